@@ -1,0 +1,13 @@
+# Every dependency comes from Debian 12's packages; the floors are the versions it ships.
+find_package(CLI11 2.1 REQUIRED CONFIG)
+find_package(fmt 9.1 REQUIRED CONFIG)
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+find_package(Threads REQUIRED)
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(LIBSERIALPORT REQUIRED IMPORTED_TARGET libserialport>=0.1.1)
+if(MCG_BUILD_TESTS)
+  find_package(GTest 1.12 REQUIRED CONFIG)
+endif()
+if(MCG_BUILD_BENCH)
+  find_package(benchmark 1.7 REQUIRED CONFIG)
+endif()

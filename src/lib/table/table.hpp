@@ -1,0 +1,141 @@
+// CSV tables per the data contract (man/mcg-csv.5): metadata, header, rows of numbers.
+#pragma once
+
+#include <cstddef>
+#include <iosfwd>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace mcg::table {
+
+/// The "# key: value" lines that precede the header, kept in order and passed on.
+class Metadata {
+ public:
+  using Entry = std::pair<std::string, std::string>;
+
+  /// Value of the first entry named `key`, if any.
+  std::optional<std::string> get(std::string_view key) const;
+  /// Replaces the value of `key` if present, else appends it.
+  void set(std::string_view key, std::string_view value);
+  /// Removes every entry named `key`.
+  void erase(std::string_view key);
+  const std::vector<Entry>& entries() const { return m_entries; }
+  bool empty() const { return m_entries.empty(); }
+
+ private:
+  std::vector<Entry> m_entries;
+};
+
+/// Parses one field: decimal or exponent form, inf, -inf, nan (any case); an empty field
+/// (after trimming blanks) is "not measured" and reads as NaN. Returns false if malformed.
+bool parse_number(std::string_view text, double& value);
+
+/// Streaming reader: metadata and header on construction, then one row per next().
+/// Every error is an mcg::Error naming the source, the line and, for a field, the column
+/// and the text: "<stdin>:12: column 'rpm': invalid number '3a'".
+class Reader {
+ public:
+  Reader(std::istream& in, std::string source);
+  ~Reader();
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+
+  const Metadata& metadata() const { return m_meta; }
+  const std::vector<std::string>& columns() const { return m_columns; }
+  const std::string& source() const { return m_source; }
+  std::optional<std::size_t> find(std::string_view name) const;
+  /// Index of column `name`; throws "<src>: missing column 'v' (has: t,rpm)".
+  std::size_t require(std::string_view name) const;
+
+  /// Reads the next row; false at the end of input.
+  bool next();
+  const std::vector<double>& row() const { return m_row; }
+  double operator[](std::size_t column) const { return m_row[column]; }
+  /// 1-based line number of the current row (or of the header before the first next()).
+  std::size_t line() const { return m_line; }
+
+ private:
+  bool read_line(std::string_view& line);
+  void parse_row(std::string_view line);
+
+  std::istream& m_in;
+  std::string m_source;
+  Metadata m_meta;
+  std::vector<std::string> m_columns;
+  std::vector<double> m_row;
+  std::string m_buffer;
+  std::size_t m_pos = 0;
+  std::size_t m_line = 0;
+  bool m_eof = false;
+};
+
+/// A whole table in memory, column-major.
+struct Table {
+  std::string source;
+  Metadata meta;
+  std::vector<std::string> names;
+  std::vector<std::vector<double>> columns;
+  /// Line number of row 0 in the source (for error messages about rows).
+  std::size_t first_line = 1;
+
+  std::size_t rows() const { return columns.empty() ? 0 : columns.front().size(); }
+  std::optional<std::size_t> find(std::string_view name) const;
+  bool has(std::string_view name) const { return find(name).has_value(); }
+  /// Column `name`; throws "<src>: missing column 'name' (has: ...)".
+  const std::vector<double>& col(std::string_view name) const;
+  std::vector<double>& col(std::string_view name);
+  /// Adds (or replaces) a column; its length must equal rows() unless the table is empty.
+  std::vector<double>& set(std::string_view name, std::vector<double> values);
+  std::size_t line_of(std::size_t row) const { return first_line + row; }
+};
+
+/// Reads a whole table. Throws on an input with no header line.
+Table read(std::istream& in, std::string source);
+/// Reads the file at `path` ("-" = stdin).
+Table read_path(const std::string& path);
+
+/// Throws unless column `name` is finite and strictly increasing, naming the first bad line.
+void require_increasing(const Table& table, std::string_view name);
+/// Throws unless every value of column `name` is finite, naming the first bad line.
+void require_finite(const Table& table, std::string_view name);
+
+/// Buffered writer. Numbers use `digits` significant digits (default 10), inf/-inf/nan
+/// as the contract spells them. Writes in large blocks; a closed pipe throws
+/// mcg::BrokenPipe, any other failure mcg::Error.
+class Writer {
+ public:
+  explicit Writer(std::ostream& out, std::string dest = "<stdout>");
+  ~Writer();
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+
+  void metadata(const Metadata& meta);
+  void meta(std::string_view key, std::string_view value);
+  void header(const std::vector<std::string>& names);
+  /// Significant digits for one column (after header()), 1..17.
+  void set_digits(std::size_t column, int digits);
+  void set_digits(std::string_view name, int digits);
+  void row(std::span<const double> values);
+  void row(std::initializer_list<double> values) { row(std::span<const double>(values.begin(), values.size())); }
+  /// Flushes to the stream and checks it; call before the end of a successful run.
+  void finish();
+
+ private:
+  void flush_if_full();
+  void flush();
+
+  std::ostream& m_out;
+  std::string m_dest;
+  std::string m_buffer;
+  std::vector<std::string> m_names;
+  std::vector<int> m_digits;
+};
+
+/// Writes a whole table (metadata, header, rows).
+void write(std::ostream& out, const Table& table, int digits = 10);
+
+}  // namespace mcg::table
