@@ -1,0 +1,217 @@
+// INI parameter sets.
+#include "config/ini.hpp"
+
+#include "common/error.hpp"
+#include "table/table.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <istream>
+#include <ostream>
+#include <sstream>
+
+namespace mcg::config {
+
+namespace {
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  return s;
+}
+
+/// Strips a trailing "; comment" or "# comment" that follows a blank.
+std::string_view strip_comment(std::string_view s) {
+  for (std::size_t i = 1; i < s.size(); ++i) {
+    if ((s[i] == ';' || s[i] == '#') && (s[i - 1] == ' ' || s[i - 1] == '\t')) return s.substr(0, i);
+  }
+  return s;
+}
+
+}  // namespace
+
+Ini Ini::parse(std::istream& in, const std::string& source) {
+  Ini ini;
+  std::string section;
+  std::string raw;
+  std::size_t line_no = 0;
+  while (std::getline(in, raw)) {
+    ++line_no;
+    std::string_view line = trim(raw);
+    if (line.empty() || line.front() == ';' || line.front() == '#') continue;
+    if (line.front() == '[') {
+      const auto close = line.find(']');
+      if (close == std::string_view::npos) fail("{}:{}: section header without ']'", source, line_no);
+      if (!trim(strip_comment(line.substr(close + 1))).empty()) {
+        fail("{}:{}: text after the section header", source, line_no);
+      }
+      section = std::string(trim(line.substr(1, close - 1)));
+      if (section.empty()) fail("{}:{}: empty section name", source, line_no);
+      continue;
+    }
+    const auto eq = line.find('=');
+    if (eq == std::string_view::npos) fail("{}:{}: expected 'key = value', found '{}'", source, line_no, line);
+    const std::string_view key = trim(line.substr(0, eq));
+    if (key.empty()) fail("{}:{}: empty key", source, line_no);
+    const std::string_view value = trim(strip_comment(line.substr(eq + 1)));
+    Entry e{section, std::string(key), std::string(value), fmt::format("{}:{}", source, line_no), {}};
+    auto it = std::find_if(ini.m_entries.begin(), ini.m_entries.end(),
+                           [&](const Entry& x) { return x.section == e.section && x.key == e.key; });
+    if (it != ini.m_entries.end()) {
+      fail("{}: [{}] {}: given twice (first at {})", e.origin, section, key, it->origin);
+    }
+    ini.m_entries.push_back(std::move(e));
+  }
+  if (in.bad()) fail("{}: read error: {}", source, std::strerror(errno));
+  return ini;
+}
+
+Ini Ini::load(const std::string& path) {
+  if (path == "-") return parse(std::cin, "<stdin>");
+  std::ifstream in(path);
+  if (!in) fail("{}: cannot open: {}", path, std::strerror(errno));
+  return parse(in, path);
+}
+
+Ini Ini::load_all(const std::vector<std::string>& paths) {
+  Ini ini;
+  for (const auto& p : paths) ini.merge(load(p));
+  return ini;
+}
+
+void Ini::merge(const Ini& later) {
+  for (const auto& e : later.m_entries) {
+    auto it = std::find_if(m_entries.begin(), m_entries.end(),
+                           [&](const Entry& x) { return x.section == e.section && x.key == e.key; });
+    if (it != m_entries.end()) {
+      *it = e;
+    } else {
+      m_entries.push_back(e);
+    }
+  }
+}
+
+const Ini::Entry* Ini::find(std::string_view section, std::string_view key) const {
+  auto it = std::find_if(m_entries.begin(), m_entries.end(),
+                         [&](const Entry& x) { return x.section == section && x.key == key; });
+  return it == m_entries.end() ? nullptr : &*it;
+}
+
+bool Ini::has(std::string_view section, std::string_view key) const { return find(section, key) != nullptr; }
+
+bool Ini::has_section(std::string_view section) const {
+  return std::any_of(m_entries.begin(), m_entries.end(), [&](const Entry& x) { return x.section == section; });
+}
+
+std::optional<std::string> Ini::get(std::string_view section, std::string_view key) const {
+  if (const Entry* e = find(section, key)) return e->value;
+  return std::nullopt;
+}
+
+void Ini::reject(std::string_view section, std::string_view key, std::string_view what) const {
+  const Entry* e = find(section, key);
+  const std::string where = e && !e->origin.empty() ? e->origin + ": " : std::string();
+  fail("{}[{}] {}: {}", where, section, key, what);
+}
+
+std::optional<double> Ini::number(std::string_view section, std::string_view key) const {
+  const Entry* e = find(section, key);
+  if (!e) return std::nullopt;
+  double v = 0;
+  if (e->value.empty() || !table::parse_number(e->value, v)) {
+    reject(section, key, fmt::format("invalid number '{}'", e->value));
+  }
+  return v;
+}
+
+double Ini::number_or(std::string_view section, std::string_view key, double fallback) const {
+  return number(section, key).value_or(fallback);
+}
+
+std::optional<std::vector<double>> Ini::numbers(std::string_view section, std::string_view key) const {
+  const Entry* e = find(section, key);
+  if (!e) return std::nullopt;
+  std::vector<double> out;
+  std::string_view rest = e->value;
+  while (true) {
+    const auto sep = rest.find_first_of(" \t,");
+    const std::string_view tok = rest.substr(0, sep);
+    if (!tok.empty()) {
+      double v = 0;
+      if (!table::parse_number(tok, v)) reject(section, key, fmt::format("invalid number '{}'", tok));
+      out.push_back(v);
+    }
+    if (sep == std::string_view::npos) break;
+    rest.remove_prefix(sep + 1);
+  }
+  return out;
+}
+
+void Ini::set(std::string_view section, std::string_view key, std::string_view value, std::string_view comment) {
+  for (auto& e : m_entries) {
+    if (e.section == section && e.key == key) {
+      e.value = value;
+      e.origin.clear();
+      e.comment = comment;
+      return;
+    }
+  }
+  m_entries.push_back(Entry{std::string(section), std::string(key), std::string(value), {}, std::string(comment)});
+}
+
+void Ini::set(std::string_view section, std::string_view key, double value, std::string_view comment) {
+  set(section, key, format_number(value), comment);
+}
+
+std::vector<std::string> Ini::sections() const {
+  std::vector<std::string> out;
+  for (const auto& e : m_entries) {
+    if (std::find(out.begin(), out.end(), e.section) == out.end()) out.push_back(e.section);
+  }
+  return out;
+}
+
+std::vector<const Ini::Entry*> Ini::entries(std::string_view section) const {
+  std::vector<const Entry*> out;
+  for (const auto& e : m_entries) {
+    if (e.section == section) out.push_back(&e);
+  }
+  return out;
+}
+
+void Ini::write(std::ostream& out) const {
+  bool first = true;
+  for (const auto& section : sections()) {
+    if (!section.empty()) {
+      if (!first) out << '\n';
+      out << '[' << section << "]\n";
+    }
+    first = false;
+    for (const Entry* e : entries(section)) {
+      out << e->key << " = " << e->value;
+      if (!e->comment.empty()) out << "  ; " << e->comment;
+      out << '\n';
+    }
+  }
+}
+
+std::string Ini::str() const {
+  std::ostringstream os;
+  write(os);
+  return os.str();
+}
+
+std::string format_number(double value) {
+  if (std::isnan(value)) return "nan";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  return fmt::format("{}", value);
+}
+
+}  // namespace mcg::config

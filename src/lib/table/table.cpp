@@ -1,0 +1,376 @@
+// CSV reader and writer per the data contract.
+#include "table/table.hpp"
+
+#include "common/error.hpp"
+#include "common/tool.hpp"
+
+#include <fmt/compile.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <istream>
+#include <limits>
+#include <ostream>
+
+namespace mcg::table {
+
+namespace {
+
+constexpr std::size_t k_read_block = 1 << 20;
+constexpr std::size_t k_write_block = 1 << 18;
+constexpr int k_default_digits = 10;
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  return s;
+}
+
+/// Shortens a field for an error message so one line stays one readable line.
+std::string quote_field(std::string_view text) {
+  std::string out;
+  for (char c : text.substr(0, 40)) out += (static_cast<unsigned char>(c) < 0x20) ? '?' : c;
+  if (text.size() > 40) out += "...";
+  return out;
+}
+
+std::string column_list(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& n : names) {
+    if (!out.empty()) out += ',';
+    out += n;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::optional<std::string> Metadata::get(std::string_view key) const {
+  for (const auto& [k, v] : m_entries) {
+    if (k == key) return v;
+  }
+  return std::nullopt;
+}
+
+void Metadata::set(std::string_view key, std::string_view value) {
+  for (auto& [k, v] : m_entries) {
+    if (k == key) {
+      v = value;
+      return;
+    }
+  }
+  m_entries.emplace_back(std::string(key), std::string(value));
+}
+
+void Metadata::erase(std::string_view key) {
+  std::erase_if(m_entries, [key](const Entry& e) { return e.first == key; });
+}
+
+bool parse_number(std::string_view text, double& value) {
+  text = trim(text);
+  if (text.empty()) {
+    value = std::numeric_limits<double>::quiet_NaN();
+    return true;
+  }
+  const char* first = text.data();
+  const char* last = text.data() + text.size();
+  if (*first == '+') ++first;
+  const auto [ptr, ec] = std::from_chars(first, last, value);
+  if (ec == std::errc() && ptr == last) return true;
+  if (ec == std::errc::result_out_of_range && ptr == last) {
+    // Overflow reads as +-inf and underflow as 0, as strtod does; the text was a number.
+    value = std::strtod(std::string(text).c_str(), nullptr);
+    return true;
+  }
+  return false;
+}
+
+Reader::Reader(std::istream& in, std::string source) : m_in(in), m_source(std::move(source)) {
+  std::string_view line;
+  while (true) {
+    if (!read_line(line)) fail("{}: empty input: no header line", m_source);
+    const std::string_view t = trim(line);
+    if (t.empty()) continue;
+    if (t.front() != '#') break;
+    std::string_view body = trim(t.substr(1));
+    const auto colon = body.find(':');
+    if (colon == std::string_view::npos) {
+      m_meta.set(body, "");
+    } else {
+      m_meta.set(trim(body.substr(0, colon)), trim(body.substr(colon + 1)));
+    }
+  }
+  std::size_t start = 0;
+  while (true) {
+    const auto comma = line.find(',', start);
+    const std::string_view name = trim(line.substr(start, comma == std::string_view::npos ? line.npos : comma - start));
+    if (name.empty()) fail("{}:{}: header: empty column name (column {})", m_source, m_line, m_columns.size() + 1);
+    if (std::find(m_columns.begin(), m_columns.end(), name) != m_columns.end()) {
+      fail("{}:{}: header: duplicate column '{}'", m_source, m_line, quote_field(name));
+    }
+    double probe = 0;
+    if (parse_number(name, probe)) {
+      fail("{}:{}: header: expected column names, found the number '{}'", m_source, m_line, quote_field(name));
+    }
+    m_columns.emplace_back(name);
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  m_row.resize(m_columns.size());
+}
+
+Reader::~Reader() = default;
+
+bool Reader::read_line(std::string_view& line) {
+  while (true) {
+    const char* begin = m_buffer.data() + m_pos;
+    const std::size_t avail = m_buffer.size() - m_pos;
+    if (const void* nl = std::memchr(begin, '\n', avail)) {
+      const auto len = static_cast<std::size_t>(static_cast<const char*>(nl) - begin);
+      line = std::string_view(begin, len);
+      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      m_pos += len + 1;
+      ++m_line;
+      return true;
+    }
+    if (m_eof) {
+      if (avail == 0) return false;
+      line = std::string_view(begin, avail);
+      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      m_pos = m_buffer.size();
+      ++m_line;
+      return true;
+    }
+    m_buffer.erase(0, m_pos);
+    m_pos = 0;
+    const std::size_t old = m_buffer.size();
+    m_buffer.resize(old + k_read_block);
+    const auto got = m_in.rdbuf()->sgetn(m_buffer.data() + old, static_cast<std::streamsize>(k_read_block));
+    m_buffer.resize(old + static_cast<std::size_t>(std::max<std::streamsize>(got, 0)));
+    if (got <= 0) {
+      if (m_in.bad()) fail("{}: read error: {}", m_source, std::strerror(errno));
+      m_eof = true;
+    }
+  }
+}
+
+void Reader::parse_row(std::string_view line) {
+  std::size_t column = 0;
+  std::size_t start = 0;
+  while (true) {
+    const auto comma = line.find(',', start);
+    const std::string_view field = line.substr(start, comma == std::string_view::npos ? line.npos : comma - start);
+    if (column >= m_columns.size()) {
+      fail("{}:{}: more fields than the {} columns of the header", m_source, m_line, m_columns.size());
+    }
+    if (!parse_number(field, m_row[column])) {
+      fail("{}:{}: column '{}': invalid number '{}'", m_source, m_line, m_columns[column], quote_field(trim(field)));
+    }
+    ++column;
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  if (column != m_columns.size()) {
+    fail("{}:{}: {} field{}, the header has {} columns", m_source, m_line, column, column == 1 ? "" : "s",
+         m_columns.size());
+  }
+}
+
+bool Reader::next() {
+  std::string_view line;
+  if (!read_line(line)) return false;
+  const std::string_view t = trim(line);
+  if (!t.empty() && t.front() == '#') fail("{}:{}: metadata line after the header", m_source, m_line);
+  if (t.empty() && m_columns.size() > 1) {
+    fail("{}:{}: empty line, the header has {} columns", m_source, m_line, m_columns.size());
+  }
+  parse_row(line);
+  return true;
+}
+
+std::optional<std::size_t> Reader::find(std::string_view name) const {
+  const auto it = std::find(m_columns.begin(), m_columns.end(), name);
+  if (it == m_columns.end()) return std::nullopt;
+  return static_cast<std::size_t>(it - m_columns.begin());
+}
+
+std::size_t Reader::require(std::string_view name) const {
+  if (auto i = find(name)) return *i;
+  fail("{}: missing column '{}' (has: {})", m_source, name, column_list(m_columns));
+}
+
+std::optional<std::size_t> Table::find(std::string_view name) const {
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it == names.end()) return std::nullopt;
+  return static_cast<std::size_t>(it - names.begin());
+}
+
+const std::vector<double>& Table::col(std::string_view name) const {
+  if (auto i = find(name)) return columns[*i];
+  fail("{}: missing column '{}' (has: {})", source, name, column_list(names));
+}
+
+std::vector<double>& Table::col(std::string_view name) {
+  return const_cast<std::vector<double>&>(std::as_const(*this).col(name));
+}
+
+std::vector<double>& Table::set(std::string_view name, std::vector<double> values) {
+  assert(names.empty() || values.size() == rows());
+  if (auto i = find(name)) {
+    columns[*i] = std::move(values);
+    return columns[*i];
+  }
+  names.emplace_back(name);
+  columns.push_back(std::move(values));
+  return columns.back();
+}
+
+Table read(std::istream& in, std::string source) {
+  Reader reader(in, source);
+  Table table;
+  table.source = std::move(source);
+  table.meta = reader.metadata();
+  table.names = reader.columns();
+  table.columns.resize(table.names.size());
+  table.first_line = reader.line() + 1;
+  bool first = true;
+  while (reader.next()) {
+    if (first) {
+      table.first_line = reader.line();
+      first = false;
+    }
+    const auto& row = reader.row();
+    for (std::size_t c = 0; c < row.size(); ++c) table.columns[c].push_back(row[c]);
+  }
+  return table;
+}
+
+Table read_path(const std::string& path) { return read(open_input(path), input_name(path)); }
+
+void require_finite(const Table& table, std::string_view name) {
+  const auto& v = table.col(name);
+  for (std::size_t r = 0; r < v.size(); ++r) {
+    if (!std::isfinite(v[r])) {
+      fail("{}:{}: column '{}': {} is not allowed here", table.source, table.line_of(r), name,
+           std::isnan(v[r]) ? "an unmeasured value (nan or empty)" : "an infinite value");
+    }
+  }
+}
+
+void require_increasing(const Table& table, std::string_view name) {
+  require_finite(table, name);
+  const auto& v = table.col(name);
+  for (std::size_t r = 1; r < v.size(); ++r) {
+    if (!(v[r] > v[r - 1])) {
+      fail("{}:{}: column '{}': {} does not increase (previous row: {})", table.source, table.line_of(r), name,
+           fmt::format("{:.10g}", v[r]), fmt::format("{:.10g}", v[r - 1]));
+    }
+  }
+}
+
+Writer::Writer(std::ostream& out, std::string dest) : m_out(out), m_dest(std::move(dest)) {
+  m_buffer.reserve(k_write_block + 4096);
+}
+
+Writer::~Writer() {
+  if (!m_buffer.empty() && m_out) m_out.write(m_buffer.data(), static_cast<std::streamsize>(m_buffer.size()));
+}
+
+void Writer::metadata(const Metadata& meta) {
+  for (const auto& [k, v] : meta.entries()) this->meta(k, v);
+}
+
+void Writer::meta(std::string_view key, std::string_view value) {
+  m_buffer += "# ";
+  m_buffer += key;
+  if (!value.empty()) {
+    m_buffer += ": ";
+    m_buffer += value;
+  }
+  m_buffer += '\n';
+  flush_if_full();
+}
+
+void Writer::header(const std::vector<std::string>& names) {
+  m_names = names;
+  m_digits.assign(names.size(), k_default_digits);
+  m_buffer += column_list(names);
+  m_buffer += '\n';
+  flush_if_full();
+}
+
+void Writer::set_digits(std::size_t column, int digits) {
+  assert(column < m_digits.size() && digits >= 1 && digits <= 17);
+  m_digits[column] = digits;
+}
+
+void Writer::set_digits(std::string_view name, int digits) {
+  const auto it = std::find(m_names.begin(), m_names.end(), name);
+  assert(it != m_names.end());
+  set_digits(static_cast<std::size_t>(it - m_names.begin()), digits);
+}
+
+void Writer::row(std::span<const double> values) {
+  assert(values.size() == m_names.size());
+  auto out = std::back_inserter(m_buffer);
+  for (std::size_t c = 0; c < values.size(); ++c) {
+    if (c) m_buffer += ',';
+    const double v = values[c];
+    if (std::isnan(v)) {
+      m_buffer += "nan";
+    } else if (std::isinf(v)) {
+      m_buffer += v > 0 ? "inf" : "-inf";
+    } else if (v == 0) {
+      m_buffer += '0';
+    } else {
+      fmt::format_to(out, FMT_COMPILE("{:.{}g}"), v, m_digits[c]);
+    }
+  }
+  m_buffer += '\n';
+  flush_if_full();
+}
+
+void Writer::flush_if_full() {
+  if (m_buffer.size() >= k_write_block) flush();
+}
+
+void Writer::flush() {
+  if (m_buffer.empty()) return;
+  errno = 0;
+  m_out.write(m_buffer.data(), static_cast<std::streamsize>(m_buffer.size()));
+  m_buffer.clear();
+  if (!m_out) {
+    if (errno == EPIPE) throw BrokenPipe();
+    fail("writing {}: {}", m_dest, errno ? std::strerror(errno) : "write failed");
+  }
+}
+
+void Writer::finish() {
+  flush();
+  errno = 0;
+  m_out.flush();
+  if (!m_out) {
+    if (errno == EPIPE) throw BrokenPipe();
+    fail("writing {}: {}", m_dest, errno ? std::strerror(errno) : "write failed");
+  }
+}
+
+void write(std::ostream& out, const Table& table, int digits) {
+  Writer w(out);
+  w.metadata(table.meta);
+  w.header(table.names);
+  for (std::size_t c = 0; c < table.names.size(); ++c) w.set_digits(c, digits);
+  std::vector<double> row(table.names.size());
+  for (std::size_t r = 0; r < table.rows(); ++r) {
+    for (std::size_t c = 0; c < row.size(); ++c) row[c] = table.columns[c][r];
+    w.row(row);
+  }
+  w.finish();
+}
+
+}  // namespace mcg::table

@@ -1,0 +1,157 @@
+// Unit tests of the CSV reader and writer against the data contract.
+#include "common/error.hpp"
+#include "table/table.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace mcg::table {
+namespace {
+
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+Table parse(const std::string& text) {
+  std::istringstream in(text);
+  return read(in, "in.csv");
+}
+
+std::string error_of(const std::string& text) {
+  try {
+    parse(text);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(TableRead, MetadataHeaderAndRows) {
+  const Table t = parse("# source: test 1\n# sample_period: 0.001\nt,v\n0,1.5\n0.001,2e-3\n");
+  EXPECT_EQ(t.meta.get("source"), "test 1");
+  EXPECT_EQ(t.meta.get("sample_period"), "0.001");
+  EXPECT_FALSE(t.meta.get("seed").has_value());
+  EXPECT_THAT(t.names, ElementsAre("t", "v"));
+  ASSERT_EQ(t.rows(), 2u);
+  EXPECT_DOUBLE_EQ(t.col("v")[1], 0.002);
+  EXPECT_EQ(t.line_of(0), 4u);
+}
+
+TEST(TableRead, InfNanEmptyAndCrlf) {
+  const Table t = parse("t,r_load,i\r\n0,inf,\r\n1,-inf,nan\r\n2,+3,NaN\r\n");
+  ASSERT_EQ(t.rows(), 3u);
+  EXPECT_TRUE(std::isinf(t.col("r_load")[0]) && t.col("r_load")[0] > 0);
+  EXPECT_TRUE(std::isinf(t.col("r_load")[1]) && t.col("r_load")[1] < 0);
+  EXPECT_TRUE(std::isnan(t.col("i")[0]));
+  EXPECT_TRUE(std::isnan(t.col("i")[1]));
+  EXPECT_DOUBLE_EQ(t.col("r_load")[2], 3.0);
+}
+
+TEST(TableRead, LastLineWithoutNewline) {
+  const Table t = parse("t\n1\n2");
+  EXPECT_THAT(t.col("t"), ElementsAre(1.0, 2.0));
+}
+
+TEST(TableRead, ErrorsNameLineColumnAndText) {
+  EXPECT_EQ(error_of(""), "in.csv: empty input: no header line");
+  EXPECT_EQ(error_of("# only: metadata\n"), "in.csv: empty input: no header line");
+  EXPECT_EQ(error_of("t,rpm\n0,1\n1,3a\n"), "in.csv:3: column 'rpm': invalid number '3a'");
+  EXPECT_EQ(error_of("t,rpm\n0,1,2\n"), "in.csv:2: more fields than the 2 columns of the header");
+  EXPECT_EQ(error_of("t,rpm\n0\n"), "in.csv:2: 1 field, the header has 2 columns");
+  EXPECT_EQ(error_of("t,t\n"), "in.csv:1: header: duplicate column 't'");
+  EXPECT_EQ(error_of("t,,v\n"), "in.csv:1: header: empty column name (column 2)");
+  EXPECT_EQ(error_of("0,1\n"), "in.csv:1: header: expected column names, found the number '0'");
+  EXPECT_EQ(error_of("t,v\n0,1\n\n1,2\n"), "in.csv:3: empty line, the header has 2 columns");
+  EXPECT_EQ(error_of("t,v\n0,1\n# late: meta\n"), "in.csv:3: metadata line after the header");
+}
+
+TEST(TableRead, MissingColumnListsWhatThereIs) {
+  const Table t = parse("t,rpm\n0,1\n");
+  try {
+    (void)t.col("v");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "in.csv: missing column 'v' (has: t,rpm)");
+  }
+}
+
+TEST(TableRead, RequireIncreasingAndFinite) {
+  EXPECT_NO_THROW(require_increasing(parse("t\n0\n0.5\n1\n"), "t"));
+  try {
+    require_increasing(parse("t\n0\n0.5\n0.5\n"), "t");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "in.csv:4: column 't': 0.5 does not increase (previous row: 0.5)");
+  }
+  try {
+    require_finite(parse("t,v\n0,1\n1,nan\n"), "v");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "in.csv:3: column 'v': an unmeasured value (nan or empty) is not allowed here");
+  }
+}
+
+TEST(TableRead, StreamingReaderAcrossBlockBoundaries) {
+  std::string text = "t,x\n";
+  for (int i = 0; i < 200000; ++i) text += std::to_string(i) + "," + std::to_string(i * 2) + "\n";
+  std::istringstream in(text);
+  Reader r(in, "big");
+  const std::size_t x = r.require("x");
+  long long n = 0;
+  while (r.next()) {
+    ASSERT_EQ(r[x], 2.0 * static_cast<double>(n));
+    ++n;
+  }
+  EXPECT_EQ(n, 200000);
+}
+
+TEST(TableWrite, RoundTripKeepsMetadataAndValues) {
+  const Table t = parse("# seed: 42\nt,v,r_load\n0,1.25,inf\n0.001,-2,nan\n");
+  std::ostringstream out;
+  write(out, t);
+  EXPECT_EQ(out.str(), "# seed: 42\nt,v,r_load\n0,1.25,inf\n0.001,-2,nan\n");
+}
+
+TEST(TableWrite, DigitsPerColumn) {
+  std::ostringstream out;
+  Writer w(out);
+  w.header({"t", "rpm"});
+  w.set_digits("rpm", 4);
+  w.row({0.1 + 0.2, 1234.5678});
+  w.finish();
+  EXPECT_EQ(out.str(), "t,rpm\n0.3,1235\n");
+}
+
+TEST(TableWrite, FullDeviceIsAnError) {
+  std::ofstream full("/dev/full");
+  if (!full) GTEST_SKIP() << "no /dev/full";
+  Writer w(full, "<stdout>");
+  w.header({"x"});
+  for (int i = 0; i < 100000; ++i) w.row({1.0});
+  try {
+    w.finish();
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("writing <stdout>: No space left on device"));
+  }
+}
+
+TEST(ParseNumber, Forms) {
+  double v = 0;
+  EXPECT_TRUE(parse_number(" 1e3 ", v));
+  EXPECT_EQ(v, 1000.0);
+  EXPECT_TRUE(parse_number("-INF", v));
+  EXPECT_TRUE(std::isinf(v));
+  EXPECT_TRUE(parse_number("1e999", v));
+  EXPECT_TRUE(std::isinf(v));
+  EXPECT_FALSE(parse_number("1,5", v));
+  EXPECT_FALSE(parse_number("0x10", v));
+  EXPECT_FALSE(parse_number("--1", v));
+  EXPECT_FALSE(parse_number("1.5V", v));
+}
+
+}  // namespace
+}  // namespace mcg::table
