@@ -4,7 +4,6 @@
 #include "common/error.hpp"
 #include "common/tool.hpp"
 
-#include <fmt/compile.h>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -317,7 +316,7 @@ void Writer::set_digits(std::string_view name, int digits) {
 
 void Writer::row(std::span<const double> values) {
   assert(values.size() == m_names.size());
-  auto out = std::back_inserter(m_buffer);
+  char text[32];
   for (std::size_t c = 0; c < values.size(); ++c) {
     if (c) m_buffer += ',';
     const double v = values[c];
@@ -328,7 +327,8 @@ void Writer::row(std::span<const double> values) {
     } else if (v == 0) {
       m_buffer += '0';
     } else {
-      fmt::format_to(out, FMT_COMPILE("{:.{}g}"), v, m_digits[c]);
+      const auto res = std::to_chars(text, text + sizeof text, v, std::chars_format::general, m_digits[c]);
+      m_buffer.append(text, res.ptr);
     }
   }
   m_buffer += '\n';

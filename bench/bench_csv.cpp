@@ -1,0 +1,52 @@
+// CSV throughput: parse and write of a simulator-shaped table (goal: >= 100 MB/s each, one core).
+#include "table/table.hpp"
+
+#include <benchmark/benchmark.h>
+
+#include <sstream>
+#include <string>
+
+namespace {
+
+constexpr std::size_t k_rows = 200000;
+
+std::string make_csv() {
+  std::ostringstream out;
+  mcg::table::Writer w(out);
+  w.meta("source", "bench_csv");
+  w.header({"t", "v", "clutch", "r_load", "rpm", "i", "v_gen"});
+  for (std::size_t n = 0; n < k_rows; ++n) {
+    const double t = 0.001 * static_cast<double>(n);
+    w.row({t, 12.0 * (n % 1000 < 500), 2, 5.6, 1234.5678 + t, 0.123456 - t * 1e-3, 3.14159 * t});
+  }
+  w.finish();
+  return out.str();
+}
+
+void BM_CsvParse(benchmark::State& state) {
+  const std::string text = make_csv();
+  for (auto _ : state) {
+    std::istringstream in(text);
+    mcg::table::Reader r(in, "bench");
+    double sum = 0;
+    while (r.next()) sum += r[4];
+    benchmark::DoNotOptimize(sum);
+  }
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(text.size()));
+}
+BENCHMARK(BM_CsvParse)->Unit(benchmark::kMillisecond);
+
+void BM_CsvWrite(benchmark::State& state) {
+  std::size_t bytes = 0;
+  for (auto _ : state) {
+    const std::string text = make_csv();
+    bytes = text.size();
+    benchmark::DoNotOptimize(text.data());
+  }
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(bytes));
+}
+BENCHMARK(BM_CsvWrite)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
