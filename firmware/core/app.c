@@ -1,0 +1,211 @@
+/* app.c: the service loop, command dispatch, stream blocks and the RAM log dump. */
+#include "core.h"
+
+#include "hal.h" /* hal_ticks_take, hal_uart_rx, hal_uart_tx_free, hal_board_id */
+
+uint8_t g_stream_seq;
+uint8_t g_dump_next;
+
+static uint8_t s_service_ms;    /* ticks since the last keypad service */
+static uint16_t s_lcd_ms;       /* ticks since the last LCD refresh */
+static uint8_t s_stream_phase;  /* ticks into the present 2 ms sample */
+static uint8_t s_stream_count;  /* samples in the present block */
+static uint16_t s_stream_pulses;
+static uint8_t MCG_XDATA s_block[MCG_STREAM_HEADER + MCG_STREAM_SAMPLES];
+static uint8_t MCG_XDATA s_data[MCG_LOGDATA_HEADER + 2u * MCG_LOG_DUMP_CHUNK];
+
+static void put16(uint8_t MCG_XDATA *p, int16_t v)
+{
+  p[0] = (uint8_t)((uint16_t)v & 0xFFu);
+  p[1] = (uint8_t)((uint16_t)v >> 8);
+}
+
+void core_init(void)
+{
+  frame_init();
+  control_init();
+  regs_init();
+  logger_init();
+  seq_init();
+  menu_init();
+  g_stream_seq = 0;
+  g_dump_next = MCG_LOG_DUMP_FRAMES;
+  s_service_ms = 0;
+  s_lcd_ms = 0;
+  s_stream_phase = 0;
+  s_stream_count = 0;
+  s_stream_pulses = 0;
+  hal_pwm_write(0);
+  menu_refresh();
+}
+
+/* One sample every MCG_STREAM_PERIOD_MS, one block every MCG_STREAM_SAMPLES samples. A block that
+ * finds no transmit room is dropped, and its sequence number with it, so the host counts the loss. */
+static void stream_tick(uint8_t pulses)
+{
+  if (!g_stream_on) {
+    s_stream_phase = 0;
+    s_stream_count = 0;
+    s_stream_pulses = 0;
+    return;
+  }
+  s_stream_pulses = (uint16_t)(s_stream_pulses + pulses);
+  if (++s_stream_phase < MCG_STREAM_PERIOD_MS) {
+    return;
+  }
+  s_stream_phase = 0;
+  s_block[MCG_STREAM_HEADER + s_stream_count] = s_stream_pulses > 255u ? 255u : (uint8_t)s_stream_pulses;
+  s_stream_pulses = 0;
+  if (++s_stream_count < MCG_STREAM_SAMPLES) {
+    return;
+  }
+  s_stream_count = 0;
+  s_block[0] = g_stream_seq++;
+  put16(s_block + 1, g_duty_out);
+  put16(s_block + 3, g_rpm_cmd);
+  frame_send(MCG_MSG_STREAM, s_block, (uint8_t)sizeof s_block);
+}
+
+static void tick(uint8_t pulses)
+{
+  control_tick(pulses);
+  logger_tick(pulses);
+  stream_tick(pulses);
+  seq_tick();
+  frame_rx_tick();
+  if (++s_service_ms >= g_service_ms) {
+    s_service_ms = 0;
+    menu_service();
+  }
+  if (++s_lcd_ms >= MENU_LCD_REFRESH_MS) {
+    s_lcd_ms = 0;
+    menu_refresh();
+  }
+}
+
+uint8_t app_dump_start(void)
+{
+  if (g_log_running) {
+    return MCG_ST_BUSY;
+  }
+  g_dump_next = 0;
+  return MCG_ST_OK;
+}
+
+/* Sends the next chunks of the log while the transmit buffer has room for a whole one. */
+static void dump_pump(void)
+{
+  while (g_dump_next < MCG_LOG_DUMP_FRAMES &&
+         hal_uart_tx_free() >= MCG_FRAME_OVERHEAD + sizeof s_data) {
+    uint8_t first = (uint8_t)(g_dump_next * MCG_LOG_DUMP_CHUNK);
+    uint8_t n = (uint8_t)(MCG_LOG_POINTS - first);
+    uint8_t i;
+    if (n > MCG_LOG_DUMP_CHUNK) {
+      n = MCG_LOG_DUMP_CHUNK;
+    }
+    s_data[0] = first;
+    s_data[1] = n;
+    for (i = 0; i < n; ++i) {
+      put16(s_data + MCG_LOGDATA_HEADER + 2u * i, (int16_t)g_log[first + i]);
+    }
+    frame_send(MCG_MSG_LOG_DATA, s_data, (uint8_t)(MCG_LOGDATA_HEADER + 2u * n));
+    ++g_dump_next;
+  }
+}
+
+void core_poll(void)
+{
+  uint16_t pulses;
+  uint8_t n = hal_ticks_take(&pulses);
+  uint8_t byte;
+  /* Late by several ticks (only if something overran a tick): share the pulses out evenly. */
+  while (n > 0) {
+    uint16_t share = n == 1 ? pulses : pulses / n;
+    pulses = (uint16_t)(pulses - share);
+    tick(share > 255u ? 255u : (uint8_t)share);
+    --n;
+  }
+  if (hal_uart_rx_overrun()) {
+    frame_rx_overrun();
+  }
+  while (hal_uart_rx(&byte)) {
+    frame_rx_byte(byte);
+  }
+  dump_pump();
+}
+
+static uint8_t MCG_XDATA s_ans[6];
+
+void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len)
+{
+  uint8_t st;
+  int16_t value;
+  switch (cmd) {
+  case MCG_CMD_VERSION:
+    if (len != 0) {
+      break;
+    }
+    s_ans[0] = MCG_PROTOCOL_VERSION;
+    s_ans[1] = MCG_FW_VERSION_MAJOR;
+    s_ans[2] = MCG_FW_VERSION_MINOR;
+    s_ans[3] = MCG_FW_VERSION_PATCH;
+    s_ans[4] = hal_board_id();
+    frame_reply(cmd, MCG_ST_OK, s_ans, 5);
+    return;
+  case MCG_CMD_READ:
+  case MCG_CMD_WRITE:
+    if (len != (cmd == MCG_CMD_READ ? 1u : 3u)) {
+      break;
+    }
+    st = MCG_ST_OK;
+    if (cmd == MCG_CMD_WRITE) {
+      st = regs_write(payload[0], (int16_t)(payload[1] | ((uint16_t)payload[2] << 8)));
+    }
+    if (st == MCG_ST_OK) {
+      st = regs_read(payload[0], &value);
+    }
+    if (st != MCG_ST_OK) {
+      frame_reply(cmd, st, s_ans, 0);
+      return;
+    }
+    s_ans[0] = payload[0];
+    put16(s_ans + 1, value);
+    frame_reply(cmd, MCG_ST_OK, s_ans, 3);
+    return;
+  case MCG_CMD_LOG_START:
+    if (len != 0) {
+      break;
+    }
+    frame_reply(cmd, logger_start(), s_ans, 0);
+    return;
+  case MCG_CMD_LOG_DUMP:
+    if (len != 0) {
+      break;
+    }
+    st = app_dump_start();
+    s_ans[0] = g_log_count;
+    s_ans[1] = g_log_interval;
+    frame_reply(cmd, st, s_ans, st == MCG_ST_OK ? 2u : 0u);
+    return;
+  case MCG_CMD_SEQ_WRITE:
+    if (len < 1u + MCG_SEQ_ENTRY_BYTES || (len - 1u) % MCG_SEQ_ENTRY_BYTES != 0 ||
+        (len - 1u) / MCG_SEQ_ENTRY_BYTES > MCG_SEQ_WRITE_MAX) {
+      break;
+    }
+    value = (int16_t)((len - 1u) / MCG_SEQ_ENTRY_BYTES);
+    st = seq_write(payload[0], payload + 1, (uint8_t)value);
+    s_ans[0] = (uint8_t)(payload[0] + value);
+    frame_reply(cmd, st, s_ans, st == MCG_ST_OK ? 1u : 0u);
+    return;
+  case MCG_CMD_SEQ_CLEAR:
+    if (len != 0) {
+      break;
+    }
+    frame_reply(cmd, seq_clear(), s_ans, 0);
+    return;
+  default:
+    frame_reply(cmd, MCG_ST_BAD_CMD, s_ans, 0);
+    return;
+  }
+  frame_reply(cmd, MCG_ST_BAD_LENGTH, s_ans, 0);
+}

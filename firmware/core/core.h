@@ -1,0 +1,122 @@
+/* core.h: the portable firmware core (C99, gcc and SDCC): modules, their state and entry points.
+ *
+ * Time: every counter named *_ms counts 1 ms control ticks. Speeds: encoder pulses per tick
+ * (2048 per revolution), or Q8 pulses per tick (x 256) where the name says q8. Duty: 1/1000 of full
+ * scale ("permille"), -1000..1000. */
+#ifndef MCG_FIRMWARE_CORE_CORE_H
+#define MCG_FIRMWARE_CORE_CORE_H
+
+#include <stdint.h> /* int16_t, int32_t, uint8_t */
+
+#include "compiler.h"     /* MCG_XDATA */
+#include "mcg_protocol.h" /* MCG_* */
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* app.c: the service loop ------------------------------------------------------------------------ */
+/* Power-on state: registers at their defaults, outputs off, parser empty. */
+void core_init(void);
+/* One pass of the main loop: runs the control update for elapsed ticks, then the receive parser,
+ * the log dump and the service tasks (keypad, LCD). Never blocks. */
+void core_poll(void);
+/* Frame dispatch (called by the parser with a CRC-checked frame). */
+void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len);
+
+/* frame.c: framing, CRC, resynchronising parser ----------------------------------------------- */
+void frame_init(void);
+/* Feeds one received byte; complete frames go to app_dispatch, bad ones to an MCG_MSG_ERROR. */
+void frame_rx_byte(uint8_t byte);
+/* Advances the inter-byte timer by one tick; drops a partial frame after MCG_FRAME_TIMEOUT_MS. */
+void frame_rx_tick(void);
+/* Drops the partial frame after lost bytes and reports MCG_ST_OVERRUN. */
+void frame_rx_overrun(void);
+/* Sends a whole frame, or none (counting g_tx_drops) if the transmit buffer lacks room.
+ * Returns 1 if queued. */
+uint8_t frame_send(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len);
+/* Sends an answer: CMD | MCG_REPLY_BIT, the status, then len bytes of data. */
+uint8_t frame_reply(uint8_t cmd, uint8_t status, const uint8_t MCG_XDATA *data, uint8_t len);
+extern uint16_t g_rx_errors; /* frames dropped by the parser */
+extern uint16_t g_tx_drops;  /* frames not sent for lack of room */
+
+/* regs.c: the register map ------------------------------------------------------------------- */
+/* MCG_ST_OK and the value in *value, or MCG_ST_BAD_REG. */
+uint8_t regs_read(uint8_t reg, int16_t *value);
+/* Range-checked write with its side effects (mode switch, log interval, outputs, ...);
+ * MCG_ST_OK or the reason it was refused, the register then unchanged. */
+uint8_t regs_write(uint8_t reg, int16_t value);
+/* 1 if the register exists and is writable. */
+uint8_t regs_writable(uint8_t reg);
+void regs_init(void);
+extern uint8_t g_mode;           /* MCG_MODE_* */
+extern int16_t g_rpm_cmd;        /* rpm */
+extern int16_t g_duty_set;       /* open-loop duty, 1/1000 */
+extern int16_t g_duty_step;      /* keypad step, 1/1000 */
+extern uint8_t g_service_ms;     /* keypad/duty service period */
+extern uint8_t g_stream_on;
+extern uint8_t g_clutch_on;
+extern uint8_t g_load_on;
+
+/* control.c: speed measurement and the 1 ms controller --------------------------------------- */
+void control_init(void);
+/* The 1 ms update: pulses counted in this tick -> speed window, controller, PWM write. */
+void control_tick(uint8_t pulses);
+/* Controller configuration; each setter keeps the output continuous (bumpless). */
+void control_set_mode(uint8_t mode);
+void control_set_rpm_cmd(int16_t rpm);
+void control_set_coef_frac(uint8_t frac_bits);
+void control_set_limits(int16_t duty_min, int16_t duty_max);
+void control_set_bias(int16_t duty_bias);
+/* Speed over the last MCG_SPEED_WINDOW_MS: rpm = counts * 1875 / 1024, rounded. */
+int16_t control_rpm(void);
+/* rpm -> Q8 pulses per tick: r = rpm * 2048 * 256 / 60000, rounded. */
+int16_t control_rpm_to_q8(int16_t rpm);
+extern int16_t g_kp, g_b0, g_b1, g_b2; /* Q(F) coefficients, 1/1000 duty per pulse/ms */
+extern uint8_t g_coef_frac;            /* F */
+extern int16_t g_duty_min, g_duty_max, g_duty_bias;
+extern int16_t g_duty_out;    /* the duty written to the PWM by the last update */
+extern uint8_t g_saturated;   /* last update hit duty_min or duty_max */
+extern uint16_t g_counts_16ms; /* pulses in the last 16 ticks */
+
+/* logger.c: the RAM log (255 points at MCG_LOG_XADDR) ----------------------------------------- */
+void logger_init(void);
+void logger_tick(uint8_t pulses);
+/* MCG_ST_OK, or MCG_ST_BUSY while a dump is being sent. Restarts from point 0. */
+uint8_t logger_start(void);
+uint8_t logger_set_interval(uint8_t interval_ms); /* MCG_ST_BUSY while recording */
+extern uint16_t MCG_XDATA g_log[MCG_LOG_POINTS];
+extern uint8_t g_log_count;    /* points recorded */
+extern uint8_t g_log_interval; /* ms between points */
+extern uint8_t g_log_running;
+
+/* seq.c: command sequence playback (the report's Simulink mode) ------------------------------- */
+void seq_init(void);
+void seq_tick(void);
+/* Stores n entries (5 bytes each) at index; MCG_ST_OK, BUSY, RANGE, BAD_REG or READ_ONLY. */
+uint8_t seq_write(uint8_t index, const uint8_t MCG_XDATA *entries, uint8_t n);
+uint8_t seq_clear(void);
+uint8_t seq_set_state(uint8_t state);
+extern uint8_t g_seq_len;
+extern uint8_t g_seq_state;
+
+/* menu.c: keypad and LCD --------------------------------------------------------------------- */
+void menu_init(void);
+/* Service task, every g_service_ms: samples the keypad and acts on keys. */
+void menu_service(void);
+/* Rewrites both LCD lines (every 500 ms, and after keys). */
+void menu_refresh(void);
+#define MENU_LCD_REFRESH_MS 500u
+extern char MCG_XDATA g_lcd[2][17]; /* last text sent to the LCD, NUL-terminated */
+
+/* app.c: streaming and the log dump ---------------------------------------------------------- */
+extern uint8_t g_stream_seq;
+/* Starts sending the RAM log as MCG_MSG_LOG_DATA frames; MCG_ST_BUSY while recording. */
+uint8_t app_dump_start(void);
+extern uint8_t g_dump_next; /* next chunk index, MCG_LOG_DUMP_FRAMES when idle */
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

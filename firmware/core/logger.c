@@ -1,0 +1,61 @@
+/* logger.c: the RAM log. 255 points at external address 0x9500, one every g_log_interval ms.
+ *
+ * Point k (u16, little-endian at 0x9500 + 2k) holds the encoder pulses counted during the interval
+ * that ends at tick (k + 1) * interval after the start, so rpm = point * 60000 / (2048 * interval).
+ * The recording runs on the tick beside the controller and touches nothing of it: the report's
+ * crash (recording set the closed-loop flag) has no way to happen here (see the regression test). */
+#include "core.h"
+
+uint16_t MCG_XDATA MCG_AT(MCG_LOG_XADDR) g_log[MCG_LOG_POINTS];
+uint8_t g_log_count;
+uint8_t g_log_interval;
+uint8_t g_log_running;
+static uint8_t s_elapsed_ms;
+static uint16_t s_pulses;
+
+void logger_init(void)
+{
+  g_log_count = 0;
+  g_log_interval = 4;
+  g_log_running = 0;
+  s_elapsed_ms = 0;
+  s_pulses = 0;
+}
+
+uint8_t logger_start(void)
+{
+  if (g_dump_next < MCG_LOG_DUMP_FRAMES) {
+    return MCG_ST_BUSY;
+  }
+  g_log_count = 0;
+  s_elapsed_ms = 0;
+  s_pulses = 0;
+  g_log_running = 1;
+  return MCG_ST_OK;
+}
+
+uint8_t logger_set_interval(uint8_t interval_ms)
+{
+  if (g_log_running) {
+    return MCG_ST_BUSY;
+  }
+  g_log_interval = interval_ms;
+  return MCG_ST_OK;
+}
+
+void logger_tick(uint8_t pulses)
+{
+  if (!g_log_running) {
+    return;
+  }
+  s_pulses = (uint16_t)(s_pulses + pulses);
+  if (++s_elapsed_ms < g_log_interval) {
+    return;
+  }
+  g_log[g_log_count] = s_pulses;
+  s_pulses = 0;
+  s_elapsed_ms = 0;
+  if (++g_log_count == MCG_LOG_POINTS) {
+    g_log_running = 0;
+  }
+}
