@@ -1,0 +1,114 @@
+// Grey-box fit of the nonlinear rig model to measured time series (mcg-fit model), and the
+// pieces other fits build on: reading a measured run, simulating the model the way the run
+// was measured, residual series and the NRMSE fit percentage.
+#pragma once
+
+#include "fit/nls.hpp"
+#include "model/model.hpp"
+#include "table/table.hpp"
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace mcg::fit {
+
+/// How `rpm` was measured: encoder counts accumulated over a trailing window,
+///   rpm(t_n) = (counts(t_n) - counts(t_n - window_s)) / counts_per_rev / window_s * 60.
+struct RpmEstimator {
+  double window_s = 0.005;
+  double counts_per_rev = 2048.0;
+};
+
+/// Parses the `# rpm_estimator:` metadata value, e.g.
+/// "counts over 0.005 s window, 2048 counts/rev". Throws naming `where` when malformed.
+RpmEstimator parse_rpm_estimator(std::string_view text, std::string_view where);
+
+/// The estimator applied to a simulated shaft angle theta(t) (rad), without the count
+/// quantisation: rpm(t_n) = (theta(t_n) - theta(t_n - W)) / W * 60 / (2 pi), theta
+/// interpolated linearly between samples and held at theta(t_0) before the start.
+/// Quantising would make the fit's cost piecewise constant in the parameters (useless for
+/// a Jacobian); the quantisation error is left to the residual as measurement noise.
+std::vector<double> estimate_rpm(const std::vector<double>& t_s, const std::vector<double>& theta_rad,
+                                 const RpmEstimator& estimator);
+
+/// Measured columns a fit can compare with the model.
+/// rpm (rev/min), i (A), i_gen (A), v_gen (V), omega (rad/s).
+const std::vector<std::string>& measurable_columns();
+
+/// One measured run: the inputs that drive the model and the measured outputs.
+struct Run {
+  std::string source;
+  std::size_t first_line = 1;
+  model::Inputs inputs;
+  std::vector<std::string> outputs;             ///< measured columns compared, e.g. {"rpm", "i"}
+  std::vector<std::vector<double>> measured;    ///< per output, one value per row (NaN = not measured)
+  std::optional<RpmEstimator> rpm_estimator;    ///< from `# rpm_estimator:`, if present
+};
+
+/// Builds a run from a table with columns t, v (or duty, then v = duty * supply_V), clutch,
+/// r_load and the measured `outputs` (empty: every measurable column present). Throws mcg::Error naming the file (and line) for a missing column, a bad
+/// input value, or fewer than `min_rows` rows ("too short").
+Run make_run(const table::Table& table, const std::vector<std::string>& outputs, const model::Params& params,
+             std::size_t min_rows = 50);
+
+/// Simulates `model` on the run's inputs and returns, per output of the run, the series as
+/// it was measured (rpm through the run's estimator when it has one).
+std::vector<std::vector<double>> simulate_as_measured(const model::Model& model, const Run& run,
+                                                      const model::SimOptions& options = {});
+
+/// MATLAB compare's fit: 100 (1 - |y - y_sim| / |y - mean(y)|) over the finite samples of y.
+/// -inf when y is constant and y_sim differs from it, 100 when both agree.
+double fit_percent(const std::vector<double>& measured, const std::vector<double>& simulated);
+
+/// The residual series of one run under a model: measured - simulated, per output.
+struct RunResiduals {
+  std::vector<std::string> outputs;
+  std::vector<std::vector<double>> simulated;
+  std::vector<std::vector<double>> residual;
+  std::vector<double> fit_percent;  ///< per output
+};
+RunResiduals residuals(const model::Model& model, const Run& run, const model::SimOptions& options = {});
+
+/// A grey-box identification problem: the model (initial values of the free parameters,
+/// values of everything else), the runs fitted jointly, and the names of the free
+/// parameters as model::parameters() spells them ("motor.R_ohm", "clutch_engaged.Tc_Nm").
+struct FitProblem {
+  model::Model model;
+  std::vector<Run> runs;
+  std::vector<std::string> free;
+  NlsOptions nls;
+  model::SimOptions sim;
+};
+
+/// Per-run quality of a fit.
+struct RunFit {
+  std::string source;
+  std::vector<std::string> outputs;
+  std::vector<double> fit_percent;  ///< per output, NRMSE as fit_percent() defines it
+  std::vector<double> rms;          ///< per output, RMS of measured - simulated, output units
+};
+
+/// The outcome: the fitted model (free parameters replaced) and the solver's statistics
+/// (nls.names = free parameter names, values, std_errors, correlation, converged, reason,
+/// iterations, evaluations).
+struct FitResult {
+  model::Model model;
+  NlsResult nls;
+  std::vector<RunFit> runs;
+};
+
+/// Minimises the simulation error. The residual vector stacks, for every run and output,
+///   r = (y_sim - y) / (std(y) sqrt(N_finite)),
+/// so each (run, output) weighs like its squared NRMSE (1 - fit/100)^2 and the cost is
+/// independent of units and lengths. Parameters whose lower bound is >= 0 are
+/// log-parameterised (kept positive); the others move linearly. Never returns the initial
+/// guess silently: result.nls.converged says whether a convergence test was met.
+/// Throws mcg::Error for an unknown parameter name, a parameter listed twice, a free
+/// parameter whose initial value is outside its bounds, or runs with no excitation of the
+/// outputs (a constant measured series).
+FitResult fit_model(const FitProblem& problem);
+
+}  // namespace mcg::fit

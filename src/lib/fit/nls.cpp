@@ -1,0 +1,242 @@
+// Levenberg-Marquardt via Eigen's unsupported module (a port of MINPACK's lmder).
+#include "fit/nls.hpp"
+
+#include "common/error.hpp"
+
+#include <Eigen/SVD>
+#include <unsupported/Eigen/LevenbergMarquardt>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <thread>
+
+namespace mcg::fit {
+
+namespace {
+
+/// Residual value standing in for a non-finite one: large enough that any step into a
+/// region where the model breaks down is rejected by the trust-region test.
+constexpr double k_penalty = 1e10;
+
+struct Coordinates {
+  std::vector<ParameterSpec> specs;
+  Eigen::VectorXd scale;
+
+  explicit Coordinates(const std::vector<ParameterSpec>& s) : specs(s), scale(static_cast<Eigen::Index>(s.size())) {
+    for (std::size_t i = 0; i < specs.size(); ++i) {
+      const auto& spec = specs[i];
+      double sc = spec.scale > 0 ? spec.scale : std::abs(spec.initial);
+      if (sc == 0.0) sc = 1.0;
+      scale[static_cast<Eigen::Index>(i)] = sc;
+    }
+  }
+
+  Eigen::VectorXd to_physical(const Eigen::VectorXd& u) const {
+    Eigen::VectorXd p(u.size());
+    for (Eigen::Index i = 0; i < u.size(); ++i) {
+      const auto& spec = specs[static_cast<std::size_t>(i)];
+      p[i] = spec.transform == Transform::log ? spec.initial * std::exp(u[i]) : spec.initial + scale[i] * u[i];
+    }
+    return p;
+  }
+
+  /// dp/du at p: the chain-rule factor from solver to physical coordinates.
+  Eigen::VectorXd derivative(const Eigen::VectorXd& p) const {
+    Eigen::VectorXd d(p.size());
+    for (Eigen::Index i = 0; i < p.size(); ++i) {
+      d[i] = specs[static_cast<std::size_t>(i)].transform == Transform::log ? p[i] : scale[i];
+    }
+    return d;
+  }
+};
+
+void sanitise(Eigen::VectorXd& r) {
+  for (Eigen::Index i = 0; i < r.size(); ++i) {
+    if (!std::isfinite(r[i])) r[i] = k_penalty;
+  }
+}
+
+struct Functor : Eigen::DenseFunctor<double> {
+  const Coordinates& coords;
+  const ResidualFunction& residuals;
+  const NlsOptions& options;
+
+  Functor(const Coordinates& c, const ResidualFunction& r, const NlsOptions& o, int n, int m)
+      : Eigen::DenseFunctor<double>(n, m), coords(c), residuals(r), options(o) {}
+
+  void evaluate(const Eigen::VectorXd& u, Eigen::VectorXd& r) const {
+    r.resize(values());
+    residuals(coords.to_physical(u), r);
+    sanitise(r);
+  }
+
+  int operator()(const InputType& u, ValueType& r) const {
+    evaluate(u, r);
+    return 0;
+  }
+
+  void column(const Eigen::VectorXd& u, const Eigen::VectorXd& r0, Eigen::Index j, JacobianType& jac) const {
+    const double h = options.fd_step * std::max(1.0, std::abs(u[j]));
+    Eigen::VectorXd up = u;
+    Eigen::VectorXd rp;
+    up[j] = u[j] + h;
+    evaluate(up, rp);
+    if (options.central_differences) {
+      Eigen::VectorXd rm;
+      up[j] = u[j] - h;
+      evaluate(up, rm);
+      jac.col(j) = (rp - rm) / (2.0 * h);
+    } else {
+      jac.col(j) = (rp - r0) / h;
+    }
+  }
+
+  /// Finite-difference Jacobian in solver coordinates; returns the evaluations it spent.
+  int df(const InputType& u, JacobianType& jac) const {
+    Eigen::VectorXd r0;
+    if (!options.central_differences) evaluate(u, r0);
+    jac.resize(values(), inputs());
+    const auto n = static_cast<unsigned>(inputs());
+    const unsigned workers = std::max(1U, std::min(options.threads, n));
+    if (workers == 1) {
+      for (Eigen::Index j = 0; j < inputs(); ++j) column(u, r0, j, jac);
+    } else {
+      std::vector<std::thread> pool;
+      pool.reserve(workers);
+      for (unsigned w = 0; w < workers; ++w) {
+        pool.emplace_back([&, w] {
+          for (unsigned j = w; j < n; j += workers) column(u, r0, static_cast<Eigen::Index>(j), jac);
+        });
+      }
+      for (auto& t : pool) t.join();
+    }
+    const int per_column = options.central_differences ? 2 : 1;
+    return per_column * inputs() + (options.central_differences ? 0 : 1);
+  }
+};
+
+std::string describe(Eigen::LevenbergMarquardtSpace::Status status, bool& converged) {
+  using namespace Eigen::LevenbergMarquardtSpace;
+  converged = true;
+  switch (status) {
+    case RelativeReductionTooSmall:
+      return "relative reduction of the sum of squares below ftol";
+    case RelativeErrorTooSmall:
+      return "relative parameter change below xtol";
+    case RelativeErrorAndReductionTooSmall:
+      return "relative reduction below ftol and parameter change below xtol";
+    case CosinusTooSmall:
+      return "residuals orthogonal to the Jacobian (gradient zero)";
+    case FtolTooSmall:
+      return "no further reduction of the sum of squares possible (machine precision)";
+    case XtolTooSmall:
+      return "no further improvement of the parameters possible (machine precision)";
+    case GtolTooSmall:
+      return "gradient orthogonal to the residuals within machine precision";
+    case TooManyFunctionEvaluation:
+      converged = false;
+      return "evaluation budget spent before convergence";
+    default:
+      converged = false;
+      return "numerical trouble in the solver (non-finite Jacobian or improper input)";
+  }
+}
+
+}  // namespace
+
+void covariance_statistics(const Eigen::MatrixXd& jacobian, const Eigen::VectorXd& residuals,
+                           Eigen::VectorXd& std_errors, Eigen::MatrixXd& correlation, double& sigma) {
+  const Eigen::Index m = jacobian.rows();
+  const Eigen::Index n = jacobian.cols();
+  sigma = m > n ? std::sqrt(residuals.squaredNorm() / static_cast<double>(m - n))
+                : std::numeric_limits<double>::quiet_NaN();
+  // Column equilibration first, so that parameters of very different magnitudes do not
+  // make J^T J look singular.
+  Eigen::VectorXd norms = jacobian.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < n; ++j) {
+    if (norms[j] == 0.0) norms[j] = 1.0;
+  }
+  const Eigen::MatrixXd scaled = jacobian * norms.cwiseInverse().asDiagonal();
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(scaled, Eigen::ComputeThinV);
+  const Eigen::VectorXd& s = svd.singularValues();
+  const double tol = s.size() > 0 ? s[0] * 1e-10 : 0.0;
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(n, n);
+  std::vector<bool> undetermined(static_cast<std::size_t>(n), false);
+  for (Eigen::Index k = 0; k < s.size(); ++k) {
+    const Eigen::VectorXd v = svd.matrixV().col(k);
+    if (s[k] > tol) {
+      cov += v * v.transpose() / (s[k] * s[k]);
+    } else {
+      for (Eigen::Index j = 0; j < n; ++j) {
+        if (std::abs(v[j]) > 1e-6) undetermined[static_cast<std::size_t>(j)] = true;
+      }
+    }
+  }
+  cov = norms.cwiseInverse().asDiagonal() * cov * norms.cwiseInverse().asDiagonal();
+  const double s2 = std::isfinite(sigma) ? sigma * sigma : 0.0;
+  std_errors.resize(n);
+  correlation.resize(n, n);
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    std_errors[i] = undetermined[static_cast<std::size_t>(i)] ? inf : std::sqrt(s2 * cov(i, i));
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const bool bad = undetermined[static_cast<std::size_t>(i)] || undetermined[static_cast<std::size_t>(j)];
+      const double d = std::sqrt(cov(i, i) * cov(j, j));
+      correlation(i, j) = i == j ? 1.0 : (bad || d == 0.0 ? nan : cov(i, j) / d);
+    }
+  }
+}
+
+NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t residual_count,
+                        const ResidualFunction& residuals, const NlsOptions& options) {
+  const auto n = static_cast<int>(specs.size());
+  const auto m = static_cast<int>(residual_count);
+  if (n == 0) fail("nothing to fit: no free parameters");
+  if (m < n) fail("too little data: {} residuals for {} free parameters", m, n);
+  for (const auto& spec : specs) {
+    if (spec.transform == Transform::log && !(spec.initial > 0.0)) {
+      fail("parameter '{}' must start positive (initial value {})", spec.name, spec.initial);
+    }
+    if (!std::isfinite(spec.initial)) fail("parameter '{}' has a non-finite initial value", spec.name);
+  }
+  const Coordinates coords(specs);
+  Functor functor(coords, residuals, options, n, m);
+  {
+    Eigen::VectorXd r(m);
+    residuals(coords.to_physical(Eigen::VectorXd::Zero(n)), r);
+    if (!r.allFinite()) fail("the model gives non-finite residuals at the initial parameter values");
+  }
+
+  Eigen::LevenbergMarquardt<Functor> lm(functor);
+  lm.setXtol(options.xtol);
+  lm.setFtol(options.ftol);
+  lm.setGtol(0.0);
+  lm.setMaxfev(options.max_evaluations);
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
+  const auto status = lm.minimize(u);
+
+  NlsResult result;
+  for (const auto& spec : specs) result.names.push_back(spec.name);
+  result.reason = describe(status, result.converged);
+  result.iterations = static_cast<int>(lm.iterations());
+  result.evaluations = static_cast<int>(lm.nfev());
+  result.values = coords.to_physical(u);
+  functor.evaluate(u, result.residuals);
+  result.cost = result.residuals.squaredNorm();
+  if (result.cost >= k_penalty) {
+    result.converged = false;
+    result.reason = "the model breaks down (non-finite output) at the solution";
+  }
+
+  Eigen::MatrixXd jac_u;
+  functor.df(u, jac_u);
+  const Eigen::MatrixXd jac_p = jac_u * coords.derivative(result.values).cwiseInverse().asDiagonal();
+  covariance_statistics(jac_p, result.residuals, result.std_errors, result.correlation, result.sigma);
+  return result;
+}
+
+}  // namespace mcg::fit

@@ -1,0 +1,82 @@
+// Nonlinear least squares for every mcg fit: Eigen's Levenberg-Marquardt (MINPACK's lmder)
+// with finite-difference Jacobians, parameter scaling, log-parameterised positive
+// parameters, and the usual statistics (standard errors, correlations) at the optimum.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace mcg::fit {
+
+/// How the solver moves a parameter. The solver works on u; the residual function sees p.
+///   linear: p = p0 + scale * u          (any sign)
+///   log:    p = p0 * exp(u)             (keeps p > 0 and makes steps relative)
+enum class Transform { linear, log };
+
+struct ParameterSpec {
+  std::string name;
+  double initial = 0.0;
+  Transform transform = Transform::linear;
+  /// Typical magnitude of a linear parameter, the solver's unit step; 0 means |initial|
+  /// (or 1 if the initial value is 0). Ignored for log parameters.
+  double scale = 0.0;
+};
+
+struct NlsOptions {
+  /// Stop after this many residual evaluations (Jacobian columns included).
+  int max_evaluations = 4000;
+  /// Relative change of the scaled parameters below which the solver stops (MINPACK xtol).
+  double xtol = 1e-8;
+  /// Relative reduction of the sum of squares below which the solver stops (MINPACK ftol).
+  double ftol = 1e-10;
+  /// Finite-difference step in solver coordinates u (a relative step for log parameters).
+  double fd_step = 1e-6;
+  /// Central differences (2 evaluations per column) instead of forward (1 per column).
+  bool central_differences = false;
+  /// Threads evaluating Jacobian columns at once (1 = in the caller's thread). The
+  /// residual function must then be safe to call concurrently.
+  unsigned threads = 1;
+};
+
+/// The optimum and its statistics. With J the Jacobian of the residuals r with respect to
+/// p at the optimum, m residuals and n parameters:
+///   sigma^2 = |r|^2 / (m - n),  cov(p) = sigma^2 (J^T J)^-1,
+///   std_errors_i = sqrt(cov_ii),  correlation_ij = cov_ij / (std_i std_j).
+/// A direction the data does not determine (J^T J singular) gives infinite standard
+/// errors and NaN correlations for the parameters it involves.
+struct NlsResult {
+  std::vector<std::string> names;
+  Eigen::VectorXd values;
+  Eigen::VectorXd std_errors;
+  Eigen::MatrixXd correlation;
+  Eigen::VectorXd residuals;  ///< at the optimum
+  double cost = 0.0;          ///< |r|^2
+  double sigma = 0.0;         ///< sqrt(|r|^2 / (m - n)), NaN if m == n
+  bool converged = false;
+  std::string reason;  ///< why the solver stopped, in words
+  int iterations = 0;
+  int evaluations = 0;
+};
+
+/// Fills r (size m, preallocated) with the residuals at parameter values p (physical
+/// units, in the order of the specs). Non-finite residuals are treated as a very poor fit,
+/// so the solver backs off from parameter values where the model breaks down.
+using ResidualFunction = std::function<void(const Eigen::VectorXd& p, Eigen::VectorXd& r)>;
+
+/// Minimises |r(p)|^2 over p starting from the specs' initial values.
+/// Throws mcg::Error if there are fewer residuals than parameters or a log parameter does
+/// not start positive. A run that stops for any reason other than a convergence test
+/// (evaluation budget spent, numerical trouble) returns converged = false and says why.
+NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t residual_count,
+                        const ResidualFunction& residuals, const NlsOptions& options = {});
+
+/// Standard errors and correlations from a Jacobian J (m x n) and residuals r (size m),
+/// as documented at NlsResult. Shared by fits that solve their own way.
+void covariance_statistics(const Eigen::MatrixXd& jacobian, const Eigen::VectorXd& residuals,
+                           Eigen::VectorXd& std_errors, Eigen::MatrixXd& correlation, double& sigma);
+
+}  // namespace mcg::fit

@@ -1,0 +1,325 @@
+// Transfer-function fit: Levy, Sanathanan-Koerner, then Levenberg-Marquardt on log(G/H).
+//
+// Coefficients live in the scaled variable x = s / w0, with w0 the geometric mean of the
+// band, so that the powers of x stay near 1 and the linear systems are well conditioned:
+//   G = B(x) / A(x),  B = sum_{i<=m} b_i x^i,  A = x^n + sum_{i<n} a_i x^i  (monic).
+#include "fit/tf.hpp"
+
+#include "common/error.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace mcg::fit {
+
+namespace {
+
+using Complex = std::complex<double>;
+
+struct Point {
+  double w_rad_s;
+  Complex h;
+  double weight;
+};
+
+Complex polyval_ascending(const Eigen::VectorXd& c, Eigen::Index count, Eigen::Index offset, Complex x) {
+  Complex y = 0.0;
+  for (Eigen::Index i = count - 1; i >= 0; --i) y = y * x + c[offset + i];
+  return y;
+}
+
+struct Scaled {
+  int m;
+  int n;
+  double w0;
+
+  Complex numerator(const Eigen::VectorXd& theta, Complex x) const { return polyval_ascending(theta, m + 1, 0, x); }
+  Complex denominator(const Eigen::VectorXd& theta, Complex x) const {
+    return polyval_ascending(theta, n, m + 1, x) + std::pow(x, n);
+  }
+  Complex model(const Eigen::VectorXd& theta, double w) const {
+    const Complex x(0.0, w / w0);
+    return numerator(theta, x) / denominator(theta, x);
+  }
+};
+
+/// One linearised least-squares solve: min sum_k |(B - H A) sqrt(w_k) / |A_prev||^2.
+Eigen::VectorXd linear_step(const Scaled& sc, const std::vector<Point>& pts, const Eigen::VectorXd* previous) {
+  const Eigen::Index unknowns = sc.m + 1 + sc.n;
+  const auto rows = static_cast<Eigen::Index>(2 * pts.size());
+  Eigen::MatrixXd a(rows, unknowns);
+  Eigen::VectorXd b(rows);
+  for (std::size_t k = 0; k < pts.size(); ++k) {
+    const Complex x(0.0, pts[k].w_rad_s / sc.w0);
+    double c = std::sqrt(pts[k].weight);
+    if (previous != nullptr) c /= std::abs(sc.denominator(*previous, x));
+    const auto r = static_cast<Eigen::Index>(2 * k);
+    Complex xp = 1.0;
+    for (int i = 0; i <= sc.m; ++i, xp *= x) {
+      a(r, i) = c * xp.real();
+      a(r + 1, i) = c * xp.imag();
+    }
+    xp = 1.0;
+    for (int i = 0; i < sc.n; ++i, xp *= x) {
+      const Complex term = -pts[k].h * xp;
+      a(r, sc.m + 1 + i) = c * term.real();
+      a(r + 1, sc.m + 1 + i) = c * term.imag();
+    }
+    const Complex rhs = pts[k].h * std::pow(x, sc.n);
+    b[r] = c * rhs.real();
+    b[r + 1] = c * rhs.imag();
+  }
+  return a.colPivHouseholderQr().solve(b);
+}
+
+/// s-domain coefficients (descending) from the scaled ones, normalised as RationalTf says.
+RationalTf to_s_domain(const Scaled& sc, const Eigen::VectorXd& theta) {
+  RationalTf tf;
+  for (int i = sc.m; i >= 0; --i) tf.num.push_back(theta[i] / std::pow(sc.w0, i));
+  tf.den.push_back(1.0 / std::pow(sc.w0, sc.n));
+  for (int i = sc.n - 1; i >= 0; --i) tf.den.push_back(theta[sc.m + 1 + i] / std::pow(sc.w0, i));
+  const double norm = tf.den.back() != 0.0 ? tf.den.back() : tf.den.front();
+  for (double& c : tf.num) c /= norm;
+  for (double& c : tf.den) c /= norm;
+  return tf;
+}
+
+double lowest_nonzero(const std::vector<double>& c) {
+  for (auto it = c.rbegin(); it != c.rend(); ++it) {
+    if (*it != 0.0) return *it;
+  }
+  return 0.0;
+}
+
+std::vector<Factor> factors_of(const std::vector<double>& coefficients) {
+  std::vector<Factor> out;
+  const double scale = std::max(1e-300, std::abs(lowest_nonzero(coefficients)));
+  for (const Complex& r : polynomial_roots(coefficients)) {
+    if (r.imag() < 0.0 && std::abs(r.imag()) > 1e-9 * std::abs(r)) continue;
+    Factor f;
+    f.corner_rad_s = std::abs(r);
+    if (std::abs(r.imag()) > 1e-9 * std::abs(r)) {
+      f.complex_pair = true;
+      f.zeta = -r.real() / f.corner_rad_s;
+    }
+    if (f.corner_rad_s < 1e-12 * std::max(1.0, scale)) f.corner_rad_s = 0.0;
+    f.unstable = r.real() > 0.0;
+    out.push_back(f);
+  }
+  std::sort(out.begin(), out.end(), [](const Factor& a, const Factor& b) { return a.corner_rad_s < b.corner_rad_s; });
+  return out;
+}
+
+/// The quantities reported with standard errors: gain, then per pole and zero factor its
+/// corner and (for pairs) its damping.
+Eigen::VectorXd reported(const Scaled& sc, const Eigen::VectorXd& theta) {
+  const RationalTf tf = to_s_domain(sc, theta);
+  std::vector<double> q{lowest_nonzero(tf.num) / lowest_nonzero(tf.den)};
+  for (const auto* list : {&tf.den, &tf.num}) {
+    for (const Factor& f : factors_of(*list)) {
+      q.push_back(f.corner_rad_s);
+      if (f.complex_pair) q.push_back(f.zeta);
+    }
+  }
+  return Eigen::Map<Eigen::VectorXd>(q.data(), static_cast<Eigen::Index>(q.size()));
+}
+
+std::string num_text(double x, int digits) { return fmt::format("{:.{}g}", x, digits); }
+
+std::string factor_text(const Factor& f, int digits) {
+  if (f.corner_rad_s == 0.0) return "s";
+  const std::string w = num_text(f.corner_rad_s, digits);
+  if (f.complex_pair) {
+    return fmt::format("((s/{})^2+{}*(s/{})+1)", w, num_text(2.0 * f.zeta, digits), w);
+  }
+  return f.unstable ? fmt::format("(1-s/{})", w) : fmt::format("(s/{}+1)", w);
+}
+
+std::string product_text(const std::vector<Factor>& factors, int digits) {
+  std::string out;
+  for (const Factor& f : factors) {
+    if (!out.empty()) out += '*';
+    out += factor_text(f, digits);
+  }
+  return out;
+}
+
+}  // namespace
+
+Complex RationalTf::operator()(Complex s) const {
+  Complex n = 0.0;
+  for (double c : num) n = n * s + c;
+  Complex d = 0.0;
+  for (double c : den) d = d * s + c;
+  return n / d;
+}
+
+std::vector<Complex> polynomial_roots(const std::vector<double>& coefficients) {
+  std::size_t first = 0;
+  while (first < coefficients.size() && coefficients[first] == 0.0) ++first;
+  std::size_t last = coefficients.size();
+  std::vector<Complex> roots;
+  while (last > first + 1 && coefficients[last - 1] == 0.0) {
+    roots.emplace_back(0.0, 0.0);
+    --last;
+  }
+  if (last <= first + 1) return roots;
+  const auto degree = static_cast<Eigen::Index>(last - first - 1);
+  Eigen::MatrixXd companion = Eigen::MatrixXd::Zero(degree, degree);
+  for (Eigen::Index i = 0; i < degree; ++i) {
+    companion(0, i) = -coefficients[first + 1 + static_cast<std::size_t>(i)] / coefficients[first];
+    if (i + 1 < degree) companion(i + 1, i) = 1.0;
+  }
+  const Eigen::VectorXcd eig = companion.eigenvalues();
+  for (Eigen::Index i = 0; i < eig.size(); ++i) roots.push_back(eig[i]);
+  return roots;
+}
+
+FrequencyResponse read_frequency_response(const table::Table& table) {
+  FrequencyResponse fr;
+  fr.source = table.source;
+  table::require_increasing(table, "f_hz");
+  table::require_finite(table, "mag_db");
+  table::require_finite(table, "phase_deg");
+  fr.f_hz = table.col("f_hz");
+  fr.mag_db = table.col("mag_db");
+  fr.phase_deg = table.col("phase_deg");
+  for (std::size_t k = 0; k < fr.f_hz.size(); ++k) {
+    if (!(fr.f_hz[k] > 0.0)) fail("{}:{}: column 'f_hz': frequency must be positive", table.source, table.line_of(k));
+  }
+  if (table.has("coherence")) {
+    fr.coherence = table.col("coherence");
+    for (std::size_t k = 0; k < fr.coherence.size(); ++k) {
+      const double c = fr.coherence[k];
+      if (!(c >= 0.0 && c <= 1.0)) {
+        fail("{}:{}: column 'coherence': {} is outside 0..1", table.source, table.line_of(k), c);
+      }
+    }
+  }
+  return fr;
+}
+
+TfFit fit_tf(const FrequencyResponse& response, const TfFitOptions& options) {
+  if (options.poles < 1) fail("--poles must be at least 1");
+  if (options.zeros < 0 || options.zeros > options.poles) {
+    fail("--zeros must be between 0 and the number of poles ({})", options.poles);
+  }
+  std::vector<Point> pts;
+  for (std::size_t k = 0; k < response.f_hz.size(); ++k) {
+    const double f = response.f_hz[k];
+    if (f < options.f_min_hz || f > options.f_max_hz) continue;
+    double weight = 1.0;
+    if (options.use_coherence && !response.coherence.empty()) {
+      const double g2 = std::min(response.coherence[k], 0.999);
+      weight = g2 / (1.0 - g2);
+    }
+    if (weight <= 0.0) continue;
+    const double mag = std::pow(10.0, response.mag_db[k] / 20.0);
+    pts.push_back({2.0 * std::numbers::pi * f, std::polar(mag, response.phase_deg[k] * std::numbers::pi / 180.0), weight});
+  }
+  const int unknowns = options.zeros + 1 + options.poles;
+  if (pts.size() < static_cast<std::size_t>(unknowns)) {
+    fail("{}: too short: {} usable frequencies for {} coefficients", response.source, pts.size(), unknowns);
+  }
+  const Scaled sc{options.zeros, options.poles, std::sqrt(pts.front().w_rad_s * pts.back().w_rad_s)};
+
+  Eigen::VectorXd theta = linear_step(sc, pts, nullptr);
+  for (int it = 0; it < options.sk_iterations; ++it) {
+    const Eigen::VectorXd next = linear_step(sc, pts, &theta);
+    const double change = (next - theta).norm() / std::max(1e-300, next.norm());
+    theta = next;
+    if (change < 1e-12) break;
+  }
+  if (!theta.allFinite()) fail("{}: the linearised fit is singular (no excitation across the band?)", response.source);
+
+  std::vector<ParameterSpec> specs;
+  const double largest = theta.cwiseAbs().maxCoeff();
+  for (Eigen::Index i = 0; i < theta.size(); ++i) {
+    const std::string name = i <= sc.m ? fmt::format("b{}", i) : fmt::format("a{}", i - sc.m - 1);
+    specs.push_back({name, theta[i], Transform::linear, std::max(std::abs(theta[i]), 1e-8 * largest)});
+  }
+  const ResidualFunction residual = [&](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
+    for (std::size_t k = 0; k < pts.size(); ++k) {
+      const Complex e = std::log(sc.model(p, pts[k].w_rad_s) / pts[k].h) * std::sqrt(pts[k].weight);
+      r[static_cast<Eigen::Index>(2 * k)] = e.real();
+      r[static_cast<Eigen::Index>(2 * k + 1)] = e.imag();
+    }
+  };
+  NlsOptions nls_options;
+  nls_options.central_differences = true;
+  TfFit fit;
+  fit.nls = least_squares(specs, 2 * pts.size(), residual, nls_options);
+  if (!fit.nls.converged) fail("{}: the transfer-function fit did not converge: {}", response.source, fit.nls.reason);
+
+  const Eigen::VectorXd& best = fit.nls.values;
+  fit.tf = to_s_domain(sc, best);
+  fit.gain = lowest_nonzero(fit.tf.num) / lowest_nonzero(fit.tf.den);
+  fit.poles = factors_of(fit.tf.den);
+  fit.zeros = factors_of(fit.tf.num);
+  fit.points = pts.size();
+
+  double sq_mag = 0.0;
+  double sq_phase = 0.0;
+  for (const Point& pt : pts) {
+    const Complex e = std::log(sc.model(best, pt.w_rad_s) / pt.h);
+    sq_mag += std::pow(e.real() * 20.0 / std::log(10.0), 2);
+    sq_phase += std::pow(e.imag() * 180.0 / std::numbers::pi, 2);
+  }
+  fit.rms_mag_db = std::sqrt(sq_mag / static_cast<double>(pts.size()));
+  fit.rms_phase_deg = std::sqrt(sq_phase / static_cast<double>(pts.size()));
+
+  // Delta method: cov(q) = G cov(theta) G^T with G = dq/dtheta by central differences.
+  const Eigen::VectorXd q0 = reported(sc, best);
+  const Eigen::Index nq = q0.size();
+  const Eigen::Index nt = best.size();
+  Eigen::MatrixXd g(nq, nt);
+  bool same_shape = true;
+  for (Eigen::Index j = 0; j < nt; ++j) {
+    const double h = 1e-6 * std::max(std::abs(best[j]), 1e-8 * largest);
+    Eigen::VectorXd tp = best;
+    Eigen::VectorXd tm = best;
+    tp[j] += h;
+    tm[j] -= h;
+    const Eigen::VectorXd qp = reported(sc, tp);
+    const Eigen::VectorXd qm = reported(sc, tm);
+    if (qp.size() != nq || qm.size() != nq) {
+      same_shape = false;
+      break;
+    }
+    g.col(j) = (qp - qm) / (2.0 * h);
+  }
+  Eigen::VectorXd q_se = Eigen::VectorXd::Constant(nq, std::numeric_limits<double>::quiet_NaN());
+  if (same_shape && fit.nls.std_errors.allFinite()) {
+    const Eigen::MatrixXd cov =
+        fit.nls.std_errors.asDiagonal() * fit.nls.correlation * fit.nls.std_errors.asDiagonal();
+    q_se = (g * cov * g.transpose()).diagonal().cwiseSqrt();
+  }
+  Eigen::Index qi = 0;
+  fit.gain_se = q_se[qi++];
+  for (auto* list : {&fit.poles, &fit.zeros}) {
+    for (Factor& f : *list) {
+      f.corner_se = q_se[qi++];
+      if (f.complex_pair) f.zeta_se = q_se[qi++];
+    }
+  }
+  return fit;
+}
+
+std::string format_factored(const TfFit& fit, int digits) {
+  std::string out = num_text(fit.gain, digits);
+  if (!fit.zeros.empty()) out += '*' + (fit.zeros.size() == 1 ? product_text(fit.zeros, digits)
+                                                              : '(' + product_text(fit.zeros, digits) + ')');
+  if (!fit.poles.empty()) {
+    out += '/';
+    out += fit.poles.size() == 1 ? product_text(fit.poles, digits) : '(' + product_text(fit.poles, digits) + ')';
+  }
+  return out;
+}
+
+}  // namespace mcg::fit

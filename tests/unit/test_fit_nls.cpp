@@ -1,0 +1,103 @@
+// Levenberg-Marquardt wrapper: optimum and statistics against closed forms.
+#include "fit/nls.hpp"
+
+#include "common/error.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace mcg::fit {
+namespace {
+
+// Straight line y = a + b x: the least-squares optimum and its standard errors are known in
+// closed form, se(b) = sigma / sqrt(Sxx), se(a) = sigma sqrt(1/N + xbar^2 / Sxx),
+// corr(a, b) = -xbar / sqrt(Sxx / N + xbar^2).
+TEST(FitNls, StraightLineMatchesOrdinaryLeastSquares) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.3);
+  const int n = 200;
+  Eigen::VectorXd x(n), y(n);
+  for (int k = 0; k < n; ++k) {
+    x[k] = 0.37 * k + 1.3;
+    y[k] = 2.5 - 0.8 * x[k] + noise(rng);
+  }
+  const double xbar = x.mean();
+  const double ybar = y.mean();
+  const double sxx = (x.array() - xbar).square().sum();
+  const double sxy = ((x.array() - xbar) * (y.array() - ybar)).sum();
+  const double b = sxy / sxx;
+  const double a = ybar - b * xbar;
+  const double sigma = std::sqrt((y.array() - a - b * x.array()).square().sum() / (n - 2));
+
+  const auto result = least_squares({{"a", 1.0}, {"b", 1.0}}, n, [&](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
+    r = p[0] + p[1] * x.array() - y.array();
+  });
+  ASSERT_TRUE(result.converged) << result.reason;
+  EXPECT_NEAR(result.values[0], a, 1e-7);
+  EXPECT_NEAR(result.values[1], b, 1e-8);
+  EXPECT_NEAR(result.sigma, sigma, 1e-9);
+  EXPECT_NEAR(result.std_errors[1], sigma / std::sqrt(sxx), 1e-6 * sigma / std::sqrt(sxx));
+  EXPECT_NEAR(result.std_errors[0], sigma * std::sqrt(1.0 / n + xbar * xbar / sxx), 1e-6);
+  EXPECT_NEAR(result.correlation(0, 1), -xbar / std::sqrt(sxx / n + xbar * xbar), 1e-6);
+  EXPECT_EQ(result.names, (std::vector<std::string>{"a", "b"}));
+}
+
+// A log parameter stays positive and its standard error is expressed in physical units:
+// y = A exp(-t / tau), tau = 0.0147 s (the report's time constant), exact data.
+TEST(FitNls, LogParameterRecoversTimeConstant) {
+  const int n = 100;
+  Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(n, 0.0, 0.06);
+  const Eigen::VectorXd y = 3.0 * (-t.array() / 0.0147).exp();
+  const auto result = least_squares({{"A", 1.0, Transform::log}, {"tau_s", 0.1, Transform::log}}, n,
+                                    [&](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
+                                      r = p[0] * (-t.array() / p[1]).exp() - y.array();
+                                    });
+  ASSERT_TRUE(result.converged) << result.reason;
+  EXPECT_NEAR(result.values[1], 0.0147, 1e-10);
+  EXPECT_NEAR(result.values[0], 3.0, 1e-8);
+  EXPECT_LT(result.cost, 1e-20);
+}
+
+TEST(FitNls, BudgetSpentIsNotConvergence) {
+  NlsOptions options;
+  options.max_evaluations = 3;
+  const auto result = least_squares({{"k", 5.0, Transform::log}}, 3,
+                                    [](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
+                                      r << std::exp(-p[0]) - 0.5, std::exp(-2 * p[0]) - 0.25, p[0] * 0.0 + 0.01;
+                                    },
+                                    options);
+  EXPECT_FALSE(result.converged);
+  EXPECT_EQ(result.reason, "evaluation budget spent before convergence");
+}
+
+TEST(FitNls, RejectsTooFewResidualsAndNonPositiveLogStart) {
+  const ResidualFunction f = [](const Eigen::VectorXd& p, Eigen::VectorXd& r) { r.setConstant(p.sum()); };
+  EXPECT_THROW(
+      {
+        try {
+          least_squares({{"a", 1.0}, {"b", 1.0}}, 1, f);
+        } catch (const Error& e) {
+          EXPECT_STREQ(e.what(), "too little data: 1 residuals for 2 free parameters");
+          throw;
+        }
+      },
+      Error);
+  EXPECT_THROW(least_squares({{"J", 0.0, Transform::log}}, 4, f), Error);
+}
+
+// Two parameters that only enter as a sum: the data cannot tell them apart.
+TEST(FitNls, UndeterminedDirectionGivesInfiniteStandardErrors) {
+  Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(20, 0.0, 1.0);
+  const auto result = least_squares({{"a", 1.0}, {"b", 2.0}, {"c", 0.5}}, 20,
+                                    [&](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
+                                      r = (p[0] + p[1]) * x.array() + p[2] - (4.0 * x.array() + 1.0 + 0.01 * x.array().sin());
+                                    });
+  EXPECT_TRUE(std::isinf(result.std_errors[0]));
+  EXPECT_TRUE(std::isinf(result.std_errors[1]));
+  EXPECT_TRUE(std::isfinite(result.std_errors[2]));
+}
+
+}  // namespace
+}  // namespace mcg::fit

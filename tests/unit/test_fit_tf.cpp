@@ -1,0 +1,144 @@
+// Transfer-function fit on analytically computed frequency responses.
+#include "fit/tf.hpp"
+
+#include "common/error.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <sstream>
+
+namespace mcg::fit {
+namespace {
+
+using Complex = std::complex<double>;
+
+/// Log-spaced response of g between f0 and f1 (Hz), optionally with multiplicative noise
+/// of `sigma` nepers / rad on log G and a coherence column.
+FrequencyResponse response_of(const std::function<Complex(Complex)>& g, double f0, double f1, int points,
+                              double sigma = 0.0, std::uint64_t seed = 1) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  FrequencyResponse fr;
+  fr.source = "<test>";
+  for (int k = 0; k < points; ++k) {
+    const double f = f0 * std::pow(f1 / f0, k / (points - 1.0));
+    Complex h = g(Complex(0.0, 2.0 * std::numbers::pi * f));
+    h *= std::exp(Complex(sigma * noise(rng), sigma * noise(rng)));
+    fr.f_hz.push_back(f);
+    fr.mag_db.push_back(20.0 * std::log10(std::abs(h)));
+    fr.phase_deg.push_back(std::arg(h) * 180.0 / std::numbers::pi);
+  }
+  return fr;
+}
+
+Complex report_plant(Complex s) { return 16.557 / ((s / 65.0 + 1.0) * (s / 950.0 + 1.0)); }
+
+// The report's second-order plant, exact data: poles, gain and the coefficient form of the
+// report's Matlab appendix (den = [1.6194e-5 .016437 1]) come back.
+TEST(FitTf, ReportPlantExactResponse) {
+  const auto fit = fit_tf(response_of(report_plant, 0.5, 200.0, 60), {});
+  ASSERT_EQ(fit.poles.size(), 2U);
+  EXPECT_NEAR(fit.gain, 16.557, 1e-8);
+  EXPECT_NEAR(fit.poles[0].corner_rad_s, 65.0, 1e-7);
+  EXPECT_NEAR(fit.poles[1].corner_rad_s, 950.0, 1e-5);
+  EXPECT_FALSE(fit.poles[0].complex_pair);
+  ASSERT_EQ(fit.tf.den.size(), 3U);
+  EXPECT_NEAR(fit.tf.den[0], 1.0 / (65.0 * 950.0), 1e-12);  // 1.6194e-5 in the report
+  EXPECT_NEAR(fit.tf.den[1], 1.0 / 65.0 + 1.0 / 950.0, 1e-10);  // .016437 in the report
+  EXPECT_DOUBLE_EQ(fit.tf.den[2], 1.0);
+  EXPECT_NEAR(fit.tf.num[0], 16.557, 1e-8);
+  EXPECT_EQ(format_factored(fit), "16.557/((s/65+1)*(s/950+1))");
+  EXPECT_LT(fit.rms_mag_db, 1e-8);
+  EXPECT_TRUE(fit.nls.converged);
+}
+
+// Noisy estimate (0.02 nepers ~ 0.17 dB, 1.1 deg per point): within a few standard errors,
+// and the standard errors are of the size the noise implies.
+TEST(FitTf, ReportPlantNoisyResponseWithinStandardErrors) {
+  const auto fit = fit_tf(response_of(report_plant, 0.5, 200.0, 120, 0.02, 11), {});
+  ASSERT_EQ(fit.poles.size(), 2U);
+  EXPECT_NEAR(fit.gain, 16.557, 4.0 * fit.gain_se);
+  EXPECT_NEAR(fit.poles[0].corner_rad_s, 65.0, 4.0 * fit.poles[0].corner_se);
+  EXPECT_NEAR(fit.poles[1].corner_rad_s, 950.0, 4.0 * fit.poles[1].corner_se);
+  EXPECT_GT(fit.poles[1].corner_se, 1.0);
+  EXPECT_LT(fit.poles[1].corner_se, 60.0);
+  EXPECT_LT(fit.gain_se / 16.557, 0.01);
+  EXPECT_NEAR(fit.nls.sigma, 0.02, 0.004);
+}
+
+// A lightly damped pair with a zero and an integrator-free gain of 0.3:
+// G = 0.3 (s/20 + 1) / ((s/300)^2 + 2 0.15 s/300 + 1) / (s/5 + 1).
+TEST(FitTf, ResonantPlantWithZero) {
+  const auto g = [](Complex s) {
+    return 0.3 * (s / 20.0 + 1.0) / ((s / 300.0) * (s / 300.0) + 0.3 * s / 300.0 + 1.0) / (s / 5.0 + 1.0);
+  };
+  TfFitOptions options;
+  options.poles = 3;
+  options.zeros = 1;
+  const auto fit = fit_tf(response_of(g, 0.1, 500.0, 200), options);
+  ASSERT_EQ(fit.poles.size(), 2U);
+  ASSERT_EQ(fit.zeros.size(), 1U);
+  EXPECT_NEAR(fit.gain, 0.3, 1e-7);
+  EXPECT_NEAR(fit.poles[0].corner_rad_s, 5.0, 1e-6);
+  EXPECT_TRUE(fit.poles[1].complex_pair);
+  EXPECT_NEAR(fit.poles[1].corner_rad_s, 300.0, 1e-5);
+  EXPECT_NEAR(fit.poles[1].zeta, 0.15, 1e-7);
+  EXPECT_NEAR(fit.zeros[0].corner_rad_s, 20.0, 1e-6);
+  EXPECT_EQ(format_factored(fit), "0.3*(s/20+1)/((s/5+1)*((s/300)^2+0.3*(s/300)+1))");
+}
+
+// Coherence weights: points with coherence 0 are ignored, so a corrupted stretch with zero
+// coherence does not move the fit.
+TEST(FitTf, ZeroCoherencePointsAreIgnored) {
+  auto fr = response_of(report_plant, 0.5, 200.0, 80);
+  fr.coherence.assign(fr.f_hz.size(), 0.98);
+  for (std::size_t k = 30; k < 40; ++k) {
+    fr.mag_db[k] += 12.0;
+    fr.coherence[k] = 0.0;
+  }
+  const auto fit = fit_tf(fr, {});
+  EXPECT_NEAR(fit.poles[0].corner_rad_s, 65.0, 1e-6);
+  EXPECT_NEAR(fit.gain, 16.557, 1e-7);
+  EXPECT_EQ(fit.points, 70U);
+}
+
+TEST(FitTf, ErrorsNameTheProblem) {
+  const auto fr = response_of(report_plant, 1.0, 10.0, 2);
+  try {
+    fit_tf(fr, {});
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "<test>: too short: 2 usable frequencies for 3 coefficients");
+  }
+  TfFitOptions options;
+  options.zeros = 3;
+  EXPECT_THROW(fit_tf(response_of(report_plant, 1.0, 10.0, 30), options), Error);
+}
+
+TEST(FitTf, ReadsFrequencyResponseTables) {
+  std::istringstream in("f_hz,mag_db,phase_deg,coherence\n1,20,-10,0.9\n2,19,-20,1.2\n");
+  const auto table = table::read(in, "bode.csv");
+  try {
+    read_frequency_response(table);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "bode.csv:3: column 'coherence': 1.2 is outside 0..1");
+  }
+}
+
+TEST(FitTf, PolynomialRoots) {
+  const auto roots = polynomial_roots({2.0, -6.0, 4.0, 0.0});  // 2 s (s - 1)(s - 2)
+  ASSERT_EQ(roots.size(), 3U);
+  std::vector<double> re;
+  for (const auto& r : roots) re.push_back(r.real());
+  std::sort(re.begin(), re.end());
+  EXPECT_NEAR(re[0], 0.0, 1e-15);
+  EXPECT_NEAR(re[1], 1.0, 1e-12);
+  EXPECT_NEAR(re[2], 2.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace mcg::fit
