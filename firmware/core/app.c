@@ -3,14 +3,14 @@
 
 #include "hal.h" /* hal_ticks_take, hal_uart_rx, hal_uart_tx_free, hal_board_id */
 
-uint8_t g_stream_seq;
-uint8_t g_dump_next;
+uint8_t MCG_XDATA g_stream_seq;
+uint8_t MCG_XDATA g_dump_next;
 
-static uint8_t s_service_ms;    /* ticks since the last keypad service */
-static uint16_t s_lcd_ms;       /* ticks since the last LCD refresh */
-static uint8_t s_stream_phase;  /* ticks into the present 2 ms sample */
-static uint8_t s_stream_count;  /* samples in the present block */
-static uint16_t s_stream_pulses;
+static MCG_XDATA uint8_t s_service_ms;    /* ticks since the last keypad service */
+static MCG_XDATA uint16_t s_lcd_ms;       /* ticks since the last LCD refresh */
+static MCG_XDATA uint8_t s_stream_phase;  /* ticks into the present 2 ms sample */
+static MCG_XDATA uint8_t s_stream_count;  /* samples in the present block */
+static MCG_XDATA uint16_t s_stream_pulses;
 static uint8_t MCG_XDATA s_block[MCG_STREAM_HEADER + MCG_STREAM_SAMPLES];
 static uint8_t MCG_XDATA s_data[MCG_LOGDATA_HEADER + 2u * MCG_LOG_DUMP_CHUNK];
 
@@ -97,9 +97,9 @@ static void dump_pump(void)
 {
   while (g_dump_next < MCG_LOG_DUMP_FRAMES &&
          hal_uart_tx_free() >= MCG_FRAME_OVERHEAD + sizeof s_data) {
-    uint8_t first = (uint8_t)(g_dump_next * MCG_LOG_DUMP_CHUNK);
-    uint8_t n = (uint8_t)(MCG_LOG_POINTS - first);
-    uint8_t i;
+    MCG_SLOW uint8_t first = (uint8_t)(g_dump_next * MCG_LOG_DUMP_CHUNK);
+    MCG_SLOW uint8_t n = (uint8_t)(MCG_LOG_POINTS - first);
+    MCG_SLOW uint8_t i;
     if (n > MCG_LOG_DUMP_CHUNK) {
       n = MCG_LOG_DUMP_CHUNK;
     }
@@ -115,12 +115,12 @@ static void dump_pump(void)
 
 void core_poll(void)
 {
-  uint16_t pulses;
-  uint8_t n = hal_ticks_take(&pulses);
-  uint8_t byte;
+  MCG_SLOW uint16_t pulses;
+  MCG_SLOW uint8_t n = hal_ticks_take(&pulses);
+  MCG_SLOW uint8_t byte;
   /* Late by several ticks (only if something overran a tick): share the pulses out evenly. */
   while (n > 0) {
-    uint16_t share = n == 1 ? pulses : pulses / n;
+    MCG_SLOW uint16_t share = n == 1 ? pulses : pulses / n;
     pulses = (uint16_t)(pulses - share);
     tick(share > 255u ? 255u : (uint8_t)share);
     --n;
@@ -138,8 +138,8 @@ static uint8_t MCG_XDATA s_ans[6];
 
 void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len)
 {
-  uint8_t st;
-  int16_t value;
+  MCG_SLOW uint8_t st;
+  MCG_SLOW int16_t value = 0;
   switch (cmd) {
   case MCG_CMD_VERSION:
     if (len != 0) {

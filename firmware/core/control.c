@@ -21,18 +21,18 @@
 
 int16_t g_kp, g_b0, g_b1, g_b2;
 uint8_t g_coef_frac;
-int16_t g_duty_min, g_duty_max, g_duty_bias;
+int16_t MCG_XDATA g_duty_min, g_duty_max, g_duty_bias;
 int16_t g_duty_out;
 uint8_t g_saturated;
 uint16_t g_counts_16ms;
 
-static uint8_t s_window[MCG_SPEED_WINDOW_MS]; /* pulses per tick, ring */
+static uint8_t MCG_IDATA s_window[MCG_SPEED_WINDOW_MS]; /* pulses per tick, ring */
 static uint8_t s_window_pos;
 static int16_t s_r_q8;                /* command, Q8 pulses per tick */
 static int16_t s_e1, s_e2;            /* e[n-1], e[n-2] */
 static int32_t s_u;                   /* U, Q(F+8) duty */
 static int32_t s_u_min, s_u_max;      /* limits in Q(F+8) */
-static int32_t s_u_bias;              /* P-mode bias in Q(F+8) */
+static MCG_XDATA int32_t s_u_bias;              /* P-mode bias in Q(F+8) */
 static int32_t s_u_half;              /* 2^(F+7), rounding */
 static uint8_t s_shift;               /* F + 8 */
 

@@ -37,8 +37,8 @@ void frame_rx_overrun(void);
 uint8_t frame_send(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len);
 /* Sends an answer: CMD | MCG_REPLY_BIT, the status, then len bytes of data. */
 uint8_t frame_reply(uint8_t cmd, uint8_t status, const uint8_t MCG_XDATA *data, uint8_t len);
-extern uint16_t g_rx_errors; /* frames dropped by the parser */
-extern uint16_t g_tx_drops;  /* frames not sent for lack of room */
+extern uint16_t MCG_XDATA g_rx_errors; /* frames dropped by the parser */
+extern uint16_t MCG_XDATA g_tx_drops;  /* frames not sent for lack of room */
 
 /* regs.c: the register map ------------------------------------------------------------------- */
 /* MCG_ST_OK and the value in *value, or MCG_ST_BAD_REG. */
@@ -50,13 +50,13 @@ uint8_t regs_write(uint8_t reg, int16_t value);
 uint8_t regs_writable(uint8_t reg);
 void regs_init(void);
 extern uint8_t g_mode;           /* MCG_MODE_* */
-extern int16_t g_rpm_cmd;        /* rpm */
+extern int16_t MCG_XDATA g_rpm_cmd;        /* rpm */
 extern int16_t g_duty_set;       /* open-loop duty, 1/1000 */
-extern int16_t g_duty_step;      /* keypad step, 1/1000 */
-extern uint8_t g_service_ms;     /* keypad/duty service period */
-extern uint8_t g_stream_on;
-extern uint8_t g_clutch_on;
-extern uint8_t g_load_on;
+extern int16_t MCG_XDATA g_duty_step;      /* keypad step, 1/1000 */
+extern uint8_t MCG_XDATA g_service_ms;     /* keypad/duty service period */
+extern uint8_t MCG_XDATA g_stream_on;
+extern uint8_t MCG_XDATA g_clutch_on;
+extern uint8_t MCG_XDATA g_load_on;
 
 /* control.c: speed measurement and the 1 ms controller --------------------------------------- */
 void control_init(void);
@@ -74,7 +74,7 @@ int16_t control_rpm(void);
 int16_t control_rpm_to_q8(int16_t rpm);
 extern int16_t g_kp, g_b0, g_b1, g_b2; /* Q(F) coefficients, 1/1000 duty per pulse/ms */
 extern uint8_t g_coef_frac;            /* F */
-extern int16_t g_duty_min, g_duty_max, g_duty_bias;
+extern int16_t MCG_XDATA g_duty_min, g_duty_max, g_duty_bias;
 extern int16_t g_duty_out;    /* the duty written to the PWM by the last update */
 extern uint8_t g_saturated;   /* last update hit duty_min or duty_max */
 extern uint16_t g_counts_16ms; /* pulses in the last 16 ticks */
@@ -85,10 +85,10 @@ void logger_tick(uint8_t pulses);
 /* MCG_ST_OK, or MCG_ST_BUSY while a dump is being sent. Restarts from point 0. */
 uint8_t logger_start(void);
 uint8_t logger_set_interval(uint8_t interval_ms); /* MCG_ST_BUSY while recording */
-extern uint16_t MCG_XDATA g_log[MCG_LOG_POINTS];
-extern uint8_t g_log_count;    /* points recorded */
-extern uint8_t g_log_interval; /* ms between points */
-extern uint8_t g_log_running;
+extern uint16_t MCG_XDATA MCG_AT(MCG_LOG_XADDR) g_log[MCG_LOG_POINTS];
+extern uint8_t MCG_XDATA g_log_count;    /* points recorded */
+extern uint8_t MCG_XDATA g_log_interval; /* ms between points */
+extern uint8_t MCG_XDATA g_log_running;
 
 /* seq.c: command sequence playback (the report's Simulink mode) ------------------------------- */
 void seq_init(void);
@@ -97,8 +97,8 @@ void seq_tick(void);
 uint8_t seq_write(uint8_t index, const uint8_t MCG_XDATA *entries, uint8_t n);
 uint8_t seq_clear(void);
 uint8_t seq_set_state(uint8_t state);
-extern uint8_t g_seq_len;
-extern uint8_t g_seq_state;
+extern uint8_t MCG_XDATA g_seq_len;
+extern uint8_t MCG_XDATA g_seq_state;
 
 /* menu.c: keypad and LCD --------------------------------------------------------------------- */
 void menu_init(void);
@@ -110,10 +110,10 @@ void menu_refresh(void);
 extern char MCG_XDATA g_lcd[2][17]; /* last text sent to the LCD, NUL-terminated */
 
 /* app.c: streaming and the log dump ---------------------------------------------------------- */
-extern uint8_t g_stream_seq;
+extern uint8_t MCG_XDATA g_stream_seq;
 /* Starts sending the RAM log as MCG_MSG_LOG_DATA frames; MCG_ST_BUSY while recording. */
 uint8_t app_dump_start(void);
-extern uint8_t g_dump_next; /* next chunk index, MCG_LOG_DUMP_FRAMES when idle */
+extern uint8_t MCG_XDATA g_dump_next; /* next chunk index, MCG_LOG_DUMP_FRAMES when idle */
 
 #ifdef __cplusplus
 }

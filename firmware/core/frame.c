@@ -7,11 +7,11 @@
 
 /* Bytes of the frame being received; s_buf[0] is always MCG_SYNC when s_fill > 0. */
 static uint8_t MCG_XDATA s_buf[FRAME_BUF_SIZE];
-static uint8_t s_fill;
-static uint8_t s_idle_ms; /* ticks since the last byte of a partial frame */
+static MCG_XDATA uint8_t s_fill;
+static MCG_XDATA uint8_t s_idle_ms; /* ticks since the last byte of a partial frame */
 static uint8_t MCG_XDATA s_err_payload[1];
-uint16_t g_rx_errors;
-uint16_t g_tx_drops;
+uint16_t MCG_XDATA g_rx_errors;
+uint16_t MCG_XDATA g_tx_drops;
 
 void frame_init(void)
 {
@@ -32,7 +32,7 @@ static void report_error(uint8_t status)
  * already received are scanned again, so a real frame that began inside a damaged one is not lost. */
 static void drop(uint8_t n)
 {
-  uint8_t i;
+  MCG_SLOW uint8_t i;
   while (n < s_fill && s_buf[n] != MCG_SYNC) {
     ++n;
   }
@@ -46,10 +46,10 @@ static void drop(uint8_t n)
 static void scan(void)
 {
   while (s_fill > 0) {
-    uint8_t len;
-    uint8_t total;
-    uint16_t crc;
-    uint8_t i;
+    MCG_SLOW uint8_t len;
+    MCG_SLOW uint8_t total;
+    MCG_SLOW uint16_t crc;
+    MCG_SLOW uint8_t i;
     if (s_fill < 2) {
       return;
     }
@@ -108,8 +108,8 @@ void frame_rx_overrun(void)
 
 uint8_t frame_send(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len)
 {
-  uint16_t crc = MCG_CRC_INIT;
-  uint8_t i;
+  MCG_SLOW uint16_t crc = MCG_CRC_INIT;
+  MCG_SLOW uint8_t i;
   if (hal_uart_tx_free() < (uint8_t)(len + MCG_FRAME_OVERHEAD)) {
     ++g_tx_drops;
     return 0;
@@ -132,7 +132,7 @@ static uint8_t MCG_XDATA s_reply[MCG_MAX_PAYLOAD];
 
 uint8_t frame_reply(uint8_t cmd, uint8_t status, const uint8_t MCG_XDATA *data, uint8_t len)
 {
-  uint8_t i;
+  MCG_SLOW uint8_t i;
   s_reply[0] = status;
   for (i = 0; i < len; ++i) {
     s_reply[i + 1] = data[i];

@@ -7,11 +7,11 @@
 #include "core.h"
 
 uint16_t MCG_XDATA MCG_AT(MCG_LOG_XADDR) g_log[MCG_LOG_POINTS];
-uint8_t g_log_count;
-uint8_t g_log_interval;
-uint8_t g_log_running;
-static uint8_t s_elapsed_ms;
-static uint16_t s_pulses;
+uint8_t MCG_XDATA g_log_count;
+uint8_t MCG_XDATA g_log_interval;
+uint8_t MCG_XDATA g_log_running;
+static MCG_XDATA uint8_t s_elapsed_ms;
+static MCG_XDATA uint16_t s_pulses;
 
 void logger_init(void)
 {

@@ -63,12 +63,12 @@ static MCG_CODE MenuItem s_items[] = {
 
 static MCG_CODE char s_mode_names[MCG_MODE_COUNT][4] = {"OL ", "P  ", "PI ", "PID"};
 
-static uint8_t s_screen;
-static uint8_t s_item;
-static uint8_t s_last_key;
-static uint8_t s_status; /* status of the last store, shown until the next key */
+static MCG_XDATA uint8_t s_screen;
+static MCG_XDATA uint8_t s_item;
+static MCG_XDATA uint8_t s_last_key;
+static MCG_XDATA uint8_t s_status; /* status of the last store, shown until the next key */
 static char MCG_XDATA s_entry[ENTRY_MAX + 1];
-static uint8_t s_entry_len;
+static MCG_XDATA uint8_t s_entry_len;
 
 void menu_init(void)
 {
@@ -81,7 +81,7 @@ void menu_init(void)
 }
 
 /* Writes v right-aligned into width characters at dst (no terminator). */
-static void put_int(char MCG_XDATA *dst, int32_t v, uint8_t width)
+static void put_int(char MCG_XDATA *dst, int32_t v, uint8_t width) MCG_REENTRANT
 {
   uint8_t neg = v < 0;
   uint32_t m = neg ? (uint32_t)-v : (uint32_t)v;
@@ -99,7 +99,7 @@ static void put_int(char MCG_XDATA *dst, int32_t v, uint8_t width)
 }
 
 /* Writes v / 10^decimals with that many decimals, right-aligned in width characters. */
-static void put_fixed(char MCG_XDATA *dst, int32_t v, uint8_t decimals, uint8_t width)
+static void put_fixed(char MCG_XDATA *dst, int32_t v, uint8_t decimals, uint8_t width) MCG_REENTRANT
 {
   uint32_t m = v < 0 ? (uint32_t)-v : (uint32_t)v;
   uint8_t i = width;
@@ -123,7 +123,7 @@ static void put_fixed(char MCG_XDATA *dst, int32_t v, uint8_t decimals, uint8_t 
 
 static void clear_line(uint8_t row)
 {
-  uint8_t i;
+  MCG_SLOW uint8_t i;
   for (i = 0; i < 16; ++i) {
     g_lcd[row][i] = ' ';
   }
@@ -138,7 +138,7 @@ static void put_text(uint8_t row, uint8_t col, const char *text)
 }
 
 /* A gain in Q(F) to thousandths, rounded half away from zero. */
-static int32_t coef_to_milli(int16_t raw)
+static int32_t coef_to_milli(int16_t raw) MCG_REENTRANT
 {
   int32_t m = (int32_t)raw * 1000;
   int32_t half = g_coef_frac > 0 ? ((int32_t)1 << (g_coef_frac - 1)) : 0;
@@ -150,7 +150,7 @@ static int32_t coef_to_milli(int16_t raw)
 
 static void show_value(uint8_t row)
 {
-  int16_t v = 0;
+  MCG_SLOW int16_t v = 0;
   MCG_CODE MenuItem *it = &s_items[s_item];
   regs_read(it->reg, &v);
   if (it->kind == KIND_COEF) {
@@ -200,7 +200,7 @@ void menu_refresh(void)
 
 /* Parses the entry: [-]digits[.digits]. Gains: round(value * 2^F), at most 3 decimals.
  * Returns MCG_ST_OK and *out, or MCG_ST_RANGE. */
-static uint8_t parse_entry(uint8_t kind, int16_t *out)
+static uint8_t parse_entry(uint8_t kind, int16_t *out) MCG_REENTRANT
 {
   uint8_t i = 0;
   uint8_t neg = 0;
@@ -248,9 +248,9 @@ static uint8_t parse_entry(uint8_t kind, int16_t *out)
 
 static void entry_key(uint8_t key)
 {
-  uint8_t kind = s_items[s_item].kind;
-  uint8_t i;
-  int16_t v;
+  MCG_SLOW uint8_t kind = s_items[s_item].kind;
+  MCG_SLOW uint8_t i;
+  MCG_SLOW int16_t v;
   if (key == KEY_D) {
     s_status = parse_entry(kind, &v);
     if (s_status == MCG_ST_OK) {
@@ -310,7 +310,7 @@ static void entry_key(uint8_t key)
 static void nudge(int8_t dir)
 {
   if (g_mode == MCG_MODE_OPEN) {
-    int16_t d = (int16_t)(g_duty_set + dir * g_duty_step);
+    MCG_SLOW int16_t d = (int16_t)(g_duty_set + dir * g_duty_step);
     if (d > g_duty_max) {
       d = g_duty_max;
     } else if (d < g_duty_min) {
@@ -348,8 +348,8 @@ static void main_key(uint8_t key, uint8_t repeat)
 
 void menu_service(void)
 {
-  uint8_t key = hal_key_read();
-  uint8_t repeat = key == s_last_key;
+  MCG_SLOW uint8_t key = hal_key_read();
+  MCG_SLOW uint8_t repeat = key == s_last_key;
   s_last_key = key;
   if (key == MCG_KEY_NONE) {
     return;

@@ -4,13 +4,13 @@
 #include "hal.h" /* hal_clutch_write, hal_load_write */
 
 uint8_t g_mode;
-int16_t g_rpm_cmd;
+int16_t MCG_XDATA g_rpm_cmd;
 int16_t g_duty_set;
-int16_t g_duty_step;
-uint8_t g_service_ms;
-uint8_t g_stream_on;
-uint8_t g_clutch_on;
-uint8_t g_load_on;
+int16_t MCG_XDATA g_duty_step;
+uint8_t MCG_XDATA g_service_ms;
+uint8_t MCG_XDATA g_stream_on;
+uint8_t MCG_XDATA g_clutch_on;
+uint8_t MCG_XDATA g_load_on;
 
 #define RPM_CMD_MIN 120 /* 420 - 300 */
 #define RPM_CMD_MAX 720 /* 420 + 300 */
@@ -32,7 +32,7 @@ void regs_init(void)
 
 static uint8_t flags(void)
 {
-  uint8_t f = 0;
+  MCG_SLOW uint8_t f = 0;
   if (g_saturated) {
     f |= MCG_FLAG_SATURATED;
   }
@@ -50,7 +50,7 @@ static uint8_t flags(void)
 
 uint8_t regs_read(uint8_t reg, int16_t *value)
 {
-  int16_t v;
+  MCG_SLOW int16_t v;
   switch (reg) {
   case MCG_REG_MODE: v = g_mode; break;
   case MCG_REG_RPM_CMD: v = g_rpm_cmd; break;
@@ -115,7 +115,7 @@ static void set_limits(int16_t lo, int16_t hi)
 
 uint8_t regs_write(uint8_t reg, int16_t v)
 {
-  int16_t dummy;
+  MCG_SLOW int16_t dummy;
   if (regs_read(reg, &dummy) != MCG_ST_OK) {
     return MCG_ST_BAD_REG;
   }

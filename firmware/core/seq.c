@@ -7,10 +7,10 @@
 #include "core.h"
 
 static uint8_t MCG_XDATA MCG_AT(MCG_SEQ_XADDR) s_table[MCG_SEQ_MAX * MCG_SEQ_ENTRY_BYTES];
-uint8_t g_seq_len;
-uint8_t g_seq_state;
-static uint8_t s_index;
-static uint16_t s_wait_ms;
+uint8_t MCG_XDATA g_seq_len;
+uint8_t MCG_XDATA g_seq_state;
+static MCG_XDATA uint8_t s_index;
+static MCG_XDATA uint16_t s_wait_ms;
 
 static uint16_t entry_delay(uint8_t k)
 {
@@ -28,8 +28,8 @@ void seq_init(void)
 
 uint8_t seq_write(uint8_t index, const uint8_t MCG_XDATA *entries, uint8_t n)
 {
-  uint16_t i;
-  uint8_t k;
+  MCG_SLOW uint16_t i;
+  MCG_SLOW uint8_t k;
   if (g_seq_state != MCG_SEQ_STOP) {
     return MCG_ST_BUSY;
   }
@@ -37,8 +37,8 @@ uint8_t seq_write(uint8_t index, const uint8_t MCG_XDATA *entries, uint8_t n)
     return MCG_ST_RANGE;
   }
   for (k = 0; k < n; ++k) {
-    uint8_t reg = entries[(uint16_t)k * MCG_SEQ_ENTRY_BYTES + 2];
-    int16_t dummy;
+    MCG_SLOW uint8_t reg = entries[(uint16_t)k * MCG_SEQ_ENTRY_BYTES + 2];
+    MCG_SLOW int16_t dummy;
     if (regs_read(reg, &dummy) != MCG_ST_OK) {
       return MCG_ST_BAD_REG;
     }
