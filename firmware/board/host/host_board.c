@@ -167,6 +167,14 @@ static int line_allows(uint32_t *credit)
   return 1;
 }
 
+/* Moves transmitted bytes from the UART ring onto the line, within the line's budget. */
+static void drain_tx(void)
+{
+  while (s_tx.count > 0 && s_line_out.count < s_line_out.cap && line_allows(&s_out_credit)) {
+    q_push(&s_line_out, q_pop(&s_tx));
+  }
+}
+
 void host_board_tick(uint16_t encoder_pulses)
 {
   ++s_time_ms;
@@ -180,18 +188,18 @@ void host_board_tick(uint16_t encoder_pulses)
     s_out_credit = (s_out_credit % 10000u) + s_baud;
   }
   core_poll();
+  drain_tx();
   /* Received bytes enter the UART ring; the core's main loop runs between batches, as the real
-   * main loop runs far more often than bytes arrive. */
+   * main loop runs far more often than bytes arrive, and the line takes answers meanwhile. */
   while (s_line_in.count > 0 && line_allows(&s_in_credit)) {
     q_push(&s_rx, q_pop(&s_line_in));
-    if (s_rx.count == s_rx.cap) {
+    if (s_rx.count == s_rx.cap || s_line_in.count == 0) {
       core_poll();
+      drain_tx();
     }
   }
   core_poll();
-  while (s_tx.count > 0 && s_line_out.count < s_line_out.cap && line_allows(&s_out_credit)) {
-    q_push(&s_line_out, q_pop(&s_tx));
-  }
+  drain_tx();
 }
 
 size_t host_board_rx(const uint8_t *data, size_t n)

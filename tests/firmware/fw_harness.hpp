@@ -1,0 +1,176 @@
+// fw_harness.hpp: drives the firmware core through its host board layer, the way the PC would.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "core.h"
+#include "host_board.h"
+#include "mcg_protocol.h"
+
+namespace fwtest {
+
+using Bytes = std::vector<std::uint8_t>;
+
+struct Frame {
+  std::uint8_t cmd = 0;
+  Bytes payload;
+};
+
+inline std::uint16_t crc16(const Bytes& bytes, std::size_t from, std::size_t to)
+{
+  unsigned crc = MCG_CRC_INIT;
+  for (std::size_t i = from; i < to; ++i) {
+    crc = mcg_crc16_update(crc, bytes[i]);
+  }
+  return static_cast<std::uint16_t>(crc);
+}
+
+// SYNC LEN CMD PAYLOAD CRC_LO CRC_HI
+inline Bytes encode(std::uint8_t cmd, const Bytes& payload = {})
+{
+  Bytes f{static_cast<std::uint8_t>(MCG_SYNC), static_cast<std::uint8_t>(payload.size()), cmd};
+  f.insert(f.end(), payload.begin(), payload.end());
+  const std::uint16_t crc = crc16(f, 1, f.size());
+  f.push_back(static_cast<std::uint8_t>(crc & 0xFFu));
+  f.push_back(static_cast<std::uint8_t>(crc >> 8));
+  return f;
+}
+
+inline Bytes le16(int v)
+{
+  const auto u = static_cast<std::uint16_t>(v);
+  return {static_cast<std::uint8_t>(u & 0xFFu), static_cast<std::uint8_t>(u >> 8)};
+}
+
+inline int i16_at(const Bytes& b, std::size_t at)
+{
+  return static_cast<std::int16_t>(static_cast<std::uint16_t>(b[at] | (b[at + 1] << 8)));
+}
+
+// Splits what the board sent into frames; the board's output must be clean framing (checked).
+class Decoder {
+ public:
+  std::vector<Frame> feed(const Bytes& bytes)
+  {
+    m_buf.insert(m_buf.end(), bytes.begin(), bytes.end());
+    std::vector<Frame> out;
+    for (;;) {
+      if (m_buf.size() < 2) {
+        break;
+      }
+      if (m_buf[0] != MCG_SYNC) {
+        ++m_garbage;
+        m_buf.erase(m_buf.begin());
+        continue;
+      }
+      const std::size_t total = m_buf[1] + std::size_t{MCG_FRAME_OVERHEAD};
+      if (m_buf.size() < total) {
+        break;
+      }
+      const std::uint16_t crc = crc16(m_buf, 1, total - 2);
+      if (m_buf[total - 2] != (crc & 0xFFu) || m_buf[total - 1] != (crc >> 8)) {
+        ++m_garbage;
+        m_buf.erase(m_buf.begin());
+        continue;
+      }
+      out.push_back(Frame{m_buf[2], Bytes(m_buf.begin() + 3, m_buf.begin() + static_cast<long>(total) - 2)});
+      m_buf.erase(m_buf.begin(), m_buf.begin() + static_cast<long>(total));
+    }
+    return out;
+  }
+  std::size_t garbage() const { return m_garbage; }
+
+ private:
+  Bytes m_buf;
+  std::size_t m_garbage = 0;
+};
+
+// The board after a power-on reset, with an unlimited serial line unless set_baud is called.
+class Board {
+ public:
+  Board() { host_board_reset(); }
+
+  void set_baud(std::uint32_t baud) { host_board_set_baud(baud); }
+  void send(const Bytes& bytes) { host_board_rx(bytes.data(), bytes.size()); }
+
+  // Runs ms ticks with the given encoder pulses per tick; returns the frames the board sent.
+  std::vector<Frame> run(int ms, std::uint16_t pulses_per_ms = 0)
+  {
+    std::vector<Frame> frames;
+    for (int i = 0; i < ms; ++i) {
+      host_board_tick(pulses_per_ms);
+      collect(frames);
+    }
+    return frames;
+  }
+
+  // Sends one request and waits (up to 200 ms of board time) for its answer.
+  std::optional<Frame> request(std::uint8_t cmd, const Bytes& payload = {})
+  {
+    send(encode(cmd, payload));
+    for (int i = 0; i < 200; ++i) {
+      std::vector<Frame> frames;
+      host_board_tick(m_pulses);
+      collect(frames);
+      for (const Frame& f : frames) {
+        if (f.cmd == (cmd | MCG_REPLY_BIT)) {
+          return f;
+        }
+        m_other.push_back(f);
+      }
+    }
+    return std::nullopt;
+  }
+
+  // Status of a register write (MCG_ST_*).
+  std::uint8_t write(std::uint8_t reg, int value)
+  {
+    Bytes p{reg};
+    const Bytes v = le16(value);
+    p.insert(p.end(), v.begin(), v.end());
+    const auto f = request(MCG_CMD_WRITE, p);
+    return f ? f->payload.at(0) : 0xFF;
+  }
+
+  int read(std::uint8_t reg)
+  {
+    const auto f = request(MCG_CMD_READ, {reg});
+    if (!f || f->payload.at(0) != MCG_ST_OK) {
+      return -100000;
+    }
+    return i16_at(f->payload, 2);
+  }
+
+  void key(std::uint8_t k) { host_board_key(k); }
+
+  // Holds a key for one service period, then releases it for one.
+  void press(std::uint8_t k, int service_ms = 40)
+  {
+    key(k);
+    run(service_ms);
+    key(MCG_KEY_NONE);
+    run(service_ms);
+  }
+
+  void set_pulses(std::uint16_t p) { m_pulses = p; }
+  const std::vector<Frame>& other() const { return m_other; }
+  std::size_t garbage() const { return m_decoder.garbage(); }
+
+ private:
+  void collect(std::vector<Frame>& frames)
+  {
+    std::uint8_t buf[512];
+    const std::size_t n = host_board_tx(buf, sizeof buf);
+    const auto got = m_decoder.feed(Bytes(buf, buf + n));
+    frames.insert(frames.end(), got.begin(), got.end());
+  }
+
+  Decoder m_decoder;
+  std::uint16_t m_pulses = 0;
+  std::vector<Frame> m_other;
+};
+
+}  // namespace fwtest
