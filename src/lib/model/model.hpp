@@ -1,0 +1,232 @@
+// The rig: motor, clutch and generator of the report, its parameters, effects and simulation.
+//
+// Physics (SI units throughout; w = shaft speed in rad/s, i = armature current in A):
+//   motor armature       L di/dt = v_m - R i - Ke w_m                      (v_m: bridge output)
+//   generator armature   L_g di_g/dt = Ke_g w_g - (R_g + r_load) i_g        (r_load = inf: i_g = 0)
+//   rotors               J dw/dt = T_drive - sum_k F_k(w)
+//   friction element k   F_k(w) = sign(w) (Tc_k + P_k(|w|)) while moving, P_k(x) = c1 x + c2 x^2 + c3 x^3;
+//                        at rest the body stays at rest while |T_drive| <= sum_k Ts_k (true stick-slip)
+//   clutch states        0: motor alone {motor}; 1: attached, disengaged {motor, clutch_disengaged},
+//                        the generator a separate body {generator} that coasts; 2: engaged, one rigid
+//                        body Jm + Jg {motor, clutch_engaged, generator}, momentum conserved on engaging
+//   bridge               v_m = clamp(v, -supply_V, supply_V), delayed by dead_time_s
+#pragma once
+
+#include <array>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace mcg::config {
+class Ini;
+}
+
+namespace mcg::model {
+
+/// One friction element. Moving: F(w) = sign(w) (Tc_Nm + c1 |w| + c2 |w|^2 + c3 |w|^3);
+/// at rest it holds up to Ts_Nm. The viscous polynomial is applied with odd symmetry.
+struct Friction {
+  double Ts_Nm = 0.0;                         ///< static (breakaway) level, N m
+  double Tc_Nm = 0.0;                         ///< Coulomb level, N m
+  std::array<double, 3> viscous{0, 0, 0};     ///< c1 [N m s/rad], c2 [N m s^2/rad^2], c3 [N m s^3/rad^3]
+
+  /// Kinetic friction magnitude at speed |w| = x_rad_s (without Stribeck): Tc + P(x).
+  double kinetic_Nm(double x_rad_s) const {
+    return Tc_Nm + x_rad_s * (viscous[0] + x_rad_s * (viscous[1] + x_rad_s * viscous[2]));
+  }
+};
+
+/// One DC machine (the motor, or the identical machine used as generator).
+struct Machine {
+  double R_ohm = 0.0;        ///< armature resistance
+  double L_H = 0.0;          ///< armature inductance
+  double Kt_Nm_A = 0.0;      ///< torque constant
+  double Ke_V_s_rad = 0.0;   ///< back-EMF constant (= Kt in SI units)
+  double J_kg_m2 = 0.0;      ///< rotor inertia
+  Friction friction;         ///< the machine's own bearing and brush friction
+};
+
+/// Every parameter of the rig, SI units. The INI form is described in docs/formats.md.
+struct Params {
+  Machine motor;
+  Machine generator;
+  Friction clutch_disengaged;   ///< clutch attached, not engaged (state 1), on the motor shaft
+  Friction clutch_engaged;      ///< clutch engaged (state 2), on the coupled shaft
+  double supply_V = 20.0;       ///< H-bridge supply: v = duty * supply_V, saturated at +-supply_V
+  double dead_time_s = 0.0;     ///< transport delay of the applied voltage (clutch/relay not delayed)
+};
+
+/// The report's rig (see model.cpp for the sources of every number and the inertia choice).
+Params builtin_rig();
+
+/// Reads the parameters present in `ini` over `base`; unknown keys in the model's sections
+/// ([motor], [generator], [clutch_disengaged], [clutch_engaged], [drive]) are an error
+/// naming the file and line; other sections are ignored. Throws mcg::Error on bad values.
+Params from_ini(const config::Ini& ini, Params base = builtin_rig());
+/// Writes every parameter of `params` into `ini` (with units as comments).
+void to_ini(const Params& params, config::Ini& ini);
+
+/// One optional effect of the catalog with its parameter values (all of the effect's
+/// parameters, defaults filled in, in catalog order).
+struct Effect {
+  std::string name;
+  std::vector<std::pair<std::string, double>> params;
+
+  /// Value of parameter `key`; the key must belong to the effect (assert).
+  double get(std::string_view key) const;
+  void set(std::string_view key, double value);
+};
+
+/// Documentation of one effect parameter.
+struct EffectParamSpec {
+  std::string name;
+  double default_value;
+  double lower;
+  double upper;
+  std::string unit;
+  std::string doc;
+};
+
+/// One entry of the effect catalog.
+struct EffectSpec {
+  std::string name;
+  std::string summary;    ///< one line
+  std::string equation;   ///< the physics, plain text
+  std::vector<EffectParamSpec> params;
+};
+
+/// The catalog, fixed order: stribeck, dead_time, supply_sag, hbridge, brush_drop,
+/// clutch_compliance, clutch_engage_lag, cogging, thermal, param_mismatch.
+const std::vector<EffectSpec>& effect_catalog();
+/// The spec of effect `name`, or nullptr.
+const EffectSpec* find_effect(std::string_view name);
+/// An effect with all parameters at their defaults. Throws mcg::Error for an unknown name.
+Effect default_effect(std::string_view name);
+/// Parses "NAME" or "NAME:key=value,key=value". Unknown names/keys, malformed numbers and
+/// values outside the bounds throw mcg::Error "<where>: ...: '<bad text>'".
+Effect parse_effect(std::string_view text, std::string_view where = "--effect");
+/// "NAME:key=value,..." with every parameter, numbers in shortest exact form.
+std::string format_effect(const Effect& effect);
+
+/// The model: nominal parameters plus active effects (each name at most once).
+struct Model {
+  Params params = builtin_rig();
+  std::vector<Effect> effects;
+
+  const Effect* effect(std::string_view name) const;
+};
+
+/// Reads parameters and effects ([effect.NAME] sections with the effect's keys) from `ini`.
+Model model_from_ini(const config::Ini& ini, Model base = Model{});
+void model_to_ini(const Model& model, config::Ini& ini);
+
+/// One named, bounded parameter of a model, for fitting.
+struct ParamInfo {
+  std::string name;   ///< "motor.R_ohm", "clutch_engaged.Tc_Nm", "stribeck.v_s_rad_s", ...
+  double value;
+  double lower;
+  double upper;
+  std::string unit;
+};
+
+/// The nominal parameters (named "section.key" as in the INI form, e.g. "motor.J_kg_m2",
+/// "motor.Kt_Nm_A", "motor.Tc_Nm", "motor.c1", "drive.dead_time_s") followed by every
+/// parameter of the active effects ("EFFECT.key").
+std::vector<ParamInfo> parameters(const Model& model);
+/// Sets one parameter by its name; throws mcg::Error for an unknown name.
+void set_parameter(Model& model, std::string_view name, double value);
+/// Reads one parameter by its name; throws mcg::Error for an unknown name.
+double get_parameter(const Model& model, std::string_view name);
+
+/// Open circuit on the generator terminals.
+inline constexpr double k_open_circuit = std::numeric_limits<double>::infinity();
+
+/// What drives the plant over one step: the commanded average bridge voltage, the clutch
+/// state and the generator load.
+struct Drive {
+  double v_V = 0.0;                       ///< commanded average voltage, duty * supply_V
+  int clutch = 2;                         ///< 0, 1 or 2
+  double r_load_ohm = k_open_circuit;     ///< >= 0, inf = relay open
+};
+
+/// The plant's state at one instant.
+struct State {
+  double t_s = 0.0;
+  double omega_rad_s = 0.0;       ///< motor shaft speed
+  double omega_gen_rad_s = 0.0;   ///< generator shaft speed (= motor when rigidly engaged; 0 in state 0)
+  double theta_rad = 0.0;         ///< motor shaft angle since the start
+  double theta_gen_rad = 0.0;     ///< generator shaft angle since the start
+  double i_A = 0.0;               ///< motor armature current
+  double i_gen_A = 0.0;           ///< generator current (through winding and r_load)
+  double v_gen_V = 0.0;           ///< generator terminal voltage: r_load i_gen, or Ke w_g when open
+  double v_applied_V = 0.0;       ///< average voltage at the motor terminals (after delay, bridge effects)
+  double temp_rise_K = 0.0;       ///< motor winding temperature rise (thermal effect)
+  int clutch = 2;
+  bool stuck = true;              ///< motor shaft held by static friction
+};
+
+/// Integrator settings.
+struct SimOptions {
+  /// Largest RK4 step, s. The step is also bounded by the fastest electrical or spring mode.
+  double max_step_s = 1e-4;
+};
+
+class PlantImpl;
+
+/// The plant, stepped in time: fixed-step RK4 between events, with the zero crossings of the
+/// speeds and the breakaway instants located inside a step (so stick-slip does not chatter or
+/// creep), row inputs held over each step. Copyable (a copy is an independent snapshot).
+class Plant {
+ public:
+  explicit Plant(const Model& model, const SimOptions& options = {}, int initial_clutch = 2);
+  ~Plant();
+  Plant(const Plant& other);
+  Plant& operator=(const Plant& other);
+  Plant(Plant&&) noexcept;
+  Plant& operator=(Plant&&) noexcept;
+
+  /// Advances by dt_s > 0 with `drive` held over [t, t + dt_s). A clutch change takes effect
+  /// at the start of the step.
+  void step(double dt_s, const Drive& drive);
+  State state() const;
+  double time_s() const;
+
+ private:
+  PlantImpl* m_impl;
+};
+
+/// Open-loop inputs, one entry per row; row n acts over [t_s[n], t_s[n+1]).
+struct Inputs {
+  std::vector<double> t_s;
+  std::vector<double> v_V;
+  std::vector<double> clutch;       ///< 0, 1, 2
+  std::vector<double> r_load_ohm;   ///< >= 0 or inf
+};
+
+/// Outputs, one entry per row: the state at t_s[n] (before row n's inputs act).
+struct Outputs {
+  std::vector<double> omega_rad_s;
+  std::vector<double> rpm;          ///< true speed, 60 w / (2 pi)
+  std::vector<double> theta_rad;
+  std::vector<double> omega_gen_rad_s;
+  std::vector<double> i_A;
+  std::vector<double> i_gen_A;
+  std::vector<double> v_gen_V;
+  std::vector<double> v_applied_V;
+
+  void resize(std::size_t rows);
+  void store(std::size_t row, const State& state);
+};
+
+/// Simulates the rows of `inputs` from rest at t_s[0] (initial clutch = clutch[0]).
+/// Inputs are validated by the caller (increasing finite t, finite v, clutch 0/1/2, r_load >= 0);
+/// asserts otherwise.
+Outputs simulate(const Model& model, const Inputs& inputs, const SimOptions& options = {});
+
+/// Checks `inputs` like mcg-sim does; throws mcg::Error naming `source` and the row's line
+/// (line = first_line + row) for the first bad value.
+void validate_inputs(const Inputs& inputs, std::string_view source, std::size_t first_line);
+
+}  // namespace mcg::model

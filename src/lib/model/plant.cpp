@@ -1,0 +1,712 @@
+// The plant integrator: RK4 between events, stick-slip and clutch events located inside a step.
+//
+// The continuous state is y = [i_m, i_g, w_m, w_g, theta_m, theta_g, dT_m, dT_g]. The discrete
+// mode is the clutch coupling (none, rigid, spring, slipping plates), for each body whether it is
+// stuck and, if moving, its direction. Within a step the direction is held, so the right-hand
+// side is smooth and RK4 keeps its order; a speed reaching zero, a stuck body's drive torque
+// leaving the static band and the slip speed of the clutch plates reaching zero are located
+// in the step (cubic Hermite interpolation of the speed, secant on the torque), the step is
+// redone up to the event, the mode switches and integration continues.
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <deque>
+#include <numbers>
+
+#include "model/model.hpp"
+
+namespace mcg::model {
+
+namespace {
+
+constexpr int k_states = 8;
+enum : std::size_t { I_M, I_G, W_M, W_G, TH_M, TH_G, DT_M, DT_G };
+using Vec = std::array<double, k_states>;
+
+/// Brush drop smoothing current (reference definition): V_b tanh(i / 0.01 A).
+constexpr double k_brush_i_A = 0.01;
+/// Generator circuits faster than this (R + r_load)/L, 1/s, are solved as algebraic: the
+/// current follows the EMF within 50 us, far below the 16 ms mechanical time constant.
+constexpr double k_quasi_static_rate = 2e4;
+/// Events handled inside one integration step before the step is accepted as is.
+constexpr int k_max_events_per_step = 16;
+
+enum class Coupling { none, rigid, spring, slip };
+
+Friction operator+(const Friction& a, const Friction& b) {
+  Friction f;
+  f.Ts_Nm = a.Ts_Nm + b.Ts_Nm;
+  f.Tc_Nm = a.Tc_Nm + b.Tc_Nm;
+  for (std::size_t k = 0; k < 3; ++k) f.viscous[k] = a.viscous[k] + b.viscous[k];
+  return f;
+}
+
+int sign_of(double x) { return x > 0.0 ? 1 : (x < 0.0 ? -1 : 0); }
+
+}  // namespace
+
+/// The model with every effect resolved into plain numbers, for the inner loop.
+struct Compiled {
+  Params p;
+  Friction motor_side[3];   ///< friction on the motor body when the bodies are separate, per state
+  Friction rigid;           ///< motor + engaged clutch + generator
+  Friction gen;             ///< the generator's own
+  double J_total = 0.0;
+  double delay_s = 0.0;
+  bool stribeck = false;
+  double v_s = 1.0, shape = 1.0;
+  double R_s = 0.0;
+  double R_on2 = 0.0, deadband = 0.0;
+  double V_b = 0.0;
+  bool compliance = false;
+  double k_spring = 0.0, c_spring = 0.0;
+  bool lag = false;
+  double T_max = 0.0, tau_lag = 1.0;
+  bool cogging = false;
+  double T_cog = 0.0, N_cog = 0.0, phase_cog = 0.0;
+  bool thermal = false;
+  double R_th = 1.0, C_th = 1.0, alpha = 0.0, dT0 = 0.0;
+
+  explicit Compiled(const Model& model) : p(model.params) {
+    delay_s = p.dead_time_s;
+    if (const Effect* e = model.effect("param_mismatch")) {
+      for (Machine* m : {&p.motor, &p.generator}) {
+        m->Kt_Nm_A *= e->get("Kt_scale");
+        m->Ke_V_s_rad *= e->get("Kt_scale");
+        m->J_kg_m2 *= e->get("J_scale");
+        m->R_ohm *= e->get("R_scale");
+        m->L_H *= e->get("L_scale");
+      }
+      for (Friction* f : {&p.motor.friction, &p.generator.friction, &p.clutch_disengaged, &p.clutch_engaged}) {
+        f->Tc_Nm *= e->get("coulomb_scale");
+        f->Ts_Nm *= e->get("static_scale");
+        for (double& c : f->viscous) c *= e->get("viscous_scale");
+      }
+    }
+    motor_side[0] = p.motor.friction;
+    motor_side[1] = p.motor.friction + p.clutch_disengaged;
+    motor_side[2] = p.motor.friction + p.clutch_engaged;
+    gen = p.generator.friction;
+    rigid = motor_side[2] + gen;
+    J_total = p.motor.J_kg_m2 + p.generator.J_kg_m2;
+    if (const Effect* e = model.effect("stribeck")) {
+      stribeck = true;
+      v_s = e->get("v_s_rad_s");
+      shape = e->get("shape_exp");
+    }
+    if (const Effect* e = model.effect("dead_time")) delay_s += e->get("tau_d_s");
+    if (const Effect* e = model.effect("supply_sag")) R_s = e->get("R_s_ohm");
+    if (const Effect* e = model.effect("hbridge")) {
+      R_on2 = 2.0 * e->get("R_on_ohm");
+      deadband = e->get("deadband");
+    }
+    if (const Effect* e = model.effect("brush_drop")) V_b = e->get("V_b_V");
+    if (const Effect* e = model.effect("clutch_compliance")) {
+      compliance = true;
+      k_spring = e->get("k_Nm_per_rad");
+      const double J_red = p.motor.J_kg_m2 * p.generator.J_kg_m2 / J_total;
+      c_spring = 2.0 * e->get("zeta") * std::sqrt(k_spring * J_red);
+    }
+    if (const Effect* e = model.effect("clutch_engage_lag")) {
+      lag = true;
+      T_max = e->get("T_max_Nm");
+      tau_lag = e->get("tau_s");
+    }
+    if (const Effect* e = model.effect("cogging")) {
+      cogging = true;
+      T_cog = e->get("T_c_Nm");
+      N_cog = e->get("N_per_rev");
+      phase_cog = e->get("phase_rad");
+    }
+    if (const Effect* e = model.effect("thermal")) {
+      thermal = true;
+      R_th = e->get("R_th_K_W");
+      C_th = e->get("tau_th_s") / R_th;
+      alpha = e->get("alpha_per_K");
+      dT0 = e->get("dT0_K");
+    }
+  }
+
+  /// Kinetic friction magnitude at speed x = dir * w (x may dip slightly below 0 inside an
+  /// RK4 stage; the polynomial continues smoothly there).
+  double kinetic(const Friction& f, double x) const {
+    double F = f.kinetic_Nm(x);
+    if (stribeck && x > 0.0) {
+      F += (f.Ts_Nm - f.Tc_Nm) * std::exp(-std::pow(x / v_s, shape));
+    } else if (stribeck) {
+      F += f.Ts_Nm - f.Tc_Nm;
+    }
+    return F;
+  }
+  /// Breakaway level: the static level, or the kinetic level at 0+ if that is larger
+  /// (otherwise a released body would be pulled back at once).
+  double breakaway(const Friction& f) const { return std::max(f.Ts_Nm, f.Tc_Nm); }
+};
+
+class PlantImpl {
+ public:
+  PlantImpl(const Model& model, const SimOptions& options, int initial_clutch)
+      : m_c(model), m_opt(options) {
+    m_y.fill(0.0);
+    m_y[DT_M] = m_c.dT0;
+    m_y[DT_G] = m_c.dT0;
+    m_clutch = initial_clutch;
+    m_t_engage = -std::numeric_limits<double>::infinity();
+    if (m_clutch == 2) {
+      m_coupling = m_c.compliance ? Coupling::spring : Coupling::rigid;
+    }
+  }
+
+  void step(double dt, const Drive& drive) {
+    assert(dt > 0.0);
+    assert(drive.clutch >= 0 && drive.clutch <= 2);
+    assert(drive.r_load_ohm >= 0.0);
+    set_clutch(drive.clutch);
+    set_load(drive.r_load_ohm);
+    const double t_end = m_t + dt;
+    if (m_c.delay_s > 0.0) {
+      m_queue.emplace_back(m_t + m_c.delay_s, drive.v_V);
+    } else {
+      m_v = drive.v_V;
+    }
+    constexpr double k_time_eps = 1e-12;
+    while (m_t < t_end - k_time_eps) {
+      while (!m_queue.empty() && m_queue.front().first <= m_t + k_time_eps) {
+        m_v = m_queue.front().second;
+        m_queue.pop_front();
+      }
+      double seg_end = t_end;
+      if (!m_queue.empty() && m_queue.front().first < t_end - k_time_eps) seg_end = m_queue.front().first;
+      integrate(seg_end - m_t);
+      m_t = seg_end;
+    }
+    m_t = t_end;
+    while (!m_queue.empty() && m_queue.front().first <= m_t + k_time_eps) {
+      m_v = m_queue.front().second;
+      m_queue.pop_front();
+    }
+  }
+
+  State state() const {
+    State s;
+    s.t_s = m_t;
+    s.omega_rad_s = m_y[W_M];
+    s.omega_gen_rad_s = m_y[W_G];
+    s.theta_rad = m_y[TH_M];
+    s.theta_gen_rad = m_y[TH_G];
+    s.i_A = m_y[I_M];
+    s.i_gen_A = gen_current(m_y);
+    if (!gen_present()) {
+      s.v_gen_V = 0.0;
+    } else if (std::isinf(m_r_load)) {
+      s.v_gen_V = m_c.p.generator.Ke_V_s_rad * m_y[W_G];
+    } else {
+      s.v_gen_V = m_r_load * s.i_gen_A;
+    }
+    double d = 0.0;
+    const double v_b = bridge(d);
+    s.v_applied_V = v_b - (m_c.R_on2 + std::abs(d) * m_c.R_s) * m_y[I_M];
+    s.temp_rise_K = m_y[DT_M];
+    s.clutch = m_clutch;
+    s.stuck = m_stuck_m;
+    return s;
+  }
+
+  double time() const { return m_t; }
+
+ private:
+  bool gen_present() const { return m_clutch != 0; }
+  bool gen_circuit() const { return gen_present() && std::isfinite(m_r_load); }
+  bool gen_quasi_static() const {
+    return gen_circuit() &&
+           (m_c.p.generator.R_ohm + m_r_load) / m_c.p.generator.L_H > k_quasi_static_rate;
+  }
+  bool rigid() const { return m_coupling == Coupling::rigid; }
+
+  /// Bridge output before the current-dependent drops: d' supply_V; d' is returned.
+  double bridge(double& d_out) const {
+    const double supply = m_c.p.supply_V;
+    double d = std::clamp(m_v / supply, -1.0, 1.0);
+    if (m_c.deadband > 0.0) d = std::copysign(std::max(0.0, std::abs(d) - m_c.deadband), d);
+    d_out = d;
+    return d * supply;
+  }
+
+  double gen_resistance(const Vec& y) const {
+    const double R = m_c.p.generator.R_ohm;
+    return m_c.thermal ? R * (1.0 + m_c.alpha * y[DT_G]) : R;
+  }
+
+  /// The generator current: the state, or the algebraic solution of
+  /// Ke w_g = (R + r_load) i + V_b tanh(i / 0.01 A) for a fast circuit.
+  double gen_current(const Vec& y) const {
+    if (!gen_circuit()) return 0.0;
+    if (!gen_quasi_static()) return y[I_G];
+    const double emf = m_c.p.generator.Ke_V_s_rad * y[W_G];
+    const double R = gen_resistance(y) + m_r_load;
+    if (m_c.V_b <= 0.0) return emf / R;
+    double lo = -std::abs(emf) / R;
+    double hi = std::abs(emf) / R;
+    for (int it = 0; it < 60; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      if (R * mid + m_c.V_b * std::tanh(mid / k_brush_i_A) > emf) {
+        hi = mid;
+      } else {
+        lo = mid;
+      }
+    }
+    return 0.5 * (lo + hi);
+  }
+
+  /// Capacity of the clutch plates at time t (clutch_engage_lag).
+  double capacity(double t) const {
+    const double age = t - m_t_engage;
+    if (age <= 0.0) return 0.0;
+    return m_c.T_max * (1.0 - std::exp(-age / m_c.tau_lag));
+  }
+
+  const Friction& motor_friction() const { return m_c.motor_side[static_cast<std::size_t>(m_clutch)]; }
+
+  /// Torques on the bodies other than friction: motor body (or the rigid pair) and generator body.
+  void drive_torques(const Vec& y, double t, double& Tm, double& Tg) const {
+    drive_torques(y, t, m_coupling, Tm, Tg);
+  }
+  void drive_torques(const Vec& y, double t, Coupling coupling, double& Tm, double& Tg) const {
+    Tm = m_c.p.motor.Kt_Nm_A * y[I_M];
+    if (m_c.cogging) Tm += m_c.T_cog * std::sin(m_c.N_cog * y[TH_M] + m_c.phase_cog);
+    Tg = -m_c.p.generator.Kt_Nm_A * gen_current(y);
+    switch (coupling) {
+      case Coupling::none:
+        break;
+      case Coupling::rigid:
+        Tm += Tg;
+        Tg = 0.0;
+        break;
+      case Coupling::spring: {
+        const double Ts = m_c.k_spring * (y[TH_M] - y[TH_G] - m_phi0) + m_c.c_spring * (y[W_M] - y[W_G]);
+        Tm -= Ts;
+        Tg += Ts;
+        break;
+      }
+      case Coupling::slip: {
+        const double Tcl = capacity(t) * m_slip_dir;
+        Tm -= Tcl;
+        Tg += Tcl;
+        break;
+      }
+    }
+  }
+
+  void deriv(const Vec& y, double t, Vec& dy) const {
+    double d = 0.0;
+    const double v_b = bridge(d);
+    const Machine& mm = m_c.p.motor;
+    const Machine& mg = m_c.p.generator;
+    const double Rm = (m_c.thermal ? mm.R_ohm * (1.0 + m_c.alpha * y[DT_M]) : mm.R_ohm) + m_c.R_on2 +
+                      std::abs(d) * m_c.R_s;
+    double vm = v_b - Rm * y[I_M] - mm.Ke_V_s_rad * y[W_M];
+    if (m_c.V_b > 0.0) vm -= m_c.V_b * std::tanh(y[I_M] / k_brush_i_A);
+    dy[I_M] = vm / mm.L_H;
+    const double i_g = gen_current(y);
+    dy[I_G] = 0.0;
+    if (gen_circuit() && !gen_quasi_static()) {
+      double vg = mg.Ke_V_s_rad * y[W_G] - (gen_resistance(y) + m_r_load) * y[I_G];
+      if (m_c.V_b > 0.0) vg -= m_c.V_b * std::tanh(y[I_G] / k_brush_i_A);
+      dy[I_G] = vg / mg.L_H;
+    }
+    double Tm = 0.0, Tg = 0.0;
+    drive_torques(y, t, Tm, Tg);
+    if (rigid()) {
+      const double a =
+          m_stuck_m ? 0.0 : (Tm - m_dir_m * m_c.kinetic(m_c.rigid, m_dir_m * y[W_M])) / m_c.J_total;
+      dy[W_M] = a;
+      dy[W_G] = a;
+    } else {
+      dy[W_M] = m_stuck_m ? 0.0
+                          : (Tm - m_dir_m * m_c.kinetic(motor_friction(), m_dir_m * y[W_M])) / mm.J_kg_m2;
+      dy[W_G] = (m_stuck_g || !gen_present())
+                    ? 0.0
+                    : (Tg - m_dir_g * m_c.kinetic(m_c.gen, m_dir_g * y[W_G])) / mg.J_kg_m2;
+    }
+    dy[TH_M] = y[W_M];
+    dy[TH_G] = y[W_G];
+    if (m_c.thermal) {
+      dy[DT_M] = (y[I_M] * y[I_M] * (Rm - m_c.R_on2 - std::abs(d) * m_c.R_s) - y[DT_M] / m_c.R_th) / m_c.C_th;
+      dy[DT_G] = (i_g * i_g * gen_resistance(y) - y[DT_G] / m_c.R_th) / m_c.C_th;
+    } else {
+      dy[DT_M] = 0.0;
+      dy[DT_G] = 0.0;
+    }
+  }
+
+  Vec rk4(const Vec& y0, double t0, double h, const Vec& k1) const {
+    Vec k2, k3, k4, tmp;
+    for (std::size_t j = 0; j < k_states; ++j) tmp[j] = y0[j] + 0.5 * h * k1[j];
+    deriv(tmp, t0 + 0.5 * h, k2);
+    for (std::size_t j = 0; j < k_states; ++j) tmp[j] = y0[j] + 0.5 * h * k2[j];
+    deriv(tmp, t0 + 0.5 * h, k3);
+    for (std::size_t j = 0; j < k_states; ++j) tmp[j] = y0[j] + h * k3[j];
+    deriv(tmp, t0 + h, k4);
+    Vec y1;
+    for (std::size_t j = 0; j < k_states; ++j) {
+      y1[j] = y0[j] + h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
+    }
+    return y1;
+  }
+
+  /// Largest step for accuracy: a fraction of the fastest electrical and spring time scales.
+  double step_limit() const {
+    double h = m_opt.max_step_s;
+    const Machine& mm = m_c.p.motor;
+    const double R_m = mm.R_ohm + m_c.R_on2 + m_c.R_s;
+    h = std::min(h, 0.5 * mm.L_H / R_m);
+    if (gen_circuit() && !gen_quasi_static()) {
+      h = std::min(h, 0.5 * m_c.p.generator.L_H / (m_c.p.generator.R_ohm + m_r_load));
+    }
+    if (m_c.compliance && m_coupling == Coupling::spring) {
+      const double inv_J = 1.0 / m_c.p.motor.J_kg_m2 + 1.0 / m_c.p.generator.J_kg_m2;
+      const double w_n = std::sqrt(m_c.k_spring * inv_J);
+      h = std::min(h, 0.3 / (w_n + m_c.c_spring * inv_J));
+    }
+    return h;
+  }
+
+  void integrate(double len) {
+    const double h_lim = step_limit();
+    const auto n = static_cast<long>(std::ceil(len / h_lim - 1e-9));
+    const double h = len / static_cast<double>(std::max(1L, n));
+    double t = m_t;
+    for (long k = 0; k < std::max(1L, n); ++k) {
+      substep(t, h);
+      t += h;
+    }
+  }
+
+  enum class EventKind { none, motor_zero, gen_zero, motor_break, gen_break, slip_zero };
+
+  /// Root in (0, 1] of the cubic Hermite interpolant of g with g(0) = g0 >= 0, g(1) = g1 <= 0.
+  static double hermite_root(double g0, double d0, double g1, double d1) {
+    auto g = [&](double s) {
+      const double s2 = s * s, s3 = s2 * s;
+      return (2 * s3 - 3 * s2 + 1) * g0 + (s3 - 2 * s2 + s) * d0 + (-2 * s3 + 3 * s2) * g1 + (s3 - s2) * d1;
+    };
+    double lo = 0.0, hi = 1.0;
+    for (int it = 0; it < 50; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      if (g(mid) > 0.0) {
+        lo = mid;
+      } else {
+        hi = mid;
+      }
+    }
+    return hi;
+  }
+
+  /// Breakaway fraction of a stuck body whose drive torque goes from T0 (inside the band)
+  /// to T1 (outside) over the step, by linear interpolation.
+  static double break_fraction(double T0, double T1, double Ts) {
+    const double bound = T1 > 0.0 ? Ts : -Ts;
+    if (std::abs(T0) > Ts || T1 == T0) return 0.0;
+    return std::clamp((bound - T0) / (T1 - T0), 0.0, 1.0);
+  }
+
+  double motor_breakaway() const {
+    return m_c.breakaway(rigid() ? m_c.rigid : motor_friction());
+  }
+  double gen_breakaway() const { return m_c.breakaway(m_c.gen); }
+
+  void substep(double t0, double h_total) {
+    double t = t0;
+    double remaining = h_total;
+    for (int events = 0; remaining > 0.0; ++events) {
+      Vec k1;
+      deriv(m_y, t, k1);
+      Vec y1 = rk4(m_y, t, remaining, k1);
+      if (events >= k_max_events_per_step) {
+        accept(y1, t + remaining);
+        return;
+      }
+      const bool two_bodies = !rigid() && gen_present();
+      double best = 2.0;
+      EventKind kind = EventKind::none;
+      Vec k_end{};
+      bool have_k_end = false;
+      auto end_derivative = [&]() -> const Vec& {
+        if (!have_k_end) {
+          deriv(y1, t + remaining, k_end);
+          have_k_end = true;
+        }
+        return k_end;
+      };
+      double Tm0 = 0.0, Tg0 = 0.0, Tm1 = 0.0, Tg1 = 0.0;
+      drive_torques(m_y, t, Tm0, Tg0);
+      drive_torques(y1, t + remaining, Tm1, Tg1);
+      // Motor body (or the rigid pair).
+      if (!m_stuck_m) {
+        if (m_dir_m * y1[W_M] <= 0.0) {
+          const double s = hermite_root(m_dir_m * m_y[W_M], m_dir_m * k1[W_M] * remaining, m_dir_m * y1[W_M],
+                                        m_dir_m * end_derivative()[W_M] * remaining);
+          if (s < best) {
+            best = s;
+            kind = EventKind::motor_zero;
+          }
+        }
+      } else if (std::abs(Tm1) > motor_breakaway()) {
+        const double s = break_fraction(Tm0, Tm1, motor_breakaway());
+        if (s < best) {
+          best = s;
+          kind = EventKind::motor_break;
+        }
+      }
+      if (two_bodies) {
+        if (!m_stuck_g) {
+          if (m_dir_g * y1[W_G] <= 0.0) {
+            const double s = hermite_root(m_dir_g * m_y[W_G], m_dir_g * k1[W_G] * remaining, m_dir_g * y1[W_G],
+                                          m_dir_g * end_derivative()[W_G] * remaining);
+            if (s < best) {
+              best = s;
+              kind = EventKind::gen_zero;
+            }
+          }
+        } else if (std::abs(Tg1) > gen_breakaway()) {
+          const double s = break_fraction(Tg0, Tg1, gen_breakaway());
+          if (s < best) {
+            best = s;
+            kind = EventKind::gen_break;
+          }
+        }
+        if (m_coupling == Coupling::slip) {
+          const double r1 = m_slip_dir * (y1[W_M] - y1[W_G]);
+          if (r1 <= 0.0) {
+            const Vec& ke = end_derivative();
+            const double s = hermite_root(m_slip_dir * (m_y[W_M] - m_y[W_G]),
+                                          m_slip_dir * (k1[W_M] - k1[W_G]) * remaining, r1,
+                                          m_slip_dir * (ke[W_M] - ke[W_G]) * remaining);
+            if (s < best) {
+              best = s;
+              kind = EventKind::slip_zero;
+            }
+          }
+        }
+      }
+      if (kind == EventKind::none) {
+        accept(y1, t + remaining);
+        check_unlock(t);
+        return;
+      }
+      const double h_event = best * remaining;
+      if (best < 1.0) y1 = h_event > 0.0 ? rk4(m_y, t, h_event, k1) : m_y;
+      accept(y1, t + h_event);
+      t += h_event;
+      remaining -= h_event;
+      if (remaining < 1e-15) remaining = 0.0;
+      apply_event(kind, t);
+    }
+  }
+
+  void accept(const Vec& y, double t) {
+    m_y = y;
+    if (rigid()) m_y[W_G] = m_y[W_M];
+    if (m_stuck_m) m_y[W_M] = 0.0;
+    if (rigid() && m_stuck_m) m_y[W_G] = 0.0;
+    if (!rigid() && (m_stuck_g || !gen_present())) m_y[W_G] = 0.0;
+    if (!gen_circuit()) m_y[I_G] = 0.0;
+    (void)t;
+  }
+
+  void apply_event(EventKind kind, double t) {
+    double Tm = 0.0, Tg = 0.0;
+    switch (kind) {
+      case EventKind::none:
+        break;
+      case EventKind::motor_zero:
+        m_y[W_M] = 0.0;
+        if (rigid()) m_y[W_G] = 0.0;
+        drive_torques(m_y, t, Tm, Tg);
+        if (std::abs(Tm) <= motor_breakaway()) {
+          m_stuck_m = true;
+        } else {
+          m_dir_m = sign_of(Tm);
+        }
+        break;
+      case EventKind::gen_zero:
+        m_y[W_G] = 0.0;
+        drive_torques(m_y, t, Tm, Tg);
+        if (std::abs(Tg) <= gen_breakaway()) {
+          m_stuck_g = true;
+        } else {
+          m_dir_g = sign_of(Tg);
+        }
+        break;
+      case EventKind::motor_break:
+        drive_torques(m_y, t, Tm, Tg);
+        if (std::abs(Tm) > motor_breakaway()) {
+          m_stuck_m = false;
+          m_dir_m = sign_of(Tm);
+        }
+        break;
+      case EventKind::gen_break:
+        drive_torques(m_y, t, Tm, Tg);
+        if (std::abs(Tg) > gen_breakaway()) {
+          m_stuck_g = false;
+          m_dir_g = sign_of(Tg);
+        }
+        break;
+      case EventKind::slip_zero:
+        try_lock(t);
+        break;
+    }
+  }
+
+  /// Torque the plates must carry to keep the shafts together (clutch_engage_lag), from the
+  /// common acceleration of the locked pair: T = Tm - Fm - Jm a.
+  double locked_torque(double t, double& Tm_out) const {
+    double Tm = 0.0, Tg = 0.0;
+    drive_torques(m_y, t, Coupling::none, Tm, Tg);
+    Tm_out = Tm;
+    const double w = m_y[W_M];
+    const int dir = sign_of(w);
+    const double Fm = dir * m_c.kinetic(m_c.motor_side[2], dir * w);
+    const double Fg = dir * m_c.kinetic(m_c.gen, dir * w);
+    const double a = (Tm - Fm + Tg - Fg) / m_c.J_total;
+    return Tm - Fm - m_c.p.motor.J_kg_m2 * a;
+  }
+
+  void try_lock(double t) {
+    const double J = m_c.J_total;
+    const double w = (m_c.p.motor.J_kg_m2 * m_y[W_M] + m_c.p.generator.J_kg_m2 * m_y[W_G]) / J;
+    m_y[W_M] = w;
+    m_y[W_G] = w;
+    double Tm = 0.0;
+    const double T_req = locked_torque(t, Tm);
+    if (w == 0.0 || std::abs(T_req) <= capacity(t)) {
+      lock(w);
+    } else {
+      m_slip_dir = sign_of(T_req);
+    }
+  }
+
+  void lock(double w) {
+    if (m_c.compliance) {
+      m_coupling = Coupling::spring;
+      m_phi0 = m_y[TH_M] - m_y[TH_G];
+      m_stuck_m = m_stuck_g = (w == 0.0);
+      m_dir_m = m_dir_g = sign_of(w);
+    } else {
+      m_coupling = Coupling::rigid;
+      m_y[W_M] = m_y[W_G] = w;
+      m_stuck_m = (w == 0.0);
+      m_dir_m = sign_of(w);
+    }
+  }
+
+  /// A locked pair (clutch_engage_lag, rigid) slips again when the plates cannot carry the
+  /// torque: moving, |T_req| > T_cap; at rest, the motor side alone exceeds its static level
+  /// plus the capacity.
+  void check_unlock(double t) {
+    if (!m_c.lag || m_coupling != Coupling::rigid || m_clutch != 2) return;
+    const double cap = capacity(t);
+    double Tm = 0.0;
+    const double T_req = locked_torque(t, Tm);
+    if (m_stuck_m) {
+      if (std::abs(Tm) > m_c.breakaway(m_c.motor_side[2]) + cap) {
+        m_coupling = Coupling::slip;
+        m_slip_dir = sign_of(Tm);
+        m_stuck_g = true;
+        m_stuck_m = false;
+        m_dir_m = sign_of(Tm);
+      }
+      return;
+    }
+    if (std::abs(T_req) > cap) {
+      m_coupling = Coupling::slip;
+      m_slip_dir = sign_of(T_req);
+      m_stuck_g = false;
+      m_dir_g = m_dir_m;
+    }
+  }
+
+  void set_load(double r_load) {
+    if (r_load == m_r_load) return;
+    m_r_load = r_load;
+    if (!gen_circuit()) m_y[I_G] = 0.0;
+    if (gen_quasi_static()) m_y[I_G] = gen_current(m_y);
+  }
+
+  void set_clutch(int next) {
+    if (next == m_clutch) return;
+    if (m_clutch == 2 && m_coupling == Coupling::rigid) {
+      m_y[W_G] = m_y[W_M];
+      m_stuck_g = m_stuck_m;
+      m_dir_g = m_dir_m;
+    }
+    m_coupling = Coupling::none;
+    if (next == 0 || m_clutch == 0) {
+      // The generator is absent in state 0 and joins at rest.
+      m_y[W_G] = 0.0;
+      m_y[I_G] = 0.0;
+      m_stuck_g = true;
+      m_dir_g = 0;
+    }
+    m_clutch = next;
+    if (next == 2) {
+      const double Jm = m_c.p.motor.J_kg_m2, Jg = m_c.p.generator.J_kg_m2;
+      if (m_c.lag) {
+        m_t_engage = m_t;
+        if (m_y[W_M] == m_y[W_G]) {
+          lock(m_y[W_M]);
+        } else {
+          m_coupling = Coupling::slip;
+          m_slip_dir = sign_of(m_y[W_M] - m_y[W_G]);
+        }
+      } else if (m_c.compliance) {
+        m_coupling = Coupling::spring;
+        m_phi0 = m_y[TH_M] - m_y[TH_G];
+      } else {
+        // Rigid engagement conserves angular momentum.
+        const double w = (Jm * m_y[W_M] + Jg * m_y[W_G]) / (Jm + Jg);
+        m_coupling = Coupling::rigid;
+        m_y[W_M] = m_y[W_G] = w;
+        m_stuck_m = (w == 0.0);
+        m_dir_m = sign_of(w);
+      }
+    }
+    if (gen_quasi_static()) m_y[I_G] = gen_current(m_y);
+  }
+
+  Compiled m_c;
+  SimOptions m_opt;
+  double m_t = 0.0;
+  Vec m_y{};
+  int m_clutch = 2;
+  Coupling m_coupling = Coupling::none;
+  bool m_stuck_m = true;
+  bool m_stuck_g = true;
+  int m_dir_m = 0;
+  int m_dir_g = 0;
+  int m_slip_dir = 0;
+  double m_phi0 = 0.0;
+  double m_t_engage = 0.0;
+  double m_r_load = k_open_circuit;
+  double m_v = 0.0;
+  std::deque<std::pair<double, double>> m_queue;
+};
+
+Plant::Plant(const Model& model, const SimOptions& options, int initial_clutch)
+    : m_impl(new PlantImpl(model, options, initial_clutch)) {}
+Plant::~Plant() { delete m_impl; }
+Plant::Plant(const Plant& other) : m_impl(new PlantImpl(*other.m_impl)) {}
+Plant& Plant::operator=(const Plant& other) {
+  if (this != &other) *m_impl = *other.m_impl;
+  return *this;
+}
+Plant::Plant(Plant&& other) noexcept : m_impl(other.m_impl) { other.m_impl = nullptr; }
+Plant& Plant::operator=(Plant&& other) noexcept {
+  std::swap(m_impl, other.m_impl);
+  return *this;
+}
+void Plant::step(double dt_s, const Drive& drive) { m_impl->step(dt_s, drive); }
+State Plant::state() const { return m_impl->state(); }
+double Plant::time_s() const { return m_impl->time(); }
+
+}  // namespace mcg::model

@@ -1,0 +1,65 @@
+// Open-loop simulation of a table of rows, and the checks on its inputs.
+#include <cassert>
+#include <cmath>
+#include <numbers>
+
+#include "common/error.hpp"
+#include "model/model.hpp"
+
+namespace mcg::model {
+
+void Outputs::resize(std::size_t rows) {
+  for (auto* v : {&omega_rad_s, &rpm, &theta_rad, &omega_gen_rad_s, &i_A, &i_gen_A, &v_gen_V, &v_applied_V}) {
+    v->assign(rows, 0.0);
+  }
+}
+
+void Outputs::store(std::size_t row, const State& s) {
+  omega_rad_s[row] = s.omega_rad_s;
+  rpm[row] = s.omega_rad_s * 30.0 / std::numbers::pi;
+  theta_rad[row] = s.theta_rad;
+  omega_gen_rad_s[row] = s.omega_gen_rad_s;
+  i_A[row] = s.i_A;
+  i_gen_A[row] = s.i_gen_A;
+  v_gen_V[row] = s.v_gen_V;
+  v_applied_V[row] = s.v_applied_V;
+}
+
+Outputs simulate(const Model& model, const Inputs& in, const SimOptions& options) {
+  const std::size_t n = in.t_s.size();
+  assert(in.v_V.size() == n && in.clutch.size() == n && in.r_load_ohm.size() == n);
+  Outputs out;
+  out.resize(n);
+  if (n == 0) return out;
+  Plant plant(model, options, static_cast<int>(in.clutch[0]));
+  for (std::size_t k = 0; k < n; ++k) {
+    const Drive drive{in.v_V[k], static_cast<int>(in.clutch[k]), in.r_load_ohm[k]};
+    // Row k's output is the state at t_k, just before row k's inputs (and a clutch or relay
+    // switch at t_k) act.
+    out.store(k, plant.state());
+    if (k + 1 < n) plant.step(in.t_s[k + 1] - in.t_s[k], drive);
+  }
+  return out;
+}
+
+void validate_inputs(const Inputs& in, std::string_view source, std::size_t first_line) {
+  const std::size_t n = in.t_s.size();
+  if (n == 0) fail("{}: no rows", source);
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t line = first_line + k;
+    if (!std::isfinite(in.t_s[k])) fail("{}:{}: column 't': not a finite time", source, line);
+    if (k > 0 && !(in.t_s[k] > in.t_s[k - 1])) {
+      fail("{}:{}: column 't': time does not increase ({} after {})", source, line, in.t_s[k], in.t_s[k - 1]);
+    }
+    if (!std::isfinite(in.v_V[k])) fail("{}:{}: column 'v': not a finite voltage", source, line);
+    const double c = in.clutch[k];
+    if (!(c == 0.0 || c == 1.0 || c == 2.0)) {
+      fail("{}:{}: column 'clutch': {} is not a clutch state (0, 1 or 2)", source, line, c);
+    }
+    if (std::isnan(in.r_load_ohm[k]) || in.r_load_ohm[k] < 0.0) {
+      fail("{}:{}: column 'r_load': {} is not a load (>= 0 ohm, inf = open)", source, line, in.r_load_ohm[k]);
+    }
+  }
+}
+
+}  // namespace mcg::model
