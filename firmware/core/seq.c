@@ -1,7 +1,8 @@
 /* seq.c: command sequences from the PC, stored in RAM and played back (the report's Simulink mode).
  *
  * An entry is (delay_ms u16, reg u8, value i16). Counting the first tick after the start as tick 1,
- * entry k is written, through regs_write and its checks, on tick 1 + delay_0 + ... + delay_k.
+ * entry k is written, through regs_write and its checks, on tick 1 + delay_0 + ... + delay_k
+ * (after that tick's control update: a new duty or command acts from the next update).
  * MCG_SEQ_LOOP restarts as if started on the tick of the last entry: one period lasts
  * 1 + sum(delay) ms, so a loop of zero delays still advances with time. */
 #include "core.h"

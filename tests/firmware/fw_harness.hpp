@@ -156,7 +156,13 @@ class Board {
   }
 
   void set_pulses(std::uint16_t p) { m_pulses = p; }
-  const std::vector<Frame>& other() const { return m_other; }
+  // Frames that arrived while request() waited for its answer; taking them empties the list.
+  std::vector<Frame> take_other()
+  {
+    std::vector<Frame> o;
+    o.swap(m_other);
+    return o;
+  }
   std::size_t garbage() const { return m_decoder.garbage(); }
 
  private:
