@@ -1,0 +1,280 @@
+// Discretisation of continuous transfer functions.
+#include "linsys/c2d.hpp"
+
+#include "common/error.hpp"
+#include "config/ini.hpp"
+
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include <cmath>
+#include <cstddef>
+
+namespace mcg::linsys {
+
+namespace {
+
+/// Parlett–Reinsch balancing with powers of 2: returns D with D^−1·A·D balanced (A updated).
+Eigen::VectorXd balance(Eigen::MatrixXd& a) {
+  const Eigen::Index n = a.rows();
+  Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
+  bool converged = false;
+  for (int sweep = 0; sweep < 100 && !converged; ++sweep) {
+    converged = true;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      double c = 0.0;
+      double r = 0.0;
+      for (Eigen::Index j = 0; j < n; ++j) {
+        if (j == i) continue;
+        c += std::abs(a(j, i));
+        r += std::abs(a(i, j));
+      }
+      if (c == 0.0 || r == 0.0) continue;
+      const double s = c + r;
+      double f = 1.0;
+      double g = r / 2.0;
+      while (c < g) {
+        f *= 2.0;
+        c *= 4.0;
+      }
+      g = r * 2.0;
+      while (c >= g) {
+        f /= 2.0;
+        c /= 4.0;
+      }
+      if ((c + r) / f < 0.95 * s) {
+        converged = false;
+        d(i) *= f;
+        a.row(i) /= f;
+        a.col(i) *= f;
+      }
+    }
+  }
+  return d;
+}
+
+/// Whole samples and the fraction θ of τ = d·T + θ.
+void split_delay(double delay_s, double dt_s, long& whole, double& theta_s) {
+  const double samples = delay_s / dt_s;
+  double d = std::floor(samples + 1e-9);
+  double theta = delay_s - d * dt_s;
+  if (theta < 1e-9 * dt_s) theta = 0.0;
+  whole = static_cast<long>(d);
+  theta_s = theta;
+}
+
+Tf make_z(Poly num, Poly den, double dt_s, long delay_samples) {
+  Tf h;
+  h.domain = Domain::z;
+  h.dt_s = dt_s;
+  h.num = trim(num);
+  h.den = mul(trim(den), monomial(static_cast<int>(delay_samples)));
+  return cancel_origin(h);
+}
+
+long whole_delay(const Tf& g, double dt_s, const std::string& what, const char* method) {
+  long d = 0;
+  double theta = 0.0;
+  split_delay(g.delay_s, dt_s, d, theta);
+  if (theta != 0.0) {
+    fail("{}: {} needs a delay of whole samples; {} s is not a multiple of {} s (use zoh)", what, method,
+         config::format_number(g.delay_s), config::format_number(dt_s));
+  }
+  return d;
+}
+
+/// (N(z) + D·den(z)) for the system (Φ, Γ, C, D).
+Poly ss_tf_num(const Eigen::MatrixXd& phi, const Eigen::VectorXd& gamma, const Eigen::RowVectorXd& c, double d,
+               const Poly& den) {
+  return add(ss_numerator(phi, gamma, c), scale(den, d));
+}
+
+Tf tustin(const Tf& g, double dt_s, double prewarp_rad_s) {
+  const double c = prewarp_rad_s > 0.0 ? prewarp_rad_s / std::tan(prewarp_rad_s * dt_s / 2.0) : 2.0 / dt_s;
+  const Poly num = trim(g.num);
+  const Poly den = trim(g.den);
+  const int n = degree(den);
+  auto map = [&](const Poly& p) {
+    Poly out;
+    const int m = static_cast<int>(p.size()) - 1;
+    for (int i = 0; i <= m; ++i) {
+      const int power = m - i;
+      Poly term{p[static_cast<std::size_t>(i)] * std::pow(c, power)};
+      for (int k = 0; k < power; ++k) term = mul(term, Poly{1.0, -1.0});
+      for (int k = 0; k < n - power; ++k) term = mul(term, Poly{1.0, 1.0});
+      out = add(out, term);
+    }
+    return out;
+  };
+  return make_z(map(num), map(den), dt_s, 0);
+}
+
+Tf matched(const Tf& g, double dt_s) {
+  const Poly num = trim(g.num);
+  const Poly den = trim(g.den);
+  const int kz0 = zeros_at_origin(num);
+  const int kp0 = zeros_at_origin(den);
+  const Poly num_r = drop_origin(num, kz0);
+  const Poly den_r = drop_origin(den, kp0);
+  std::vector<Complex> zeros;
+  std::vector<Complex> poles;
+  for (const Complex& z : roots(num_r)) zeros.push_back(std::exp(z * dt_s));
+  for (const Complex& p : roots(den_r)) poles.push_back(std::exp(p * dt_s));
+  const int infinite = degree(den) - degree(num);
+  const Poly shape_num = mul(from_roots(zeros), [&] {
+    Poly p{1.0};
+    for (int k = 0; k < infinite - 1; ++k) p = mul(p, Poly{1.0, 1.0});
+    return p;
+  }());
+  const Poly shape_den = from_roots(poles);
+  const double gr0 = num_r.back() / den_r.back();
+  const double a1 = eval(shape_num, 1.0) / eval(shape_den, 1.0);
+  const double k = gr0 * std::pow(dt_s, kp0 - kz0) / a1;
+  Poly hn = scale(shape_num, k);
+  Poly hd = shape_den;
+  for (int i = 0; i < kz0; ++i) hn = mul(hn, Poly{1.0, -1.0});
+  for (int i = 0; i < kp0; ++i) hd = mul(hd, Poly{1.0, -1.0});
+  return make_z(hn, hd, dt_s, 0);
+}
+
+}  // namespace
+
+const char* method_name(C2dMethod m) {
+  switch (m) {
+    case C2dMethod::zoh: return "zoh";
+    case C2dMethod::foh: return "foh";
+    case C2dMethod::tustin: return "tustin";
+    case C2dMethod::matched: return "matched";
+    case C2dMethod::impulse: return "impulse";
+  }
+  return "zoh";
+}
+
+C2dMethod parse_method(const std::string& text, const std::string& where) {
+  for (C2dMethod m : {C2dMethod::zoh, C2dMethod::foh, C2dMethod::tustin, C2dMethod::matched, C2dMethod::impulse}) {
+    if (text == method_name(m)) return m;
+  }
+  fail("{}: unknown discretisation method '{}' (zoh, foh, tustin, matched, impulse)", where, text);
+}
+
+StateSpace realise(const Tf& g) {
+  const Poly den = trim(g.den);
+  const Poly num0 = trim(g.num);
+  const int n = static_cast<int>(den.size()) - 1;
+  StateSpace ss;
+  Poly num(den.size(), 0.0);
+  for (std::size_t i = 0; i < num0.size(); ++i) num[num.size() - num0.size() + i] = num0[i] / den[0];
+  ss.d = num[0];
+  ss.a = Eigen::MatrixXd::Zero(n, n);
+  ss.b = Eigen::VectorXd::Zero(n);
+  ss.c = Eigen::RowVectorXd::Zero(n);
+  if (n == 0) return ss;
+  for (int j = 0; j < n; ++j) {
+    const double aj = den[static_cast<std::size_t>(j) + 1] / den[0];
+    ss.a(0, j) = -aj;
+    ss.c(j) = num[static_cast<std::size_t>(j) + 1] - ss.d * aj;
+  }
+  for (int i = 1; i < n; ++i) ss.a(i, i - 1) = 1.0;
+  ss.b(0) = 1.0;
+  const Eigen::VectorXd dscale = balance(ss.a);
+  ss.b = ss.b.cwiseQuotient(dscale);
+  ss.c = ss.c.cwiseProduct(dscale.transpose());
+  return ss;
+}
+
+Poly charpoly(const Eigen::MatrixXd& a) {
+  const Eigen::Index n = a.rows();
+  if (n == 0) return {1.0};
+  Eigen::MatrixXd h = a;
+  if (n > 2) h = Eigen::HessenbergDecomposition<Eigen::MatrixXd>(a).matrixH();
+  std::vector<Poly> p;
+  p.push_back({1.0});
+  for (Eigen::Index k = 0; k < n; ++k) {
+    Poly next = mul(Poly{1.0, -h(k, k)}, p.back());
+    double prod = 1.0;
+    for (Eigen::Index i = k - 1; i >= 0; --i) {
+      prod *= h(i + 1, i);
+      next = sub(next, scale(p[static_cast<std::size_t>(i)], h(i, k) * prod));
+    }
+    p.push_back(next);
+  }
+  return p.back();
+}
+
+Poly ss_numerator(const Eigen::MatrixXd& a, const Eigen::VectorXd& b, const Eigen::RowVectorXd& c) {
+  const Eigen::MatrixXd closed = a - b * c;
+  return sub(charpoly(closed), charpoly(a));
+}
+
+Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const std::string& what) {
+  if (g.discrete()) fail("{}: already discrete (z)", what);
+  if (!(dt_s > 0.0) || !std::isfinite(dt_s)) fail("{}: sample period must be positive, got {}", what, dt_s);
+  if (is_zero(g.num)) return make_z({}, {1.0}, dt_s, 0);
+  if (!g.proper()) fail("{}: improper transfer function cannot be discretised", what);
+  if (method == C2dMethod::tustin) {
+    const long d = whole_delay(g, dt_s, what, "tustin");
+    Tf h = tustin(g, dt_s, prewarp_rad_s);
+    return make_z(h.num, h.den, dt_s, d);
+  }
+  if (method == C2dMethod::matched) {
+    const long d = whole_delay(g, dt_s, what, "matched");
+    Tf h = matched(g, dt_s);
+    return make_z(h.num, h.den, dt_s, d);
+  }
+  const StateSpace ss = realise(g);
+  const Eigen::Index n = ss.a.rows();
+  if (method == C2dMethod::zoh) {
+    long d = 0;
+    double theta = 0.0;
+    split_delay(g.delay_s, dt_s, d, theta);
+    Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n + 1, n + 1);
+    m.topLeftCorner(n, n) = ss.a;
+    m.topRightCorner(n, 1) = ss.b;
+    auto block_exp = [&](double t, Eigen::MatrixXd& phi, Eigen::VectorXd& psi) {
+      const Eigen::MatrixXd e = (m * t).exp();
+      phi = e.topLeftCorner(n, n);
+      psi = e.topRightCorner(n, 1);
+    };
+    Eigen::MatrixXd phi;
+    Eigen::VectorXd gamma;
+    block_exp(dt_s - theta, phi, gamma);
+    if (theta == 0.0) {
+      const Poly den = charpoly(phi);
+      return make_z(ss_tf_num(phi, gamma, ss.c, ss.d, den), den, dt_s, d);
+    }
+    Eigen::MatrixXd phi_theta;
+    Eigen::VectorXd psi_theta;
+    block_exp(theta, phi_theta, psi_theta);
+    const Eigen::VectorXd gamma1 = phi * psi_theta;
+    Eigen::MatrixXd phi_full;
+    Eigen::VectorXd unused;
+    block_exp(dt_s, phi_full, unused);
+    const Poly den = charpoly(phi_full);
+    const Poly n0 = ss_numerator(phi_full, gamma, ss.c);
+    const Poly n1 = ss_numerator(phi_full, gamma1, ss.c);
+    const Poly num = add(add(mul(n0, Poly{1.0, 0.0}), n1), scale(den, ss.d));
+    return make_z(num, den, dt_s, d + 1);
+  }
+  if (method == C2dMethod::foh) {
+    const long d = whole_delay(g, dt_s, what, "foh");
+    Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n + 2, n + 2);
+    m.topLeftCorner(n, n) = ss.a * dt_s;
+    m.block(0, n, n, 1) = ss.b * dt_s;
+    m(n, n + 1) = 1.0;
+    const Eigen::MatrixXd e = m.exp();
+    const Eigen::MatrixXd phi = e.topLeftCorner(n, n);
+    const Eigen::VectorXd gamma1 = e.block(0, n, n, 1);
+    const Eigen::VectorXd gamma2 = e.block(0, n + 1, n, 1);
+    const Eigen::VectorXd gamma = gamma1 + (phi - Eigen::MatrixXd::Identity(n, n)) * gamma2;
+    const double dd = ss.d + (ss.c * gamma2)(0);
+    const Poly den = charpoly(phi);
+    return make_z(ss_tf_num(phi, gamma, ss.c, dd, den), den, dt_s, d);
+  }
+  const long d = whole_delay(g, dt_s, what, "impulse");
+  if (!g.strictly_proper()) fail("{}: impulse invariance needs a strictly proper transfer function", what);
+  const Eigen::MatrixXd phi = (ss.a * dt_s).exp();
+  const Poly den = charpoly(phi);
+  const Poly num = mul(scale(ss_numerator(phi, ss.b, ss.c), dt_s), Poly{1.0, 0.0});
+  return make_z(num, den, dt_s, d);
+}
+
+}  // namespace mcg::linsys

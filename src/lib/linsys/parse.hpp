@@ -1,0 +1,31 @@
+// The plant text parser: transfer functions typed the way the report writes them.
+#pragma once
+
+#include "linsys/tf.hpp"
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace mcg::linsys {
+
+/// A parsed expression. `domain` is empty for a constant (no s or z in the text).
+struct ParsedTf {
+  Tf tf;
+  std::optional<Domain> domain;
+};
+
+/// Parses an expression in s or in z:
+///   expr   := term (('+'|'-') term)*
+///   term   := factor (('*'|'/') factor)*
+///   factor := ('+'|'-') factor | power
+///   power  := atom ('^' ['+'|'-'] integer)?
+///   atom   := number | 's' | 'z' | '(' expr ')' | 'exp' '(' expr ')'
+/// e.g. "16.557/((s/65+1)*(s/950+1))", "4658*(s/500+1)/s", "0.5*exp(-0.002*s)/(s+1)",
+/// "(11.645*z - 6.987)/(z - 1)", "z^-1". exp() takes a polynomial of degree <= 1 in s:
+/// exp(c − τ·s) = e^c·e^(−τs), a delay τ >= 0. Terms of a sum must carry the same delay.
+/// Errors are mcg::Error "<where>: <what> at character N" (N counts from 1), e.g.
+/// "--plant: unbalanced '(' at character 12", "--plant: s and z mixed at character 9".
+ParsedTf parse_tf(std::string_view text, const std::string& where);
+
+}  // namespace mcg::linsys

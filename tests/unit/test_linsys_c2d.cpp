@@ -1,0 +1,138 @@
+// c2d against transforms derived by hand, at an awkward step size.
+#include "common/error.hpp"
+#include "linsys/c2d.hpp"
+#include "linsys/parse.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace mcg::linsys {
+namespace {
+
+constexpr double k_tol = 1e-12;
+constexpr double k_h = 0.031415926;  // awkward step, as in Drake's discretisation tests
+
+/// num and den scaled so that den is monic, for comparing transfer functions.
+void expect_tf(const Tf& h, const Poly& num, const Poly& den, double tol = k_tol) {
+  ASSERT_TRUE(h.discrete());
+  const Poly hd = trim(h.den);
+  const Poly hn = trim(h.num);
+  const double lead = hd.front();
+  ASSERT_EQ(hd.size(), den.size()) << tf_text(h);
+  ASSERT_EQ(hn.size(), num.size()) << tf_text(h);
+  for (std::size_t i = 0; i < den.size(); ++i) EXPECT_NEAR(hd[i] / lead, den[i], tol) << "den " << i;
+  for (std::size_t i = 0; i < num.size(); ++i) EXPECT_NEAR(hn[i] / lead, num[i], tol) << "num " << i;
+}
+
+Tf s_tf(const char* text) { return parse_tf(text, "test").tf; }
+
+TEST(LinsysC2d, ZohFirstOrderMatchesAnalytic) {
+  const double a = 3.7;
+  const double e = std::exp(-a * k_h);
+  const Tf h = c2d(s_tf("3.7/(s+3.7)"), k_h, C2dMethod::zoh, 0.0, "t");
+  expect_tf(h, {1.0 - e}, {1.0, -e});
+}
+
+TEST(LinsysC2d, ZohSecondOrderMatchesPartialFractions) {
+  // 1/((s+1)(s+2)) = 1/(s+1) − 1/(s+2); ZOH of 1/(s+p) is (1 − e^(−pT))/(p (z − e^(−pT))).
+  const double e1 = std::exp(-k_h);
+  const double e2 = std::exp(-2.0 * k_h);
+  const double c1 = 1.0 - e1;
+  const double c2 = (1.0 - e2) / 2.0;
+  const Tf h = c2d(s_tf("1/((s+1)*(s+2))"), k_h, C2dMethod::zoh, 0.0, "t");
+  expect_tf(h, {c1 - c2, -c1 * e2 + c2 * e1}, {1.0, -(e1 + e2), e1 * e2});
+}
+
+TEST(LinsysC2d, ZohFractionalDelayIsTheModifiedZTransform) {
+  // e^(−1.5Ts)/(s+1): x[k+1] = e^(−T)x[k] + e^(−(T−θ))(1 − e^(−θ))u[k−2] + (1 − e^(−(T−θ)))u[k−1], θ = T/2.
+  Tf g = s_tf("1/(s+1)");
+  g.delay_s = 1.5 * k_h;
+  const double th = 0.5 * k_h;
+  const double e = std::exp(-k_h);
+  const Tf h = c2d(g, k_h, C2dMethod::zoh, 0.0, "t");
+  expect_tf(h, {1.0 - std::exp(-(k_h - th)), std::exp(-(k_h - th)) * (1.0 - std::exp(-th))}, {1.0, -e, 0.0, 0.0});
+}
+
+TEST(LinsysC2d, ZohWholeSampleDelayAddsPolesAtOrigin) {
+  Tf g = s_tf("2/(s+2)");
+  g.delay_s = 2.0 * k_h;
+  const double e = std::exp(-2.0 * k_h);
+  expect_tf(c2d(g, k_h, C2dMethod::zoh, 0.0, "t"), {1.0 - e}, {1.0, -e, 0.0, 0.0});
+}
+
+TEST(LinsysC2d, ZohKeepsFeedthrough) {
+  // (s+3)/(s+1) = 1 + 2/(s+1).
+  const double e = std::exp(-k_h);
+  expect_tf(c2d(s_tf("(s+3)/(s+1)"), k_h, C2dMethod::zoh, 0.0, "t"), {1.0, -e + 2.0 * (1.0 - e)}, {1.0, -e});
+}
+
+TEST(LinsysC2d, FohOfIntegratorIsTrapezoidal) {
+  expect_tf(c2d(s_tf("1/s"), k_h, C2dMethod::foh, 0.0, "t"), {k_h / 2.0, k_h / 2.0}, {1.0, -1.0});
+}
+
+TEST(LinsysC2d, FohFirstOrderMatchesHandDerivation) {
+  // FOH of a/(s+a): H = (z−1)²/(Tz)·Z{a/(s²(s+a))}; with e = e^(−aT):
+  // H = [(aT − 1 + e) z + (1 − e − aTe)] / (aT (z − e)).
+  const double a = 2.5;
+  const double e = std::exp(-a * k_h);
+  const double at = a * k_h;
+  expect_tf(c2d(s_tf("2.5/(s+2.5)"), k_h, C2dMethod::foh, 0.0, "t"), {(at - 1.0 + e) / at, (1.0 - e - at * e) / at},
+            {1.0, -e});
+}
+
+TEST(LinsysC2d, TustinOfTheReportsPi) {
+  // 4658(s/500 + 1)/s at 1 ms: Kp = 9.316, Ki = 4658, (Kp + KiT/2) z + (KiT/2 − Kp) over z − 1.
+  const Tf h = c2d(s_tf("4658*(s/500+1)/s"), 0.001, C2dMethod::tustin, 0.0, "t");
+  expect_tf(h, {11.645, -6.987}, {1.0, -1.0}, 1e-12);
+}
+
+TEST(LinsysC2d, TustinPrewarpMatchesAtTheWarpFrequency) {
+  const Tf g = s_tf("100/(s^2 + 4*s + 100)");
+  const double wp = 10.0;
+  const Tf h = c2d(g, k_h, C2dMethod::tustin, wp, "t");
+  EXPECT_NEAR(std::abs(h.freq(wp) - g.freq(wp)), 0.0, 1e-12);
+  const Tf plain = c2d(g, k_h, C2dMethod::tustin, 0.0, "t");
+  EXPECT_GT(std::abs(plain.freq(wp) - g.freq(wp)), 1e-3);
+}
+
+TEST(LinsysC2d, ImpulseInvariantFirstOrder) {
+  const double e = std::exp(-3.0 * k_h);
+  expect_tf(c2d(s_tf("1/(s+3)"), k_h, C2dMethod::impulse, 0.0, "t"), {k_h, 0.0}, {1.0, -e});
+}
+
+TEST(LinsysC2d, MatchedPutsInfiniteZerosAtMinusOneExceptOne) {
+  const double e1 = std::exp(-k_h);
+  const double e2 = std::exp(-2.0 * k_h);
+  // K (z + 1)/((z − e1)(z − e2)), DC gain 1/2: K = (1 − e1)(1 − e2)/4.
+  const double k = (1.0 - e1) * (1.0 - e2) / 4.0;
+  expect_tf(c2d(s_tf("1/((s+1)*(s+2))"), k_h, C2dMethod::matched, 0.0, "t"), {k, k}, {1.0, -(e1 + e2), e1 * e2});
+}
+
+TEST(LinsysC2d, MatchedIntegratorMatchesTheVelocityGain) {
+  // 1/(s(s+1)): H = K(z+1)/((z−1)(z−e)); lim (z−1)/T·H at z=1 = 1: K = T(1 − e)/2.
+  const double e = std::exp(-k_h);
+  const double k = k_h * (1.0 - e) / 2.0;
+  expect_tf(c2d(s_tf("1/(s*(s+1))"), k_h, C2dMethod::matched, 0.0, "t"), {k, k}, {1.0, -(1.0 + e), e});
+}
+
+TEST(LinsysC2d, RejectsBadInput) {
+  Tf g = s_tf("1/(s+1)");
+  g.delay_s = 0.5 * k_h;
+  EXPECT_THROW(c2d(g, k_h, C2dMethod::tustin, 0.0, "t"), mcg::Error);
+  EXPECT_THROW(c2d(s_tf("s^2/(s+1)"), k_h, C2dMethod::zoh, 0.0, "t"), mcg::Error);
+  EXPECT_THROW(c2d(s_tf("(s+2)/(s+1)"), k_h, C2dMethod::impulse, 0.0, "t"), mcg::Error);
+  EXPECT_THROW(parse_method("bilinear", "--method"), mcg::Error);
+}
+
+TEST(LinsysC2d, CharpolyOfCompanionIsItsPolynomial) {
+  const Tf g = s_tf("1/((s/60+1)*(s/850+1)*(s/1800+1))");
+  const StateSpace ss = realise(g);
+  const Poly p = charpoly(ss.a);
+  const Poly want = from_roots({Complex(-60, 0), Complex(-850, 0), Complex(-1800, 0)});
+  ASSERT_EQ(p.size(), want.size());
+  for (std::size_t i = 0; i < p.size(); ++i) EXPECT_NEAR(p[i] / want[i], 1.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace mcg::linsys
