@@ -1,0 +1,283 @@
+// Margins by root finding on the exact frequency response; closed-loop poles; gain ranges.
+#include "linsys/analysis.hpp"
+
+#include "common/error.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace mcg::linsys {
+
+namespace {
+
+constexpr double k_pi = std::numbers::pi;
+
+/// Bisection of f on [a, b] with f(a), f(b) of opposite sign, to the last representable bit.
+template <typename F>
+double bisect(F f, double a, double b) {
+  double fa = f(a);
+  for (int i = 0; i < 200; ++i) {
+    const double m = 0.5 * (a + b);
+    if (m <= a || m >= b) break;
+    const double fm = f(m);
+    if (fm == 0.0) return m;
+    if ((fm < 0.0) == (fa < 0.0)) {
+      a = m;
+      fa = fm;
+    } else {
+      b = m;
+    }
+  }
+  return 0.5 * (a + b);
+}
+
+double wrap_pi(double x) {
+  double r = std::remainder(x, 2.0 * k_pi);
+  if (r <= -k_pi) r += 2.0 * k_pi;
+  return r;
+}
+
+void add_unique(std::vector<double>& v, double x) {
+  for (double y : v) {
+    if (std::abs(x - y) <= 1e-10 * std::max(std::abs(x), std::abs(y))) return;
+  }
+  v.push_back(x);
+}
+
+/// Dense scan grid for crossovers of `fe` on [lo, hi].
+std::vector<double> scan_grid(const FreqEval& fe, double lo, double hi) {
+  const Tf& g = fe.tf();
+  const double decades = std::log10(hi / lo);
+  std::vector<double> w = log_grid(lo, hi, std::max(200, static_cast<int>(decades * 400.0)));
+  // Lightly damped roots turn the phase within a few percent of |root|: sample them finely.
+  auto dense_near = [&](Complex r) {
+    double wn = 0.0;
+    double zeta = 1.0;
+    if (g.discrete()) {
+      if (std::abs(r) == 0.0) return;
+      const Complex sr = std::log(r) / g.dt_s;
+      wn = std::abs(sr);
+      zeta = wn > 0.0 ? -sr.real() / wn : 1.0;
+    } else {
+      wn = std::abs(r);
+      zeta = wn > 0.0 ? -r.real() / wn : 1.0;
+    }
+    if (wn <= 0.0 || std::abs(zeta) > 0.2) return;
+    const double width = std::max(std::abs(zeta), 1e-6) * wn;
+    for (int k = -200; k <= 200; ++k) {
+      const double centre = g.discrete() ? std::abs(std::arg(r)) / g.dt_s : std::abs(r.imag());
+      const double x = centre + width * k / 20.0;
+      if (x > lo && x < hi) w.push_back(x);
+    }
+  };
+  for (const Complex& z : fe.zeros()) dense_near(z);
+  for (const Complex& p : fe.poles()) dense_near(p);
+  if (g.delay_s > 0.0) {
+    const double step = k_pi / (4.0 * g.delay_s);
+    const double count = (hi - lo) / step;
+    const double n = std::min(count, 200000.0);
+    for (int k = 0; k <= static_cast<int>(n); ++k) w.push_back(lo + step * k);
+  }
+  std::sort(w.begin(), w.end());
+  w.erase(std::unique(w.begin(), w.end()), w.end());
+  w.erase(std::remove_if(w.begin(), w.end(), [&](double x) { return x < lo || x > hi; }), w.end());
+  return w;
+}
+
+/// The scan range for margins: wide enough to hold every crossover of `fe`.
+void scan_range(const FreqEval& fe, double& lo, double& hi) {
+  default_range(fe.tf(), lo, hi);
+  const Tf& g = fe.tf();
+  const bool integrating = zeros_at_origin(g.den) > 0 || (g.discrete() && [&] {
+    for (const Complex& p : fe.poles()) {
+      if (std::abs(p - Complex(1.0, 0.0)) < 1e-12) return true;
+    }
+    return false;
+  }());
+  for (int i = 0; i < 40 && integrating && fe.log_mag(lo) < std::log(1e4); ++i) lo /= 10.0;
+  if (!g.discrete()) {
+    for (int i = 0; i < 40 && g.strictly_proper() && fe.log_mag(hi) > std::log(1e-4); ++i) hi *= 10.0;
+    const bool differentiating = zeros_at_origin(g.num) > 0;
+    for (int i = 0; i < 40 && differentiating && fe.log_mag(lo) > std::log(1e-4); ++i) lo /= 10.0;
+  }
+}
+
+double dc_value(const Tf& g, double x) { return eval(g.num, x) / eval(g.den, x); }
+
+/// Real points of L where it may sit on the negative real axis exactly: ω = 0 (no root at
+/// s = 0 / z = 1) and, in z, ω = π/T.
+void real_axis_points(const Tf& g, std::vector<double>& omegas, std::vector<double>& values) {
+  const double x0 = g.discrete() ? 1.0 : 0.0;
+  if (eval(g.den, x0) != 0.0) {
+    omegas.push_back(0.0);
+    values.push_back(dc_value(g, x0));
+  }
+  if (g.discrete() && eval(g.den, -1.0) != 0.0) {
+    const double wn = k_pi / g.dt_s;
+    omegas.push_back(wn);
+    // A whole-sample delay e^(−jπk) = (−1)^k at Nyquist.
+    const double k = std::round(g.delay_s / g.dt_s);
+    values.push_back(dc_value(g, -1.0) * (std::fmod(k, 2.0) == 0.0 ? 1.0 : -1.0));
+  }
+}
+
+}  // namespace
+
+std::vector<double> log_grid(double lo, double hi, int n) {
+  std::vector<double> w(static_cast<std::size_t>(n));
+  const double a = std::log(lo);
+  const double b = std::log(hi);
+  for (int i = 0; i < n; ++i) w[static_cast<std::size_t>(i)] = std::exp(a + (b - a) * i / (n - 1));
+  w.front() = lo;
+  w.back() = hi;
+  return w;
+}
+
+void default_range(const Tf& g, double& lo, double& hi) {
+  const FreqEval fe(g);
+  const std::vector<double> corners = fe.corner_frequencies();
+  double cmin = 1.0;
+  double cmax = 1.0;
+  if (!corners.empty()) {
+    cmin = *std::min_element(corners.begin(), corners.end());
+    cmax = *std::max_element(corners.begin(), corners.end());
+  }
+  if (g.delay_s > 0.0) cmax = std::max(cmax, 1.0 / g.delay_s);
+  lo = cmin * 1e-3;
+  hi = cmax * 1e3;
+  if (g.discrete()) {
+    hi = k_pi / g.dt_s;
+    lo = std::min(lo, hi * 1e-5);
+  }
+}
+
+Margins margins(const Tf& loop) {
+  if (!loop.proper()) fail("margins need a proper loop transfer function, got {}", tf_text(loop));
+  Margins m;
+  if (is_zero(loop.num)) return m;
+  const FreqEval fe(loop);
+  double lo = 0.0;
+  double hi = 0.0;
+  scan_range(fe, lo, hi);
+  const std::vector<double> w = scan_grid(fe, lo, hi);
+  std::vector<double> lm(w.size());
+  std::vector<double> ph(w.size());
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    lm[i] = fe.log_mag(w[i]);
+    ph[i] = fe.phase_rad(w[i]);
+  }
+  for (std::size_t i = 0; i + 1 < w.size(); ++i) {
+    if (std::isfinite(lm[i]) && std::isfinite(lm[i + 1]) && (lm[i] > 0.0) != (lm[i + 1] > 0.0)) {
+      add_unique(m.gain_crossovers_rad_s, bisect([&](double x) { return fe.log_mag(x); }, w[i], w[i + 1]));
+    } else if (lm[i] == 0.0) {
+      add_unique(m.gain_crossovers_rad_s, w[i]);
+    }
+    const double u0 = std::floor((ph[i] + k_pi) / (2.0 * k_pi));
+    const double u1 = std::floor((ph[i + 1] + k_pi) / (2.0 * k_pi));
+    if (u0 != u1) {
+      const double target = 2.0 * k_pi * std::max(u0, u1) - k_pi;
+      const double x = bisect([&](double v) { return fe.phase_rad(v) - target; }, w[i], w[i + 1]);
+      if (std::abs(fe.phase_rad(x) - target) < 1e-6) add_unique(m.phase_crossovers_rad_s, x);
+    }
+  }
+  std::vector<double> axis_w;
+  std::vector<double> axis_v;
+  real_axis_points(loop, axis_w, axis_v);
+  for (std::size_t i = 0; i < axis_w.size(); ++i) {
+    if (axis_v[i] < 0.0) add_unique(m.phase_crossovers_rad_s, axis_w[i]);
+  }
+  std::sort(m.gain_crossovers_rad_s.begin(), m.gain_crossovers_rad_s.end());
+  std::sort(m.phase_crossovers_rad_s.begin(), m.phase_crossovers_rad_s.end());
+  for (double x : m.gain_crossovers_rad_s) {
+    const double pm = wrap_pi(fe.phase_rad(x) + k_pi);
+    const double pm_deg = pm * 180.0 / k_pi;
+    m.phase_margins_deg.push_back(pm_deg);
+    const double dm = pm > 0.0 && x > 0.0 ? pm / x : std::numeric_limits<double>::quiet_NaN();
+    m.delay_margins_s.push_back(dm);
+    if (std::abs(pm_deg) < std::abs(m.pm_deg)) {
+      m.pm_deg = pm_deg;
+      m.pm_omega_rad_s = x;
+    }
+    if (std::isfinite(dm) && dm < m.dm_s) m.dm_s = dm;
+  }
+  for (double x : m.phase_crossovers_rad_s) {
+    const double gm = std::exp(-fe.log_mag(x));
+    m.gain_margins.push_back(gm);
+    if (std::abs(std::log(gm)) < std::abs(std::log(m.gm))) {
+      m.gm = gm;
+      m.gm_omega_rad_s = x;
+    }
+  }
+  return m;
+}
+
+std::vector<Complex> closed_loop_poles(const Tf& loop, bool* padded) {
+  Tf l = loop;
+  if (padded) *padded = false;
+  if (l.discrete()) {
+    l = fold_delay(l, "loop");
+  } else if (l.delay_s > 0.0) {
+    const Tf p = pade(l.delay_s, 6);
+    l.delay_s = 0.0;
+    l = series(l, p);
+    if (padded) *padded = true;
+  }
+  return roots(add(l.den, l.num));
+}
+
+bool is_stable(const std::vector<Complex>& poles, Domain domain) {
+  for (const Complex& p : poles) {
+    if (domain == Domain::s ? !(p.real() < 0.0) : !(std::abs(p) < 1.0)) return false;
+  }
+  return true;
+}
+
+std::vector<double> boundary_gains(const Tf& loop) {
+  std::vector<double> k;
+  if (is_zero(loop.num)) return k;
+  const Margins m = margins(loop);
+  for (double gm : m.gain_margins) {
+    if (gm > 0.0 && std::isfinite(gm)) add_unique(k, gm);
+  }
+  // A root through infinity: the leading coefficient of den + K·num vanishes.
+  Tf l = loop.discrete() ? fold_delay(loop, "loop") : loop;
+  const Poly num = trim(l.num);
+  const Poly den = trim(l.den);
+  if (num.size() == den.size()) {
+    const double kinf = -den.front() / num.front();
+    if (kinf > 0.0) add_unique(k, kinf);
+  }
+  std::sort(k.begin(), k.end());
+  return k;
+}
+
+std::vector<GainRange> stable_gain_ranges(const Tf& loop) {
+  const std::vector<double> k = boundary_gains(loop);
+  std::vector<double> edges{0.0};
+  edges.insert(edges.end(), k.begin(), k.end());
+  edges.push_back(std::numeric_limits<double>::infinity());
+  std::vector<GainRange> out;
+  for (std::size_t i = 0; i + 1 < edges.size(); ++i) {
+    const double a = edges[i];
+    const double b = edges[i + 1];
+    double probe = 0.0;
+    if (a == 0.0) {
+      probe = std::isfinite(b) ? b / 2.0 : 1.0;
+    } else if (!std::isfinite(b)) {
+      probe = a * 2.0;
+    } else {
+      probe = std::sqrt(a * b);
+    }
+    if (is_stable(closed_loop_poles(scaled(loop, probe)), loop.domain)) {
+      if (!out.empty() && out.back().k_high == a) {
+        out.back().k_high = b;
+      } else {
+        out.push_back(GainRange{a, b});
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace mcg::linsys
