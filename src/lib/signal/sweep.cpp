@@ -1,0 +1,377 @@
+// mcg-sweep's two halves: excitation tables out, frequency responses of measured tables.
+#include "signal/sweep.hpp"
+
+#include "common/error.hpp"
+#include "config/ini.hpp"
+#include "mcg/version.hpp"
+#include "signal/excitation.hpp"
+#include "signal/spectrum.hpp"
+#include "table/table.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <ostream>
+#include <random>
+#include <sstream>
+
+namespace mcg::signal {
+
+namespace {
+
+using config::format_number;
+
+std::string unit_of(const std::string& column) {
+  if (column == "v") return " V";
+  if (column == "rpm_cmd") return " rev/min";
+  return "";
+}
+
+std::string join_numbers(const std::vector<double>& values) {
+  std::string text;
+  for (const double v : values) {
+    if (!text.empty()) text += ' ';
+    text += format_number(v);
+  }
+  return text;
+}
+
+// Whole number of samples of dt in `seconds`, or an error naming the option.
+std::size_t whole_samples(double seconds, double dt_s, const char* option) {
+  const double n = seconds / dt_s;
+  const double rounded = std::round(n);
+  if (rounded < 1 || std::abs(n - rounded) > 1e-6 * rounded) {
+    fail("{} {} s is not a whole number of --dt {} s samples", option, format_number(seconds),
+         format_number(dt_s));
+  }
+  return static_cast<std::size_t>(rounded);
+}
+
+void check_band(const GeneratorOptions& o) {
+  if (o.f1_hz <= o.f0_hz) {
+    fail("--f1 {} Hz must be above --f0 {} Hz", format_number(o.f1_hz), format_number(o.f0_hz));
+  }
+  const double nyquist = 0.5 / o.dt_s;
+  if (o.f1_hz >= nyquist) {
+    fail("--f1 {} Hz is not below the Nyquist frequency {} Hz of --dt {} s", format_number(o.f1_hz),
+         format_number(nyquist), format_number(o.dt_s));
+  }
+}
+
+ChirpSpacing spacing_of_option(const std::string& text, ChirpSpacing fallback) {
+  if (text.empty()) return fallback;
+  return text == "log" ? ChirpSpacing::log : ChirpSpacing::linear;
+}
+
+const char* spacing_name(ChirpSpacing s) { return s == ChirpSpacing::log ? "log" : "linear"; }
+
+// Everything a generator produces besides the sample grid.
+struct Excitation {
+  std::vector<double> x;
+  table::Metadata meta;
+};
+
+double default_duration_s(Generator g, const GeneratorOptions& o, const std::vector<Change>& then) {
+  switch (g) {
+    case Generator::step:
+      return std::max(1.0, (then.empty() ? o.at_s : then.back().time_s) + 1.0);
+    case Generator::staircase:
+      return o.hold_s * (4.0 * o.steps + 1.0);
+    case Generator::chirp:
+      return 10.0;
+    case Generator::multisine:
+      return 3.0 * o.period_s.value_or(1.0 / o.f0_hz);
+    case Generator::prbs:
+    case Generator::aprbs:
+      return 2.0 * (std::ldexp(1.0, o.order) - 1.0) * o.clock_s.value_or(o.dt_s);
+  }
+  return 1.0;
+}
+
+Excitation excite(Generator g, const GeneratorOptions& o, const std::vector<double>& t,
+                  const std::vector<Change>& then, double duration_s) {
+  Excitation e;
+  const std::string unit = unit_of(o.column);
+  const std::string about = fmt::format("on {} about bias {}{}", o.column, format_number(o.bias), unit);
+  switch (g) {
+    case Generator::step: {
+      e.x = step_signal(t, o.level, o.at_s, then);
+      std::string steps = fmt::format("{}@{}", format_number(o.level), format_number(o.at_s));
+      for (const Change& c : then) steps += fmt::format(",{}@{}", format_number(c.value), format_number(c.time_s));
+      e.meta.set("excitation", fmt::format("step {} (level@time){} {}", steps, unit, about));
+      break;
+    }
+    case Generator::staircase:
+      e.x = staircase_signal(t, o.amp, o.steps, o.hold_s);
+      e.meta.set("excitation",
+                 fmt::format("staircase 0 -> {1}{0} -> -{1}{0} -> 0 in steps of {2}{0}, {3} s each, {4}", unit,
+                             format_number(o.amp), format_number(o.amp / o.steps), format_number(o.hold_s),
+                             about));
+      break;
+    case Generator::chirp: {
+      check_band(o);
+      const ChirpSpacing spacing = spacing_of_option(o.spacing, ChirpSpacing::linear);
+      e.x = chirp_signal(t, o.amp, o.f0_hz, o.f1_hz, duration_s, spacing);
+      e.meta.set("excitation", fmt::format("chirp {} {}..{} Hz over {} s, amplitude {}{} {}", spacing_name(spacing),
+                                           format_number(o.f0_hz), format_number(o.f1_hz),
+                                           format_number(duration_s), format_number(o.amp), unit, about));
+      e.meta.set("excitation_band_hz", fmt::format("{} {}", format_number(o.f0_hz), format_number(o.f1_hz)));
+      break;
+    }
+    case Generator::multisine: {
+      check_band(o);
+      const ChirpSpacing spacing = spacing_of_option(o.spacing, ChirpSpacing::log);
+      // The period is a whole number of samples, so every line is an exact DFT bin.
+      const double wanted_period = o.period_s.value_or(1.0 / o.f0_hz);
+      const std::size_t period_samples =
+          o.period_s ? whole_samples(*o.period_s, o.dt_s, "--period")
+                     : static_cast<std::size_t>(std::max(1.0, std::round(wanted_period / o.dt_s)));
+      const double period = static_cast<double>(period_samples) * o.dt_s;
+      const auto harmonics = multisine_harmonics(o.f0_hz * (1 - 1e-9), o.f1_hz, o.lines, period, spacing);
+      std::vector<double> phases;
+      if (o.phases == "schroeder") {
+        phases = schroeder_phases(harmonics.size());
+      } else if (o.phases == "random") {
+        std::mt19937_64 rng(o.seed);
+        std::uniform_real_distribution<double> angle(-3.141592653589793, 3.141592653589793);
+        for (std::size_t j = 0; j < harmonics.size(); ++j) phases.push_back(angle(rng));
+        e.meta.set("seed", std::to_string(o.seed));
+      } else {
+        phases.assign(harmonics.size(), 0.0);
+      }
+      e.x = multisine_signal(t.size(), o.amp, period_samples, harmonics, phases);
+      std::vector<double> lines;
+      for (int h : harmonics) lines.push_back(static_cast<double>(h) / period);
+      e.meta.set("excitation",
+                 fmt::format("multisine {} lines {} spaced {}..{} Hz, {} phases, period {} s, peak {}{} {}",
+                             harmonics.size(), spacing_name(spacing), format_number(lines.front()),
+                             format_number(lines.back()), o.phases, format_number(period), format_number(o.amp),
+                             unit, about));
+      e.meta.set("excitation_band_hz", fmt::format("{} {}", format_number(lines.front()), format_number(lines.back())));
+      e.meta.set("multisine_period_s", format_number(period));
+      e.meta.set("multisine_lines_hz", join_numbers(lines));
+      break;
+    }
+    case Generator::prbs:
+    case Generator::aprbs: {
+      const double clock = o.clock_s.value_or(o.dt_s);
+      const std::size_t clock_samples = whole_samples(clock, o.dt_s, "--clock");
+      std::mt19937_64 rng(o.seed);
+      const std::uint32_t state = prbs_initial_state(o.order, rng);
+      const double period = (std::ldexp(1.0, o.order) - 1.0) * clock;
+      if (g == Generator::prbs) {
+        e.x = prbs_signal(t.size(), o.amp, o.order, clock_samples, state);
+      } else {
+        e.x = aprbs_signal(t.size(), o.amp, o.order, clock_samples, state, rng);
+      }
+      e.meta.set("excitation",
+                 fmt::format("{} order {} (period {} s), bit time {} s, {} {}{} {}",
+                             g == Generator::prbs ? "prbs" : "aprbs", o.order, format_number(period),
+                             format_number(clock), g == Generator::prbs ? "levels +-" : "levels uniform in +-",
+                             format_number(o.amp), unit, about));
+      e.meta.set("seed", std::to_string(o.seed));
+      break;
+    }
+  }
+  return e;
+}
+
+void check_values(const std::vector<Change>& changes, const char* option, bool clutch) {
+  for (const Change& c : changes) {
+    if (clutch && c.value != 0 && c.value != 1 && c.value != 2) {
+      fail("{}: clutch state {} is not 0, 1 or 2", option, format_number(c.value));
+    }
+    if (!clutch && !(c.value >= 0)) fail("{}: r_load {} ohm is negative", option, format_number(c.value));
+  }
+}
+
+// Parses a list of numbers "1,2.5, 10".
+std::vector<double> parse_list(const std::string& text, const char* option) {
+  std::vector<double> values;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    double v = 0;
+    if (!table::parse_number(item, v) || !std::isfinite(v)) fail("{}: invalid number '{}'", option, item);
+    values.push_back(v);
+  }
+  if (values.empty()) fail("{}: no numbers in '{}'", option, text);
+  return values;
+}
+
+std::vector<double> numbers_in(const std::string& text) {
+  std::vector<double> values;
+  std::stringstream in(text);
+  std::string item;
+  while (in >> item) {
+    double v = 0;
+    if (table::parse_number(item, v)) values.push_back(v);
+  }
+  return values;
+}
+
+}  // namespace
+
+void generate(Generator generator, const GeneratorOptions& o, std::ostream& out) {
+  const std::vector<Change> then = o.then.empty() ? std::vector<Change>{} : parse_schedule(o.then, "--then");
+  const std::vector<Change> clutch =
+      o.clutch_schedule.empty() ? std::vector<Change>{} : parse_schedule(o.clutch_schedule, "--clutch-schedule");
+  const std::vector<Change> r_load =
+      o.r_load_schedule.empty() ? std::vector<Change>{} : parse_schedule(o.r_load_schedule, "--r-load-schedule");
+  check_values(clutch, "--clutch-schedule", true);
+  check_values(r_load, "--r-load-schedule", false);
+
+  const double duration = o.duration_s.value_or(default_duration_s(generator, o, then));
+  const std::vector<double> t = time_grid(o.dt_s, duration);
+  if (t.size() < 2) {
+    fail("--duration {} s holds fewer than two samples of --dt {} s", format_number(duration),
+         format_number(o.dt_s));
+  }
+  Excitation e = excite(generator, o, t, then, duration);
+
+  table::Writer w(out);
+  w.meta("source", fmt::format("mcg-sweep {}", k_version));
+  w.meta("sample_period", format_number(o.dt_s));
+  for (const auto& [key, value] : e.meta.entries()) w.meta(key, value);
+  w.header({"t", o.column, "clutch", "r_load"});
+  w.set_digits(std::size_t{1}, 12);
+  std::size_t next_clutch = 0;
+  std::size_t next_r_load = 0;
+  double clutch_now = o.clutch;
+  double r_load_now = o.r_load_ohm;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    while (next_clutch < clutch.size() && clutch[next_clutch].time_s <= t[k] + 5e-10) {
+      clutch_now = clutch[next_clutch++].value;
+    }
+    while (next_r_load < r_load.size() && r_load[next_r_load].time_s <= t[k] + 5e-10) {
+      r_load_now = r_load[next_r_load++].value;
+    }
+    w.row({t[k], o.bias + e.x[k], clutch_now, r_load_now});
+  }
+  w.finish();
+}
+
+void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
+  const table::Table tbl = table::read_path(o.input);
+  const std::vector<double>& t_in = tbl.col("t");
+  const std::vector<double>& x_in = tbl.col(o.in_column);
+  const std::vector<double>& y_in = tbl.col(o.out_column);
+  if (tbl.rows() < 32) {
+    fail("{}: {} rows, too short for a frequency response (at least 32)", tbl.source, tbl.rows());
+  }
+  table::require_increasing(tbl, "t");
+  table::require_finite(tbl, o.in_column);
+  table::require_finite(tbl, o.out_column);
+
+  const Spacing spacing = spacing_of(t_in);
+  double dt = (t_in.back() - t_in.front()) / static_cast<double>(tbl.rows() - 1);
+  std::vector<double> x_even;
+  std::vector<double> y_even;
+  std::span<const double> x = x_in;
+  std::span<const double> y = y_in;
+  if (!spacing.uniform) {
+    double nominal = spacing.median_dt_s;
+    if (const auto period = tbl.meta.get("sample_period")) {
+      double v = 0;
+      if (table::parse_number(*period, v) && v > 0 && std::isfinite(v)) nominal = v;
+    }
+    dt = nominal;
+    x_even = resample_linear(t_in, x_in, dt);
+    y_even = resample_linear(t_in, y_in, dt);
+    x = x_even;
+    y = y_even;
+    warn << fmt::format("mcg-sweep: warning: {}: uneven sampling (steps {} to {} s); resampled to {} s by linear "
+                        "interpolation\n",
+                        tbl.source, format_number(spacing.min_dt_s), format_number(spacing.max_dt_s),
+                        format_number(dt));
+  }
+
+  // Lines come from --lines/--period, else from the multisine generator's metadata.
+  std::vector<double> lines;
+  std::optional<double> period = o.period_s;
+  if (!o.lines_hz.empty()) {
+    lines = parse_list(o.lines_hz, "--lines");
+  } else if (o.method != BodeMethod::welch) {
+    if (const auto meta_lines = tbl.meta.get("multisine_lines_hz")) lines = numbers_in(*meta_lines);
+  }
+  if (!period && !lines.empty()) {
+    if (const auto meta_period = tbl.meta.get("multisine_period_s")) {
+      const auto values = numbers_in(*meta_period);
+      if (values.size() == 1 && values[0] > 0) period = values[0];
+    }
+  }
+  const bool use_lines = o.method == BodeMethod::lines || (o.method == BodeMethod::automatic && !lines.empty());
+  if (use_lines && lines.empty()) fail("--method lines: no lines (give --lines, or a multisine table's metadata)");
+  if (use_lines && !period) fail("--lines needs --period (the multisine's period, s)");
+
+  Response r;
+  table::Metadata meta = tbl.meta;
+  meta.erase("sample_period");
+  meta.erase("timing");
+  meta.set("source", fmt::format("mcg-sweep {} bode", k_version));
+  meta.set("response", fmt::format("{} -> {}", o.in_column, o.out_column));
+  if (use_lines) {
+    const std::size_t period_samples = whole_samples(*period, dt, "--period");
+    const double exact_period = static_cast<double>(period_samples) * dt;
+    std::vector<int> harmonics;
+    for (double f : lines) {
+      const double h = f * exact_period;
+      if (h < 0.5 || std::abs(h - std::round(h)) > 1e-6 * std::max(1.0, h)) {
+        fail("--lines: {} Hz is not a multiple of 1/period = {} Hz", format_number(f),
+             format_number(1.0 / exact_period));
+      }
+      harmonics.push_back(static_cast<int>(std::lround(h)));
+    }
+    r = line_response(x, y, dt, period_samples, harmonics);
+    const std::size_t periods = x.size() / period_samples;
+    meta.set("estimator", fmt::format("multisine lines, DFT over {} whole period(s) of {} s{}",
+                                      periods >= 2 ? periods - 1 : periods, format_number(exact_period),
+                                      periods >= 2 ? ", first period skipped" : ""));
+  } else {
+    const std::size_t segment = o.segment != 0 ? o.segment : default_segment(x.size());
+    r = welch_h1(x, y, dt, segment, o.overlap);
+    const auto step = std::max<std::size_t>(
+        1, segment - static_cast<std::size_t>(std::lround(o.overlap * static_cast<double>(segment))));
+    meta.set("estimator",
+             fmt::format("Welch H1, Hann window, segment {} samples ({} Hz resolution), overlap {}, {} averages",
+                         segment, format_number(1.0 / (static_cast<double>(segment) * dt)),
+                         format_number(o.overlap), 1 + (x.size() - segment) / step));
+  }
+
+  double f_min = o.f_min_hz.value_or(0.0);
+  double f_max = o.f_max_hz.value_or(std::numeric_limits<double>::infinity());
+  if (!use_lines && !o.f_min_hz && !o.f_max_hz) {
+    if (const auto band = tbl.meta.get("excitation_band_hz")) {
+      const auto values = numbers_in(*band);
+      if (values.size() == 2 && values[0] < values[1]) {
+        f_min = values[0];
+        f_max = values[1];
+      }
+    }
+  }
+  std::vector<std::size_t> keep;
+  for (std::size_t k = 0; k < r.f_hz.size(); ++k) {
+    if (r.f_hz[k] >= f_min * (1 - 1e-9) && r.f_hz[k] <= f_max * (1 + 1e-9) && !std::isnan(r.h[k].real())) {
+      keep.push_back(k);
+    }
+  }
+  if (keep.empty()) {
+    fail("{}: no excitation in column '{}' between {} and {} Hz", tbl.source, o.in_column, format_number(f_min),
+         format_number(f_max));
+  }
+  std::vector<std::complex<double>> h;
+  for (std::size_t k : keep) h.push_back(r.h[k]);
+  const std::vector<double> phase = unwrapped_phase_deg(h);
+
+  table::Writer w(out);
+  w.metadata(meta);
+  w.header({"f_hz", "mag_db", "phase_deg", "coherence"});
+  for (std::size_t j = 0; j < keep.size(); ++j) {
+    const std::size_t k = keep[j];
+    w.row({r.f_hz[k], magnitude_db(h[j]), phase[j], r.coherence[k]});
+  }
+  w.finish();
+}
+
+}  // namespace mcg::signal
