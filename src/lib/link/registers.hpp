@@ -1,0 +1,63 @@
+// The board's registers by name, with their engineering units and the protocol's scales.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+
+namespace mcg::link {
+
+/// How a register's raw i16 maps to the value a user types and reads.
+enum class Unit {
+  Mode,      ///< MCG_MODE_*: open, p, pi, pid (or 0..3)
+  SeqState,  ///< MCG_SEQ_*: stop, play, loop (or 0..2)
+  Rpm,       ///< rev/min, raw = value
+  Percent,   ///< duty in %, raw = 10 x value (the board counts 1/1000 of full scale)
+  Gain,      ///< coefficient, raw = value x 2^F (F = coef_frac): 1/1000 duty per (pulse/ms)
+  Bits,      ///< fractional bits, raw = value
+  Ms,        ///< milliseconds, raw = value
+  Count,     ///< a count, raw = value (counters read as unsigned 16 bit)
+  Switch,    ///< 0/1 (also off/on)
+  Flags,     ///< MCG_FLAG_* bits, read only
+};
+
+struct RegisterInfo {
+  std::string_view name;
+  std::uint8_t id;
+  Unit unit;
+  bool writable;
+  std::int32_t raw_min;  ///< the range the board accepts (static part; the board checks the rest)
+  std::int32_t raw_max;
+  std::string_view doc;  ///< unit and meaning, one line
+};
+
+/// Every register of the protocol, in id order.
+std::span<const RegisterInfo> registers();
+/// The register called `name` (case-insensitive; '-' may stand for '_'), or nullptr.
+const RegisterInfo* find_register(std::string_view name);
+/// The register with protocol id `id`, or nullptr.
+const RegisterInfo* find_register(std::uint8_t id);
+/// find_register(name) that throws "unknown register 'x' (registers: mode, rpm_cmd, ...)".
+const RegisterInfo& require_register(std::string_view name);
+
+/// Unit text for messages and listings: "rpm", "%", "ms", ...
+std::string_view unit_suffix(Unit unit);
+/// Engineering value of a raw register value: rpm and ms as is, duty % = raw / 10,
+/// gain = raw / 2^frac_bits, counters as unsigned 16 bit.
+double to_engineering(const RegisterInfo& reg, std::int16_t raw, int frac_bits);
+/// The raw value nearest to `value` (rounded half away from zero). Throws mcg::Error
+/// "<reg>: <value> <unit> is outside <min>..<max>" when it falls outside the register's range.
+std::int16_t to_raw(const RegisterInfo& reg, double value, int frac_bits);
+/// Parses the text a user typed for `reg` (a number, or a name for mode, seq_state and
+/// switches) into its engineering value. Throws mcg::Error naming `where`.
+double parse_value(const RegisterInfo& reg, std::string_view text, std::string_view where);
+/// Shortest exact text of a raw value in engineering units ("420", "35.5", "0.75", "pi",
+/// "saturated,logging").
+std::string format_value(const RegisterInfo& reg, std::int16_t raw, int frac_bits);
+
+/// Text of a protocol status code ("value outside the register's range", ...).
+std::string_view status_text(std::uint8_t status);
+
+}  // namespace mcg::link

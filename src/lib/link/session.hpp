@@ -1,0 +1,104 @@
+// A conversation with the board: requests with timeouts and retries, unsolicited frames queued.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "link/frame.hpp"      // Frame, Decoder
+#include "link/port.hpp"       // Port
+#include "link/registers.hpp"  // RegisterInfo
+
+namespace mcg::link {
+
+struct SessionOptions {
+  /// Wait for each answer, s. At 9600 baud a reply takes under 15 ms on the wire, but it may
+  /// queue behind a stream block or a log dump frame; 0.3 s leaves room for both.
+  double reply_timeout_s = 0.3;
+  /// Attempts per request before the board counts as not answering.
+  int attempts = 3;
+  /// Longest silence inside a frame before the host drops it, s. Larger than the board's
+  /// MCG_FRAME_TIMEOUT_MS because the host is not real-time.
+  double frame_timeout_s = 0.1;
+};
+
+/// What MCG_CMD_VERSION reports.
+struct Version {
+  unsigned protocol = 0;
+  unsigned major = 0;
+  unsigned minor = 0;
+  unsigned patch = 0;
+  unsigned board = 0;  ///< MCG_BOARD_*
+};
+/// "c515", "ucsim", "host" or the number.
+std::string board_name(unsigned board);
+
+/// The RAM log as the board sent it.
+struct LogDump {
+  unsigned interval_ms = 0;            ///< spacing of the points
+  std::vector<std::uint16_t> counts;   ///< encoder pulses during each interval, oldest first
+};
+
+/// One entry of a command sequence: after `delay_ms` (from the previous entry), write `raw`
+/// into register `reg`.
+struct SeqEntry {
+  std::uint16_t delay_ms = 0;
+  std::uint8_t reg = 0;
+  std::int16_t raw = 0;
+};
+
+class Session {
+ public:
+  explicit Session(Port& port, SessionOptions options = {});
+
+  /// Flushes stale input, asks for the version and checks the protocol revision. Throws
+  /// mcg::Error "<port>: nothing answers ..." or "<port>: wrong firmware: ...".
+  Version hello();
+
+  /// Sends a request and returns the answer's data (the bytes after the status). Resends
+  /// after `reply_timeout_s` of silence, or at once when the board reports it dropped a
+  /// damaged frame, up to `attempts` times. Throws mcg::Error "<port>: <what>: <status text>"
+  /// for a refusal, "<port>: nothing answers ..." after the last attempt.
+  std::vector<std::uint8_t> request(std::uint8_t cmd, std::span<const std::uint8_t> payload,
+                                    std::string_view what);
+
+  /// The raw value of a register.
+  std::int16_t read(const RegisterInfo& reg);
+  /// Writes a raw value; returns the value the board holds afterwards (from its answer).
+  std::int16_t write(const RegisterInfo& reg, std::int16_t raw);
+
+  /// Starts nothing: reads the RAM log (MCG_CMD_LOG_DUMP and its data frames), retrying the
+  /// whole dump when a data frame is lost.
+  LogDump dump_log();
+  /// Replaces the board's command sequence with `entries` (cleared first, then written in
+  /// chunks of MCG_SEQ_WRITE_MAX), checking the next index each chunk reports.
+  void write_sequence(std::span<const SeqEntry> entries);
+
+  /// The next frame the board sent on its own (stream blocks, log data): from the queue of
+  /// frames that arrived during requests first, else waits up to `timeout_s`. nullopt on
+  /// timeout or when a signal interrupted the wait.
+  std::optional<Frame> receive(double timeout_s);
+
+  Port& port() { return m_port; }
+  const DecoderStats& stats() const { return m_decoder.stats(); }
+  /// Board frame-error reports (MCG_MSG_ERROR) seen so far.
+  std::uint64_t board_errors() const { return m_board_errors; }
+
+ private:
+  /// Reads what arrives within `timeout_s` into m_frames.
+  void pump(double timeout_s);
+  [[noreturn]] void no_answer(std::string_view what) const;
+
+  Port& m_port;
+  SessionOptions m_options;
+  Decoder m_decoder;
+  std::deque<Frame> m_frames;    ///< decoded, not yet consumed
+  std::deque<Frame> m_unsolicited;
+  std::uint64_t m_board_errors = 0;
+};
+
+}  // namespace mcg::link
