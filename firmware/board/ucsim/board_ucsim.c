@@ -98,9 +98,9 @@ uint8_t hal_key_read(void)
 
 void hal_lcd_write(uint8_t row, const char *text16)
 {
+  uint8_t base = row ? 0x20u : 0x10u;
   uint8_t i;
-  volatile uint8_t MCG_XDATA *dst = s_io + 0x10u + (row ? 0x10u : 0u);
   for (i = 0; i < 16u && text16[i]; ++i) {
-    dst[i] = (uint8_t)text16[i];
+    s_io[base + i] = (uint8_t)text16[i];
   }
 }

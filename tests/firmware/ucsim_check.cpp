@@ -1,0 +1,437 @@
+// ucsim_check: runs the SIM image in s51 (-t C517) and talks to it the way the PC talks to the board.
+//
+//   ucsim_check IMAGE.ihx WORKDIR
+//
+// The UART goes through two FIFOs (binary clean); s51's command console listens on a TCP port and
+// is used to start the simulation and, at the end, to read the RAM log straight from external RAM
+// at 0x9500. Checks: version, register write and read-back (all eight bits), a refused write,
+// resynchronisation after garbage and a truncated frame, the 255 logged points (through the dump
+// frames and in memory), the LCD mirror. Prints one line per check and "N passed, M failed".
+// s51 runs under `timeout`; a watchdog ends everything if the simulator stops answering.
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <optional>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "fw_frames.hpp"
+
+extern char** environ;
+
+namespace {
+
+using fwtest::Bytes;
+using fwtest::Frame;
+using Clock = std::chrono::steady_clock;
+
+pid_t g_child = -1;
+
+void on_watchdog(int)
+{
+  const char msg[] = "ucsim_check: watchdog: the simulator stopped answering\n";
+  (void)!write(2, msg, sizeof msg - 1);
+  if (g_child > 0) {
+    kill(g_child, SIGTERM);
+  }
+  _exit(1);
+}
+
+int free_tcp_port()
+{
+  const int s = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = 0;
+  socklen_t len = sizeof a;
+  if (bind(s, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 ||
+      getsockname(s, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
+    close(s);
+    return 0;
+  }
+  close(s);
+  return ntohs(a.sin_port);
+}
+
+class Sim {
+ public:
+  Sim(const std::string& image, const std::string& dir)
+  {
+    const std::string to = dir + "/to_sim", from = dir + "/from_sim";
+    unlink(to.c_str());
+    unlink(from.c_str());
+    if (mkfifo(to.c_str(), 0600) != 0 || mkfifo(from.c_str(), 0600) != 0) {
+      std::perror("ucsim_check: mkfifo");
+      std::exit(1);
+    }
+    m_transcript = std::fopen((dir + "/console.log").c_str(), "w");
+    m_port = free_tcp_port();
+    const std::string port = std::to_string(m_port);
+    const std::string serial = "in=" + to + ",out=" + from;
+    const std::string log = dir + "/s51.log";
+    std::vector<std::string> args{"timeout", "-k", "5", "300", "s51", "-t", "C517", "-X", "12M", "-P",
+                                  "-Z", port, "-S", serial, image};
+    std::vector<char*> argv;
+    for (auto& a : args) {
+      argv.push_back(a.data());
+    }
+    argv.push_back(nullptr);
+    // s51 ends when its stdin reaches EOF: give it a pipe that stays open.
+    int in[2];
+    if (pipe(in) != 0) {
+      std::perror("ucsim_check: pipe");
+      std::exit(1);
+    }
+    m_stdin = in[1];
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_adddup2(&fa, in[0], 0);
+    posix_spawn_file_actions_addclose(&fa, in[1]);
+    posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&fa, 1, 2);
+    if (posix_spawnp(&g_child, "timeout", &fa, nullptr, argv.data(), environ) != 0) {
+      std::perror("ucsim_check: spawn s51");
+      std::exit(1);
+    }
+    posix_spawn_file_actions_destroy(&fa);
+    close(in[0]);
+    // s51 opens the input FIFO first, then the output one.
+    m_to = open(to.c_str(), O_WRONLY);
+    m_from = open(from.c_str(), O_RDONLY);
+    fcntl(m_from, F_SETFL, O_NONBLOCK);
+    connect_console();
+    console("expr uart0_check_often=1");
+    console("expr sim_start=1");
+  }
+
+  ~Sim()
+  {
+    if (m_console >= 0) {
+      close(m_console);
+    }
+    if (m_transcript) {
+      std::fclose(m_transcript);
+    }
+    close(m_to);
+    close(m_from);
+    close(m_stdin);
+    kill(g_child, SIGTERM);  // timeout passes it on to s51
+    int st = 0;
+    waitpid(g_child, &st, 0);
+    g_child = -1;
+  }
+
+  // One console command; returns its output without colour codes. The console echoes the command
+  // and ends each answer with a NUL (its prompt); answers to earlier commands are skipped.
+  std::string console(const std::string& cmd)
+  {
+    const std::string line = cmd + "\n";
+    if (send(m_console, line.data(), line.size(), MSG_NOSIGNAL) < 0) {
+      return {};
+    }
+    std::string out;
+    for (;;) {
+      out = strip(read_to_prompt());
+      if (out.empty() || out.find(cmd) != std::string::npos) {
+        break;
+      }
+    }
+    if (m_transcript) {
+      std::fprintf(m_transcript, "> %s\n%s\n", cmd.c_str(), out.c_str());
+      std::fflush(m_transcript);
+    }
+    return out;
+  }
+
+  // Discards console output still in flight (some commands answer twice).
+  void console_drain()
+  {
+    for (;;) {
+      pollfd p{m_console, POLLIN, 0};
+      if (poll(&p, 1, 300) <= 0) {
+        return;
+      }
+      char buf[512];
+      if (recv(m_console, buf, sizeof buf, 0) <= 0) {
+        return;
+      }
+    }
+  }
+
+  void send_bytes(const Bytes& b) { (void)!write(m_to, b.data(), b.size()); }
+
+  // Frames received within timeout_ms of wall time, returning early once `until` is seen or `done`
+  // says the frames so far are enough.
+  std::vector<Frame> receive(int timeout_ms, std::optional<std::uint8_t> until = std::nullopt,
+                             const std::function<bool(const std::vector<Frame>&)>& done = {})
+  {
+    std::vector<Frame> out;
+    const auto end = Clock::now() + std::chrono::milliseconds(timeout_ms);
+    while (Clock::now() < end) {
+      pollfd p{m_from, POLLIN, 0};
+      poll(&p, 1, 20);
+      std::uint8_t buf[256];
+      const ssize_t n = read(m_from, buf, sizeof buf);
+      if (n > 0) {
+        const auto got = m_decoder.feed(Bytes(buf, buf + n));
+        out.insert(out.end(), got.begin(), got.end());
+        for (const Frame& f : got) {
+          if (until && f.cmd == *until) {
+            return out;
+          }
+        }
+        if (done && done(out)) {
+          return out;
+        }
+      }
+    }
+    return out;
+  }
+
+  std::optional<Frame> request(std::uint8_t cmd, const Bytes& payload = {})
+  {
+    send_bytes(fwtest::encode(cmd, payload));
+    const std::uint8_t want = static_cast<std::uint8_t>(cmd | MCG_REPLY_BIT);
+    for (const Frame& f : receive(5000, want)) {
+      if (f.cmd == want) {
+        return f;
+      }
+      m_other.push_back(f);
+    }
+    return std::nullopt;
+  }
+
+  std::vector<Frame> m_other;
+
+ private:
+  void connect_console()
+  {
+    const auto end = Clock::now() + std::chrono::seconds(20);
+    while (Clock::now() < end) {
+      m_console = socket(AF_INET, SOCK_STREAM, 0);
+      sockaddr_in a{};
+      a.sin_family = AF_INET;
+      a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+      a.sin_port = htons(static_cast<std::uint16_t>(m_port));
+      if (connect(m_console, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) {
+        console_drain();  // telnet options and the banner
+        return;
+      }
+      close(m_console);
+      m_console = -1;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    std::fprintf(stderr, "ucsim_check: no s51 console on port %d\n", m_port);
+    std::exit(1);
+  }
+
+  // Console text up to the next NUL byte; empty if nothing comes for 5 s.
+  std::string read_to_prompt()
+  {
+    std::string text;
+    for (;;) {
+      pollfd p{m_console, POLLIN, 0};
+      char c = 0;
+      if (poll(&p, 1, 5000) <= 0 || recv(m_console, &c, 1, 0) != 1 || c == '\0') {
+        return text;
+      }
+      text.push_back(c);
+    }
+  }
+
+  static std::string strip(const std::string& s)
+  {
+    static const std::regex ansi("\x1b\\[[0-9;]*[A-Za-z]");
+    std::string t = std::regex_replace(s, ansi, "");
+    t.erase(std::remove(t.begin(), t.end(), '\r'), t.end());
+    return t;
+  }
+
+  std::FILE* m_transcript = nullptr; // the console dialogue, kept in WORKDIR for a failed run
+  int m_port = 0;
+  int m_to = -1, m_from = -1, m_stdin = -1, m_console = -1;
+  fwtest::Decoder m_decoder;
+};
+
+// Bytes [from, to] of external RAM through the console's dx command (16 per line).
+Bytes read_xram(Sim& sim, unsigned from, unsigned to)
+{
+  char cmd[64];
+  std::snprintf(cmd, sizeof cmd, "dx 0x%04x 0x%04x 16", from, to);
+  std::istringstream lines(sim.console(cmd));
+  Bytes out;
+  std::string line;
+  while (std::getline(lines, line)) {
+    std::istringstream f(line);
+    std::string addr;
+    if (!(f >> addr) || addr.rfind("0x", 0) != 0) {
+      continue;
+    }
+    const unsigned a = static_cast<unsigned>(std::stoul(addr, nullptr, 16));
+    if (a < from || a > to) {
+      continue;
+    }
+    const unsigned n = std::min(16u, to - a + 1);
+    for (unsigned i = 0; i < n; ++i) {
+      std::string h;
+      f >> h;
+      out.push_back(static_cast<std::uint8_t>(std::stoul(h, nullptr, 16)));
+    }
+  }
+  return out;
+}
+
+int g_pass = 0, g_fail = 0;
+
+void check(bool ok, const std::string& what)
+{
+  std::printf("%s: %s\n", ok ? "PASS" : "FAIL", what.c_str());
+  (ok ? g_pass : g_fail) += 1;
+}
+
+Bytes write_payload(std::uint8_t reg, int value)
+{
+  Bytes p{reg};
+  const Bytes v = fwtest::le16(value);
+  p.insert(p.end(), v.begin(), v.end());
+  return p;
+}
+
+std::optional<int> read_reg(Sim& sim, std::uint8_t reg)
+{
+  const auto f = sim.request(MCG_CMD_READ, {reg});
+  if (!f || f->payload.size() != 4 || f->payload[0] != MCG_ST_OK) {
+    return std::nullopt;
+  }
+  return fwtest::i16_at(f->payload, 2);
+}
+
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  if (argc != 3) {
+    std::fprintf(stderr, "usage: ucsim_check IMAGE.ihx WORKDIR\n");
+    return 2;
+  }
+  signal(SIGALRM, on_watchdog);
+  signal(SIGPIPE, SIG_IGN);
+  alarm(240);
+  {
+    Sim sim(argv[1], argv[2]);
+
+    const auto v = sim.request(MCG_CMD_VERSION);
+    check(v && v->payload == Bytes{MCG_ST_OK, MCG_PROTOCOL_VERSION, MCG_FW_VERSION_MAJOR, MCG_FW_VERSION_MINOR,
+                                   MCG_FW_VERSION_PATCH, MCG_BOARD_UCSIM},
+          "version: protocol 1, firmware 0.1.0, board ucsim");
+
+    const auto w = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_RPM_CMD, 515));
+    check(w && w->payload == Bytes{MCG_ST_OK, MCG_REG_RPM_CMD, 0x03, 0x02}, "write rpm_cmd 515 acknowledged");
+    check(read_reg(sim, MCG_REG_RPM_CMD) == 515, "rpm_cmd reads back 515");
+
+    bool all_bits = true;
+    for (int value : {-32513, 0x7F80, -1, 0x00FF, -32768}) {
+      const auto a = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_KP, value));
+      all_bits = all_bits && a && a->payload.at(0) == MCG_ST_OK && read_reg(sim, MCG_REG_KP) == value;
+    }
+    check(all_bits, "Kp written and read back with the eighth bit of both bytes");
+
+    const auto r = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_RPM_CMD, 800));
+    check(r && r->payload == Bytes{MCG_ST_RANGE} && read_reg(sim, MCG_REG_RPM_CMD) == 515,
+          "rpm_cmd 800 refused with status RANGE, register unchanged");
+
+    // Garbage with SYNC bytes in it, then a truncated frame; then silence, then a good request.
+    Bytes junk;
+    std::uint32_t x = 12345;
+    for (int i = 0; i < 150; ++i) {
+      x = x * 1103515245u + 12345u;
+      const auto b = static_cast<std::uint8_t>(x >> 16);
+      junk.push_back((b & 7) == 0 ? std::uint8_t{MCG_SYNC} : b);
+    }
+    const Bytes cut = fwtest::encode(MCG_CMD_WRITE, write_payload(MCG_REG_KP, 7));
+    junk.insert(junk.end(), cut.begin(), cut.begin() + 4);
+    sim.send_bytes(junk);
+    const auto errors = sim.receive(800);
+    int error_frames = 0;
+    for (const Frame& f : errors) {
+      error_frames += f.cmd == MCG_MSG_ERROR;
+    }
+    const auto after = sim.request(MCG_CMD_VERSION);
+    check(after && after->payload.at(0) == MCG_ST_OK, "answers after garbage and a truncated frame");
+    const auto rx_errors = read_reg(sim, MCG_REG_RX_ERRORS);
+    check(error_frames > 0 && rx_errors && *rx_errors > 0,
+          "garbage reported: " + std::to_string(error_frames) + " error frames, rx_errors " +
+              std::to_string(rx_errors.value_or(-1)));
+    check(read_reg(sim, MCG_REG_KP) == -32768, "the truncated write did not happen");
+
+    // The RAM log: open loop at duty 400, the SIM encoder then counts 10 pulses per ms.
+    check(sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_DUTY, 400))->payload.at(0) == MCG_ST_OK &&
+              sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_LOG_INTERVAL, 4))->payload.at(0) == MCG_ST_OK,
+          "duty 400 and log interval 4 ms set");
+    sim.receive(100);
+    const auto start = sim.request(MCG_CMD_LOG_START);
+    check(start && start->payload == Bytes{MCG_ST_OK}, "log started");
+    bool full = false;
+    for (int i = 0; i < 200 && !full; ++i) {
+      const auto flags = read_reg(sim, MCG_REG_FLAGS);
+      full = flags && (*flags & static_cast<int>(MCG_FLAG_LOG_FULL)) != 0;
+      if (!full) {
+        sim.receive(50);
+      }
+    }
+    check(full && read_reg(sim, MCG_REG_LOG_COUNT) == 255, "255 points recorded");
+
+    sim.m_other.clear();
+    const auto dump = sim.request(MCG_CMD_LOG_DUMP);
+    check(dump && dump->payload == Bytes{MCG_ST_OK, 255, 4}, "dump announced: 255 points, 4 ms apart");
+    std::vector<Frame> frames = sim.m_other;
+    const auto rest = sim.receive(8000, std::nullopt, [](const std::vector<Frame>& got) {
+      return std::count_if(got.begin(), got.end(), [](const Frame& f) { return f.cmd == MCG_MSG_LOG_DATA; }) ==
+             MCG_LOG_DUMP_FRAMES;
+    });
+    frames.insert(frames.end(), rest.begin(), rest.end());
+    std::vector<int> points;
+    for (const Frame& f : frames) {
+      if (f.cmd == MCG_MSG_LOG_DATA && f.payload.size() >= 2 && f.payload[0] == points.size()) {
+        for (std::size_t i = 0; i < f.payload[1]; ++i) {
+          points.push_back(fwtest::i16_at(f.payload, 2 + 2 * i));
+        }
+      }
+    }
+    check(points.size() == 255 && std::all_of(points.begin(), points.end(), [](int p) { return p == 40; }),
+          "dump frames carry 255 points of 40 pulses (10 per ms x 4 ms)");
+
+    sim.console("stop");
+    sim.console_drain();
+    const Bytes ram = read_xram(sim, MCG_LOG_XADDR, MCG_LOG_XADDR + 2 * MCG_LOG_POINTS - 1);
+    bool same = ram.size() == 2 * MCG_LOG_POINTS && points.size() == MCG_LOG_POINTS;
+    for (std::size_t k = 0; same && k < MCG_LOG_POINTS; ++k) {
+      same = (ram[2 * k] | ram[2 * k + 1] << 8) == points[k];
+    }
+    check(same, "external RAM at 0x9500 holds the same 255 points (" + std::to_string(ram.size()) + " bytes read)");
+
+    const Bytes lcd = read_xram(sim, 0x9F20, 0x9F2F);
+    const std::string row(lcd.begin(), lcd.end());
+    check(row == "open   d  40.0% ", "LCD line 2: '" + row + "'");
+  }
+  std::printf("%d passed, %d failed\n", g_pass, g_fail);
+  return g_fail == 0 ? 0 : 1;
+}
