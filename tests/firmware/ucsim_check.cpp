@@ -42,15 +42,41 @@ using fwtest::Bytes;
 using fwtest::Frame;
 using Clock = std::chrono::steady_clock;
 
-pid_t g_child = -1;
+pid_t g_child = -1; // the `timeout` process
+pid_t g_s51 = -1;   // its child, s51
+
+// s51's pid: the only child of `timeout`.
+pid_t child_of(pid_t parent)
+{
+  char path[64];
+  std::snprintf(path, sizeof path, "/proc/%d/task/%d/children", static_cast<int>(parent), static_cast<int>(parent));
+  std::FILE* f = std::fopen(path, "r");
+  int pid = -1;
+  if (f) {
+    if (std::fscanf(f, "%d", &pid) != 1) {
+      pid = -1;
+    }
+    std::fclose(f);
+  }
+  return pid;
+}
+
+// Ends s51 by its pid (timeout does not always pass a signal on), then reaps timeout.
+void stop_simulator()
+{
+  if (g_s51 > 0) {
+    kill(g_s51, SIGTERM);
+  }
+  if (g_child > 0) {
+    kill(g_child, SIGTERM);
+  }
+}
 
 void on_watchdog(int)
 {
   const char msg[] = "ucsim_check: watchdog: the simulator stopped answering\n";
   (void)!write(2, msg, sizeof msg - 1);
-  if (g_child > 0) {
-    kill(g_child, SIGTERM);
-  }
+  stop_simulator();
   _exit(1);
 }
 
@@ -113,6 +139,12 @@ class Sim {
     }
     posix_spawn_file_actions_destroy(&fa);
     close(in[0]);
+    for (int i = 0; i < 100 && g_s51 <= 0; ++i) {
+      g_s51 = child_of(g_child);
+      if (g_s51 <= 0) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      }
+    }
     // s51 opens the input FIFO first, then the output one.
     m_to = open(to.c_str(), O_WRONLY);
     m_from = open(from.c_str(), O_RDONLY);
@@ -133,10 +165,11 @@ class Sim {
     close(m_to);
     close(m_from);
     close(m_stdin);
-    kill(g_child, SIGTERM);  // timeout passes it on to s51
+    stop_simulator();
     int st = 0;
     waitpid(g_child, &st, 0);
     g_child = -1;
+    g_s51 = -1;
   }
 
   // One console command; returns its output without colour codes. The console echoes the command
