@@ -1,0 +1,150 @@
+// mcg-fit gap: the sim-to-real gap diagnosis. Where the model misses the measured runs,
+// which unmodelled physical effect of the catalog explains it, and how far the gap shrinks
+// on held-out data once that effect is added and refitted.
+//
+// Method (every fit is fit_model(), the grey-box Levenberg-Marquardt fit):
+//   before          the model as given, simulated on the validation runs the way they were
+//                   measured (rpm through the runs' `# rpm_estimator:`)
+//   param_mismatch  the nominal parameters refitted on the training runs through the scale
+//                   factors of the param_mismatch effect (Kt, J, Coulomb, static, viscous, R)
+//   EFFECT          the refitted model plus one catalog effect, its parameters started from
+//                   the best point of a coarse grid, then everything refitted jointly
+//   A+B             pairs of the strongest significant effects, refitted jointly
+// Each candidate is scored on the validation runs only, with the residual of every output
+// normalised by its noise floor:
+//   score = sum_outputs mean(r^2) / floor^2        (about 1 per output for a perfect model)
+// and ranked by Akaike's final prediction error FPE = score (N + k) / (N - k) (k free
+// parameters, N validation samples). A candidate is significant against a reference when
+//   score_ref - score > max(k_abs, k_rel (score_ref - outputs))
+// i.e. it removes a clear part of the gap above the noise that the reference leaves.
+// The diagnosis: `none` unless the model as given misses by more than the noise allows;
+// the best significant effect (or pair) over the refit; else `param_mismatch` if the refit
+// alone is significant; else `none`.
+#pragma once
+
+#include "fit/diag_residual.hpp"
+#include "fit/greybox.hpp"
+#include "model/model.hpp"
+
+#include <functional>
+#include <iosfwd>
+#include <limits>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace mcg::fit {
+
+/// A candidate must lower the validation score by at least this much (in noise units)...
+inline constexpr double k_gap_abs_threshold = 0.25;
+/// ... and by at least this fraction of the gap its reference leaves above the noise.
+inline constexpr double k_gap_rel_threshold = 0.2;
+
+/// How the diagnosis runs.
+struct GapSettings {
+  unsigned threads = 0;                ///< candidates fitted at once; 0 = all cores
+  double split_fraction = 0.6;         ///< training share when a single file is split
+  std::size_t pair_effects = 3;        ///< pairs are formed among this many strongest effects
+  int max_evaluations = 0;             ///< simulation budget per candidate fit; 0 = by size
+  std::function<void(const std::string&)> progress;  ///< progress lines (none when empty)
+};
+
+/// One measured validation run prepared for scoring: rows before `first_scored` only bring
+/// the simulation to its state (their measured values are not scored).
+struct ScoredRun {
+  Run run;
+  std::size_t first_scored = 0;
+  /// The current measurement chain from `# i_measurement:` ("1 ohm shunt, 10-bit ADC over
+  /// 0-5 V ..., noise sigma 0.003 A"): ADC step in A and noise sigma in A, NaN when not stated.
+  double i_step_A = std::numeric_limits<double>::quiet_NaN();
+  double i_sigma_A = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// The prepared data: training runs, validation runs, and how they were obtained.
+struct GapData {
+  std::vector<Run> train;
+  std::vector<ScoredRun> validate;
+  std::string split_note;  ///< empty unless a single file was split
+};
+
+/// Builds the training and validation sets from tables. With no validation table and one
+/// training table, that table is split at the event (clutch or relay change, jump > 1 V)
+/// nearest to split_fraction of its duration, within 40-80 %, else at split_fraction itself:
+/// the rows before train; the whole file is simulated for validation but only the rows
+/// after the split are scored. Outputs compared: rpm and i where measured. Current samples
+/// at the ADC rails (from `# i_measurement: ... range A..B A`) are dropped as not measured.
+GapData prepare_gap_data(const std::vector<table::Table>& train, const std::vector<table::Table>& validate,
+                         const model::Params& params, double split_fraction);
+
+/// Per validation output: the measured series (scored rows only, NaN elsewhere) and the
+/// noise floor of its measurement chain.
+struct OutputFloor {
+  std::string output;       ///< "rpm" or "i"
+  NoiseFloor noise;
+  double floor = 0.0;       ///< used for the score (the chain value when stated, else the data value)
+};
+
+/// One candidate and its validation result.
+struct GapCandidate {
+  std::string name;                   ///< "none", "param_mismatch", "stribeck", "stribeck+dead_time"
+  std::vector<std::string> effects;   ///< catalog effects added (param_mismatch excluded)
+  std::string status;                 ///< "as given", "fitted", "not converged", "not excited: ..."
+  model::Model model;                 ///< the fitted model
+  std::vector<std::string> free;      ///< fitted parameter names
+  std::vector<double> values;
+  std::vector<double> std_errors;
+  std::size_t added_parameters = 0;   ///< parameters of the added effects
+  double score = 0.0;                 ///< validation score (see top of file)
+  double fpe = 0.0;                   ///< final prediction error, the ranking key
+  std::vector<double> rms;            ///< validation RMS per output (order of GapReport::floors)
+  double train_rms_rpm = 0.0;
+  bool significant = false;
+  bool evaluated = false;             ///< false when skipped (not excited)
+};
+
+/// The diagnosis.
+struct GapReport {
+  std::string split_note;
+  std::vector<OutputFloor> floors;
+  std::size_t validation_samples = 0;
+  std::vector<GapCandidate> candidates;  ///< diagnosis first, then the rest best first
+  std::string diagnosis;                 ///< = candidates.front().name
+  std::string reason;                    ///< one sentence: why this diagnosis
+  /// Where the gap lies before and after (the diagnosis' model), pooled over validation runs.
+  std::vector<RegimeStat> regimes_before, regimes_after;
+  std::vector<RegimeStat> bands_before, bands_after;
+  std::vector<RegimeStat> current_regimes_before, current_regimes_after;
+  Whiteness white_before, white_after;
+  /// Per validation run and output: simulated series of the model as given and of the diagnosis.
+  std::vector<std::vector<std::vector<double>>> simulated_before, simulated_after;
+};
+
+/// Runs the diagnosis of `model` on `data`.
+GapReport diagnose_gap(const model::Model& model, const GapData& data, const GapSettings& settings);
+
+/// The CSV result, one row per candidate, diagnosis first: effect, rms_before_rpm,
+/// rms_after_rpm, shrink_pct, gap_shrink_pct, rms_before_i_A, rms_after_i_A, score, fpe,
+/// n_params, params, significant, status.
+void write_gap_csv(std::ostream& out, const GapReport& report);
+/// The human summary (the same content with the regime tables and residual checks).
+void write_gap_text(std::ostream& out, const GapReport& report);
+/// The validation time series for plotting: run, t, inputs, measured, before, after and
+/// both residuals per output.
+void write_gap_residuals(std::ostream& out, const GapReport& report, const GapData& data);
+
+/// Options of `mcg-fit gap`.
+struct GapOptions {
+  std::vector<std::string> config;
+  std::vector<std::string> train;
+  std::vector<std::string> validate;
+  std::string format = "csv";   ///< csv (summary on stderr) or text (summary on stdout)
+  std::string residuals;        ///< path of the residual series, empty = none
+  unsigned threads = 0;
+  double split_fraction = 0.6;
+};
+
+/// The whole subcommand: reads the files, diagnoses, writes stdout/stderr (and residuals).
+void run_gap(const GapOptions& options, std::ostream& out, std::ostream& err);
+
+}  // namespace mcg::fit
