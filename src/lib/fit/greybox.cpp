@@ -6,7 +6,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -17,28 +16,6 @@ namespace mcg::fit {
 namespace {
 
 constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-  return s;
-}
-
-/// Consumes `word` at the front of s (after blanks); false if it is not there.
-bool take(std::string_view& s, std::string_view word) {
-  s = trim(s);
-  if (s.substr(0, word.size()) != word) return false;
-  s.remove_prefix(word.size());
-  return true;
-}
-
-bool take_number(std::string_view& s, double& value) {
-  s = trim(s);
-  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
-  if (ec != std::errc{} || !(value > 0.0) || !std::isfinite(value)) return false;
-  s.remove_prefix(static_cast<std::size_t>(end - s.data()));
-  return true;
-}
 
 double mean_of_finite(const std::vector<double>& y, std::size_t& count) {
   double sum = 0.0;
@@ -62,18 +39,8 @@ const std::vector<double>& pick(const model::Outputs& out, const std::string& na
 
 }  // namespace
 
-RpmEstimator parse_rpm_estimator(std::string_view text, std::string_view where) {
-  RpmEstimator est;
-  std::string_view s = text;
-  if (take(s, "counts over") && take_number(s, est.window_s) && take(s, "s window") && take(s, ",") &&
-      take_number(s, est.counts_per_rev) && take(s, "counts/rev") && trim(s).empty()) {
-    return est;
-  }
-  fail("{}: rpm_estimator: expected 'counts over W s window, N counts/rev', got '{}'", where, text);
-}
-
-std::vector<double> estimate_rpm(const std::vector<double>& t_s, const std::vector<double>& theta_rad,
-                                 const RpmEstimator& estimator) {
+std::vector<double> window_average_rpm(const std::vector<double>& t_s, const std::vector<double>& theta_rad,
+                                       const sim::CountEstimator& estimator) {
   const std::size_t n = t_s.size();
   std::vector<double> rpm(n);
   const double to_rpm = 60.0 / (2.0 * std::numbers::pi * estimator.window_s);
@@ -133,7 +100,7 @@ Run make_run(const table::Table& table, const std::vector<std::string>& outputs,
   }
   for (const auto& name : run.outputs) run.measured.push_back(table.col(name));
   if (const auto text = table.meta.get("rpm_estimator")) {
-    run.rpm_estimator = parse_rpm_estimator(*text, table.source);
+    run.rpm_estimator = sim::parse_rpm_estimator(*text, table.source);
   }
   return run;
 }
@@ -145,7 +112,7 @@ std::vector<std::vector<double>> simulate_as_measured(const model::Model& model,
   series.reserve(run.outputs.size());
   for (const auto& name : run.outputs) {
     if (name == "rpm" && run.rpm_estimator) {
-      series.push_back(estimate_rpm(run.inputs.t_s, out.theta_rad, *run.rpm_estimator));
+      series.push_back(window_average_rpm(run.inputs.t_s, out.theta_rad, *run.rpm_estimator));
     } else {
       series.push_back(pick(out, name));
     }

@@ -5,34 +5,27 @@
 
 #include "fit/nls.hpp"
 #include "model/model.hpp"
+#include "sim/encoder.hpp"
 #include "table/table.hpp"
 
 #include <cstddef>
 #include <optional>
 #include <string>
-#include <string_view>
 #include <vector>
 
 namespace mcg::fit {
 
-/// How `rpm` was measured: encoder counts accumulated over a trailing window,
-///   rpm(t_n) = (counts(t_n) - counts(t_n - window_s)) / counts_per_rev / window_s * 60.
-struct RpmEstimator {
-  double window_s = 0.005;
-  double counts_per_rev = 2048.0;
-};
+/// How `rpm` was measured: encoder counts over a trailing window (window_s, counts_per_rev).
+using RpmEstimator = sim::CountEstimator;
 
-/// Parses the `# rpm_estimator:` metadata value, e.g.
-/// "counts over 0.005 s window, 2048 counts/rev". Throws naming `where` when malformed.
-RpmEstimator parse_rpm_estimator(std::string_view text, std::string_view where);
-
-/// The estimator applied to a simulated shaft angle theta(t) (rad), without the count
-/// quantisation: rpm(t_n) = (theta(t_n) - theta(t_n - W)) / W * 60 / (2 pi), theta
-/// interpolated linearly between samples and held at theta(t_0) before the start.
+/// The run's encoder estimator (sim::CountEstimator, from `# rpm_estimator:`) applied to a
+/// simulated shaft angle theta(t) without the count quantisation:
+///   rpm(t_n) = (theta(t_n) - theta(t_n - W)) / W * 60 / (2 pi),
+/// theta interpolated linearly between samples and held at theta(t_0) before the start.
 /// Quantising would make the fit's cost piecewise constant in the parameters (useless for
 /// a Jacobian); the quantisation error is left to the residual as measurement noise.
-std::vector<double> estimate_rpm(const std::vector<double>& t_s, const std::vector<double>& theta_rad,
-                                 const RpmEstimator& estimator);
+std::vector<double> window_average_rpm(const std::vector<double>& t_s, const std::vector<double>& theta_rad,
+                                       const sim::CountEstimator& estimator);
 
 /// Measured columns a fit can compare with the model.
 /// rpm (rev/min), i (A), i_gen (A), v_gen (V), omega (rad/s).

@@ -1,0 +1,312 @@
+// Friction from quasi-steady windows (Coulomb and viscous) and starts from rest (static).
+#include "fit/friction.hpp"
+
+#include "common/error.hpp"
+#include "fit/nls.hpp"
+
+#include <Eigen/QR>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+
+namespace mcg::fit {
+
+namespace {
+
+/// A stretch of at least this long at rest precedes a start that counts as a breakaway.
+constexpr double k_rest_min_s = 0.02;
+/// Motion shows in the encoder estimate this long after it began (window + first count).
+constexpr double k_detect_lag_s = 0.015;
+/// Block length for averaging a measured current at rest (beats its noise down); a drive
+/// torque from the voltage balance is noise-free and used sample by sample.
+constexpr double k_block_s = 0.01;
+constexpr std::size_t k_min_rows = 100;
+
+struct Window {
+  double omega_rad_s;
+  double torque_Nm;
+  bool from_current;
+};
+
+struct Breakaway {
+  double lower_Nm;
+  double upper_Nm;
+};
+
+struct StateData {
+  std::vector<Window> windows;
+  std::vector<Breakaway> breakaways;
+  double max_drive_Nm = 0.0;
+};
+
+int sign_of(double x) { return (x > 0.0) - (x < 0.0); }
+
+/// Largest mean of `d * torque` over blocks of `block_s` tiling [from, to) backwards from `to`.
+double max_block_mean(const std::vector<double>& t, const std::vector<double>& torque, int d, std::size_t from,
+                      std::size_t to, double block_s) {
+  double best = -1e300;
+  std::size_t end = to;
+  while (end > from) {
+    std::size_t begin = end - 1;
+    while (begin > from && t[end - 1] - t[begin - 1] < block_s) --begin;
+    double sum = 0.0;
+    for (std::size_t k = begin; k < end; ++k) sum += d * torque[k];
+    best = std::max(best, sum / static_cast<double>(end - begin));
+    end = begin;
+  }
+  return best;
+}
+
+void collect(const table::Table& table, const model::Params& p, const FrictionOptions& options,
+             std::map<int, StateData>& states) {
+  table::require_increasing(table, "t");
+  if (table.rows() < k_min_rows) fail("{}: too short: {} rows (at least {} needed)", table.source, table.rows(), k_min_rows);
+  model::Inputs in;
+  in.t_s = table.col("t");
+  if (!table.has("v") && table.has("duty")) {
+    in.v_V = table.col("duty");
+    for (double& v : in.v_V) v *= p.supply_V;
+  } else {
+    in.v_V = table.col("v");
+  }
+  in.clutch = table.col("clutch");
+  in.r_load_ohm = table.col("r_load");
+  model::validate_inputs(in, table.source, table.first_line);
+  std::vector<double> omega;
+  if (table.has("rpm") || !table.has("omega")) {
+    omega = table.col("rpm");
+    for (double& w : omega) w *= 2.0 * std::numbers::pi / 60.0;
+  } else {
+    omega = table.col("omega");
+  }
+  const std::vector<double>* current = options.use_current && table.has("i") ? &table.col("i") : nullptr;
+  const std::vector<double>* current_gen = options.use_current && table.has("i_gen") ? &table.col("i_gen") : nullptr;
+
+  const std::size_t n = table.rows();
+  const auto& m = p.motor;
+  std::vector<double> drive(n);
+  std::vector<bool> measured(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double v = std::clamp(in.v_V[k], -p.supply_V, p.supply_V);
+    measured[k] = current != nullptr && std::isfinite((*current)[k]);
+    drive[k] = measured[k] ? m.Kt_Nm_A * (*current)[k] : m.Kt_Nm_A * (v - m.Ke_V_s_rad * omega[k]) / m.R_ohm;
+  }
+
+  // Quasi-steady windows.
+  double event_t = in.t_s[0];
+  std::size_t start = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const bool changed = k > 0 && (std::abs(in.v_V[k] - in.v_V[k - 1]) > options.jump_V ||
+                                   in.clutch[k] != in.clutch[k - 1] || in.r_load_ohm[k] != in.r_load_ohm[k - 1]);
+    if (changed) event_t = in.t_s[k];
+    const bool usable = in.t_s[k] - event_t >= options.settle_s && std::isfinite(omega[k]);
+    if (!usable || changed) {
+      start = k + 1;
+      continue;
+    }
+    if (in.t_s[k] - in.t_s[start] < options.window_s) continue;
+    const int d = sign_of(omega[start]);
+    bool moving = d != 0;
+    for (std::size_t j = start; j <= k && moving; ++j) moving = sign_of(omega[j]) == d && std::isfinite(drive[j]);
+    if (moving) {
+      const int clutch = static_cast<int>(in.clutch[k]);
+      const double count = static_cast<double>(k - start + 1);
+      double w = 0.0;
+      double tau = 0.0;
+      double gen = 0.0;
+      bool all_measured = true;
+      bool gen_measured = clutch == 2 && current_gen != nullptr;
+      for (std::size_t j = start; j <= k; ++j) {
+        w += omega[j];
+        tau += drive[j];
+        all_measured = all_measured && measured[j];
+        if (gen_measured) {
+          gen_measured = std::isfinite((*current_gen)[j]);
+          gen += p.generator.Kt_Nm_A * (*current_gen)[j];
+        }
+      }
+      w /= count;
+      tau /= count;
+      const double j_shaft = m.J_kg_m2 + (clutch == 2 ? p.generator.J_kg_m2 : 0.0);
+      const double accel = (omega[k] - omega[start]) / (in.t_s[k] - in.t_s[start]);
+      double load = 0.0;
+      if (clutch == 2 && std::isfinite(in.r_load_ohm[k])) {
+        load = gen_measured ? gen / count
+                            : p.generator.Kt_Nm_A * p.generator.Ke_V_s_rad * w / (p.generator.R_ohm + in.r_load_ohm[k]);
+      }
+      states[clutch].windows.push_back({w, tau - j_shaft * accel - load, all_measured});
+    }
+    start = k + 1;
+  }
+
+  // Starts from rest.
+  std::size_t rest_start = 0;
+  bool resting = false;
+  for (std::size_t k = 0; k < n; ++k) {
+    auto& st = states[static_cast<int>(in.clutch[k])];
+    const bool at_rest = omega[k] == 0.0;
+    if (at_rest) st.max_drive_Nm = std::max(st.max_drive_Nm, std::abs(drive[k]));
+    if (k > 0 && in.clutch[k] != in.clutch[k - 1]) resting = false;
+    if (at_rest) {
+      if (!resting) rest_start = k;
+      resting = true;
+      continue;
+    }
+    if (resting && std::isfinite(omega[k]) && in.t_s[k] - in.t_s[rest_start] >= k_rest_min_s) {
+      const int d = sign_of(omega[k]);
+      std::size_t split = k;
+      while (split > rest_start && in.t_s[k] - in.t_s[split - 1] <= k_detect_lag_s) --split;
+      const double block_s = measured[k] ? k_block_s : 0.0;
+      if (split > rest_start && in.t_s[split] - in.t_s[rest_start] >= block_s) {
+        const double lower = max_block_mean(in.t_s, drive, d, rest_start, split, block_s);
+        const double upper = max_block_mean(in.t_s, drive, d, split, k + 1, block_s);
+        st.breakaways.push_back({std::min(lower, upper), std::max(lower, upper)});
+      }
+    }
+    resting = false;
+  }
+}
+
+/// Number of clusters of |w| separated by more than max(1 rad/s, 2 %).
+std::size_t distinct_speeds(std::vector<double> speeds) {
+  std::sort(speeds.begin(), speeds.end());
+  std::size_t levels = speeds.empty() ? 0 : 1;
+  for (std::size_t k = 1; k < speeds.size(); ++k) {
+    if (speeds[k] - speeds[k - 1] > std::max(1.0, 0.02 * speeds[k])) ++levels;
+  }
+  return levels;
+}
+
+StateFriction estimate(int clutch, const StateData& data, const FrictionOptions& options) {
+  StateFriction out;
+  out.clutch = clutch;
+  if (data.windows.empty()) {
+    if (data.breakaways.empty()) {
+      fail("clutch state {}: the shaft never leaves stiction (largest drive torque at rest {:.4g} N m)", clutch,
+           data.max_drive_Nm);
+    }
+    fail("clutch state {}: no quasi-steady stretch while moving (runs too fast for the {} s settling time?)", clutch,
+         options.settle_s);
+  }
+  if (data.breakaways.empty()) fail("clutch state {}: no start from rest: static friction cannot be estimated", clutch);
+
+  std::vector<double> speeds;
+  for (const auto& w : data.windows) speeds.push_back(std::abs(w.omega_rad_s));
+  out.omega_min_rad_s = *std::min_element(speeds.begin(), speeds.end());
+  out.omega_max_rad_s = *std::max_element(speeds.begin(), speeds.end());
+  const std::size_t needed = static_cast<std::size_t>(options.order) + 1;
+  const std::size_t levels = distinct_speeds(speeds);
+  if (levels < needed || data.windows.size() <= needed) {
+    fail("clutch state {}: no excitation in the needed range: {} distinct speeds ({:.3g}..{:.3g} rad/s), "
+         "a polynomial of order {} needs {}",
+         clutch, levels, out.omega_min_rad_s, out.omega_max_rad_s, options.order, needed);
+  }
+
+  const auto rows = static_cast<Eigen::Index>(data.windows.size());
+  const auto cols = static_cast<Eigen::Index>(needed);
+  Eigen::MatrixXd a(rows, cols);
+  Eigen::VectorXd b(rows);
+  out.from_current = true;
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const auto& w = data.windows[static_cast<std::size_t>(r)];
+    const double s = w.omega_rad_s > 0.0 ? 1.0 : -1.0;
+    const double x = std::abs(w.omega_rad_s);
+    double xp = 1.0;
+    for (Eigen::Index c = 0; c < cols; ++c, xp *= x) a(r, c) = s * xp;
+    b[r] = w.torque_Nm;
+    out.from_current = out.from_current && w.from_current;
+  }
+  const Eigen::VectorXd coef = a.colPivHouseholderQr().solve(b);
+  Eigen::VectorXd se;
+  Eigen::MatrixXd corr;
+  double sigma = 0.0;
+  covariance_statistics(a, a * coef - b, se, corr, sigma);
+  out.total.value.Tc_Nm = coef[0];
+  out.total.se.Tc_Nm = se[0];
+  for (Eigen::Index c = 1; c < cols; ++c) {
+    out.total.value.viscous[static_cast<std::size_t>(c - 1)] = coef[c];
+    out.total.se.viscous[static_cast<std::size_t>(c - 1)] = se[c];
+  }
+
+  double sum = 0.0;
+  double width2 = 0.0;
+  for (const auto& e : data.breakaways) {
+    sum += 0.5 * (e.lower_Nm + e.upper_Nm);
+    width2 += (e.upper_Nm - e.lower_Nm) * (e.upper_Nm - e.lower_Nm);
+  }
+  const auto count = static_cast<double>(data.breakaways.size());
+  const double mean = sum / count;
+  double spread2 = 0.0;
+  for (const auto& e : data.breakaways) spread2 += std::pow(0.5 * (e.lower_Nm + e.upper_Nm) - mean, 2);
+  const double var_mean = count > 1 ? spread2 / (count - 1.0) / count : 0.0;
+  out.total.value.Ts_Nm = mean;
+  out.total.se.Ts_Nm = std::sqrt(var_mean + width2 / count / 12.0);
+  out.windows = data.windows.size();
+  out.breakaways = data.breakaways.size();
+  return out;
+}
+
+/// a - k b with standard errors in quadrature (k b counts b's error k times: b is one estimate).
+FrictionTerm minus(const FrictionTerm& a, const FrictionTerm& b, double k = 1.0) {
+  FrictionTerm out;
+  const auto diff = [k](double x, double y) { return x - k * y; };
+  const auto quad = [k](double x, double y) { return std::sqrt(x * x + k * k * y * y); };
+  out.value.Ts_Nm = diff(a.value.Ts_Nm, b.value.Ts_Nm);
+  out.value.Tc_Nm = diff(a.value.Tc_Nm, b.value.Tc_Nm);
+  out.se.Ts_Nm = quad(a.se.Ts_Nm, b.se.Ts_Nm);
+  out.se.Tc_Nm = quad(a.se.Tc_Nm, b.se.Tc_Nm);
+  for (std::size_t c = 0; c < 3; ++c) {
+    out.value.viscous[c] = diff(a.value.viscous[c], b.value.viscous[c]);
+    out.se.viscous[c] = quad(a.se.viscous[c], b.se.viscous[c]);
+  }
+  return out;
+}
+
+}  // namespace
+
+FrictionResult fit_friction(const std::vector<table::Table>& runs, const model::Params& base,
+                            const FrictionOptions& options) {
+  if (options.order < 1 || options.order > 3) fail("--order must be 1, 2 or 3");
+  if (runs.empty()) fail("no runs given");
+  std::map<int, StateData> data;
+  for (const auto& table : runs) collect(table, base, options, data);
+
+  FrictionResult result;
+  result.params = base;
+  std::map<int, FrictionTerm> total;
+  for (const auto& [clutch, d] : data) {
+    if (d.windows.empty() && d.breakaways.empty() && d.max_drive_Nm == 0.0) continue;
+    result.states.push_back(estimate(clutch, d, options));
+    total[clutch] = result.states.back().total;
+  }
+
+  FrictionTerm motor{base.motor.friction, {}};
+  FrictionTerm generator{base.generator.friction, {}};
+  double generator_factor = 1.0;
+  if (total.count(0) != 0) {
+    motor = total[0];
+    generator = motor;
+    generator_factor = 2.0;
+    result.motor = motor;
+    result.params.motor.friction = motor.value;
+    result.params.generator.friction = motor.value;
+  }
+  if (total.count(1) != 0) {
+    result.clutch_disengaged = minus(total[1], motor);
+    result.params.clutch_disengaged = result.clutch_disengaged->value;
+  }
+  if (total.count(2) != 0) {
+    // total2 - motor - generator; when the generator is the motor's estimate the two
+    // subtractions share one error, so it counts twice.
+    FrictionTerm engaged = minus(total[2], motor, generator_factor);
+    if (generator_factor == 1.0) engaged = minus(engaged, generator);
+    result.clutch_engaged = engaged;
+    result.params.clutch_engaged = engaged.value;
+  }
+  return result;
+}
+
+}  // namespace mcg::fit

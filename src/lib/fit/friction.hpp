@@ -1,0 +1,81 @@
+// Friction identification from slow ramp or staircase runs (mcg-fit friction), with the
+// report's stacking: motor alone; plus the clutch attached; plus the clutch engaged and
+// the generator.
+#pragma once
+
+#include "model/model.hpp"
+#include "table/table.hpp"
+
+#include <array>
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace mcg::fit {
+
+struct FrictionOptions {
+  /// Order of the viscous polynomial P(x) = c1 x + ... + c_order x^order (1..3).
+  int order = 3;
+  /// Samples closer than settle_s after a jump of v larger than jump_V (or a change of
+  /// clutch or r_load) are transients and skipped; a slow ramp never jumps.
+  double settle_s = 0.15;
+  double jump_V = 0.05;
+  /// Length of the averaging windows in the quasi-steady stretches, s.
+  double window_s = 0.1;
+  /// Use the measured current `i` where the run has it (else the voltage balance).
+  bool use_current = true;
+};
+
+/// A friction element and the standard errors of its values (same layout).
+struct FrictionTerm {
+  model::Friction value;
+  model::Friction se;
+};
+
+/// What the runs in one clutch state show: the total friction on the motor shaft.
+///   moving windows: T_f = mean(T_drive) - J_shaft dw/dt - T_gen_load, regressed on
+///                   sign(w) (Tc + c1 |w| + ... + c_order |w|^order), standard errors from OLS;
+///   T_drive       = Kt i (measured current) or Kt (v - Ke w) / R (voltage balance, the
+///                   armature at steady state: L di/dt averages out over a window);
+///   T_gen_load    = Kt_g i_gen, or Kt_g Ke_g w / (R_g + r_load) (state 2 only);
+///   breakaway     = each start from rest: Ts lies between the largest drive torque held
+///                   at rest and the drive torque when the shaft moved; Ts is the mean of the
+///                   midpoints, its standard error combines their spread and the bracket
+///                   width / sqrt(12).
+struct StateFriction {
+  int clutch = 0;
+  FrictionTerm total;
+  std::size_t windows = 0;
+  std::size_t breakaways = 0;
+  double omega_min_rad_s = 0.0;  ///< speed range of the moving windows (|w|)
+  double omega_max_rad_s = 0.0;
+  bool from_current = false;  ///< every window used the measured current
+};
+
+/// The stacked elements (standard errors add in quadrature):
+///   motor             = total(state 0)
+///   clutch_disengaged = total(state 1) - motor
+///   clutch_engaged    = total(state 2) - motor - generator, generator = motor (the report's
+///                       "equivalent systems" assumption).
+/// The report subtracted only the motor for its "clutch engaged" row (207.5 mA - 89 mA), so
+/// that row still contains the generator, which its Simulink model then adds a second time;
+/// subtracting both makes the model's sum reproduce the measured total.
+/// When no state-0 run is given, the motor's friction is taken from `base` (se 0).
+struct FrictionResult {
+  std::vector<StateFriction> states;  ///< in clutch order, only states present in the runs
+  std::optional<FrictionTerm> motor;  ///< estimated (state 0 present)
+  std::optional<FrictionTerm> clutch_disengaged;
+  std::optional<FrictionTerm> clutch_engaged;
+  model::Params params;  ///< `base` with the estimated frictions (and generator = motor) written in
+};
+
+/// Estimates the frictions from runs with columns t, v (or duty), clutch, r_load, rpm (or
+/// omega) and optionally i (and i_gen in state 2). Throws mcg::Error naming the file or the
+/// clutch state for: a missing column, too few rows, a state whose shaft never leaves
+/// stiction, no start from rest (static friction unknown), or too few distinct speeds for
+/// the polynomial ("no excitation in the needed range").
+FrictionResult fit_friction(const std::vector<table::Table>& runs, const model::Params& base,
+                            const FrictionOptions& options = {});
+
+}  // namespace mcg::fit

@@ -1,0 +1,151 @@
+// Friction identification: the report's friction values come back from simulated runs.
+#include "fit/friction.hpp"
+
+#include "common/error.hpp"
+#include "test_fit_support.hpp"
+
+#include <gtest/gtest.h>
+
+namespace mcg::fit {
+namespace {
+
+using testing::measure;
+using testing::Program;
+
+/// The report's procedure in one run per clutch state: a slow voltage ramp through the
+/// breakaway (static and Coulomb), then a staircase up to `top_V` (viscous), back through
+/// zero, and the same in the negative direction.
+model::Inputs friction_run(int clutch, double ramp_to_V, double top_V, double r_load_ohm = model::k_open_circuit) {
+  Program p;
+  for (const double d : {1.0, -1.0}) {
+    p.hold(0.0, 0.3, clutch, r_load_ohm);
+    p.ramp(0.0, d * ramp_to_V, 3.0, clutch, r_load_ohm);
+    for (double v = 1.0; v <= top_V + 1e-9; v += 1.0) p.hold(d * v, 0.6, clutch, r_load_ohm);
+  }
+  return p.inputs;
+}
+
+struct Expected {
+  double Ts, Tc, c1, c2, c3;
+};
+
+void expect_friction(const model::Friction& got, const model::Friction& se, const Expected& want, double tol_ts,
+                     double tol_tc, double tol_c1, double tol_c2, double tol_c3, const char* what) {
+  SCOPED_TRACE(what);
+  EXPECT_NEAR(got.Ts_Nm, want.Ts, tol_ts);
+  EXPECT_NEAR(got.Tc_Nm, want.Tc, tol_tc);
+  EXPECT_NEAR(got.viscous[0], want.c1, tol_c1);
+  EXPECT_NEAR(got.viscous[1], want.c2, tol_c2);
+  EXPECT_NEAR(got.viscous[2], want.c3, tol_c3);
+  // The stated standard errors are honest: the truth lies within 4 of them.
+  EXPECT_NEAR(got.Ts_Nm, want.Ts, 4.0 * se.Ts_Nm + 1e-12);
+  EXPECT_NEAR(got.Tc_Nm, want.Tc, 4.0 * se.Tc_Nm + 1e-12);
+}
+
+class FitFriction : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const model::Model rig;
+    runs = new std::vector<table::Table>{measure(rig, friction_run(0, 0.6, 14.0), 1),
+                                         measure(rig, friction_run(1, 0.7, 14.0), 2),
+                                         measure(rig, friction_run(2, 1.6, 14.0), 3)};
+  }
+  static void TearDownTestSuite() {
+    delete runs;
+    runs = nullptr;
+  }
+  static std::vector<table::Table>* runs;
+};
+std::vector<table::Table>* FitFriction::runs = nullptr;
+
+/// Kinetic friction curve sign(w) (Tc + P(|w|)) of a term, N m.
+double curve(const model::Friction& f, double w) { return f.kinetic_Nm(w); }
+
+// The report's values (model::builtin_rig(): the motor's tuned m-file values Ts 5.5872e-3,
+// Tc 2.541594e-3 N m and viscous cubic 58.2e-3 (2.07e-4 w - 3.048e-7 w^2 + 1.8472e-10 w^3)
+// = table 11-2's 1.205e-5 w - 1.7739e-8 w^2 + 1.0751e-11 w^3; the clutch rows of tables
+// 11-1/11-2) come back through the stacking. Tolerances per parameter: static levels are
+// bracketed by a slow ramp (0.2 V/s) and read from a noisy current; the clutch values are
+// differences of two measured totals; the cubic term is weakly determined below 240 rad/s,
+// so the curve itself is checked at 20..200 rad/s as well.
+TEST_F(FitFriction, ReportValuesComeBackFromStaircaseWithCurrent) {
+  const auto result = fit_friction(*runs, model::builtin_rig());
+  ASSERT_EQ(result.states.size(), 3U);
+  ASSERT_TRUE(result.motor && result.clutch_disengaged && result.clutch_engaged);
+  const model::Params rig = model::builtin_rig();
+  const auto& m = rig.motor.friction;
+  const auto& d = rig.clutch_disengaged;
+  const auto& e = rig.clutch_engaged;
+  expect_friction(result.motor->value, result.motor->se, {m.Ts_Nm, m.Tc_Nm, m.viscous[0], m.viscous[1], m.viscous[2]},
+                  2e-4, 5e-5, 1e-6, 5e-9, 1.5e-11, "motor");
+  expect_friction(result.clutch_disengaged->value, result.clutch_disengaged->se,
+                  {d.Ts_Nm, d.Tc_Nm, d.viscous[0], d.viscous[1], d.viscous[2]}, 2e-4, 3e-5, 1.5e-6, 1.5e-8, 4e-11,
+                  "clutch disengaged");
+  expect_friction(result.clutch_engaged->value, result.clutch_engaged->se,
+                  {e.Ts_Nm, e.Tc_Nm, e.viscous[0], e.viscous[1], e.viscous[2]}, 4e-4, 8e-5, 3e-6, 3e-8, 8e-11,
+                  "clutch engaged");
+  for (double w = 20.0; w <= 200.0; w += 30.0) {
+    EXPECT_NEAR(curve(result.motor->value, w), curve(m, w), 0.01 * curve(m, w)) << w;
+    const double total2 = 2.0 * curve(m, w) + curve(e, w);
+    const double got2 = 2.0 * curve(result.motor->value, w) + curve(result.clutch_engaged->value, w);
+    EXPECT_NEAR(got2, total2, 0.01 * total2) << w;
+  }
+  EXPECT_EQ(result.states[2].breakaways, 2U);
+  EXPECT_TRUE(result.states[0].from_current);
+  // The estimates are written into the parameter set, the generator taking the motor's.
+  EXPECT_EQ(result.params.motor.friction.Tc_Nm, result.motor->value.Tc_Nm);
+  EXPECT_EQ(result.params.generator.friction.Ts_Nm, result.motor->value.Ts_Nm);
+  EXPECT_EQ(result.params.clutch_engaged.viscous[1], result.clutch_engaged->value.viscous[1]);
+}
+
+// Without a current column the voltage balance T = Kt (v - Ke w) / R gives the same values;
+// a generator load (5.6 ohm across the generator in state 2) is subtracted from the model.
+TEST_F(FitFriction, VoltageBalanceAndGeneratorLoad) {
+  const model::Model rig;
+  std::vector<table::Table> no_current{measure(rig, friction_run(0, 0.6, 14.0), 4, false),
+                                       measure(rig, friction_run(2, 1.6, 14.0, 5.6), 5, false)};
+  const auto result = fit_friction(no_current, rig.params);
+  ASSERT_TRUE(result.motor && result.clutch_engaged);
+  EXPECT_FALSE(result.clutch_disengaged.has_value());
+  EXPECT_FALSE(result.states[0].from_current);
+  const auto& m = rig.params.motor.friction;
+  const auto& e = rig.params.clutch_engaged;
+  expect_friction(result.motor->value, result.motor->se, {m.Ts_Nm, m.Tc_Nm, m.viscous[0], m.viscous[1], m.viscous[2]},
+                  2e-4, 5e-5, 1e-6, 5e-9, 1.5e-11, "motor");
+  expect_friction(result.clutch_engaged->value, result.clutch_engaged->se,
+                  {e.Ts_Nm, e.Tc_Nm, e.viscous[0], e.viscous[1], e.viscous[2]}, 4e-4, 1e-4, 4e-6, 4e-8, 1e-10,
+                  "clutch engaged, 5.6 ohm load");
+  // The disengaged clutch keeps the base value when no state-1 run is given.
+  EXPECT_EQ(result.params.clutch_disengaged.Ts_Nm, rig.params.clutch_disengaged.Ts_Nm);
+}
+
+std::string error_of(const std::vector<table::Table>& runs, const FrictionOptions& options = {}) {
+  try {
+    fit_friction(runs, model::builtin_rig(), options);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(FitFrictionErrors, BadDataIsNamed) {
+  const model::Model rig;
+  // 0.3 V cannot break the motor free (Ts R / Kt = 0.375 V).
+  const auto stuck = measure(rig, Program{}.hold(0.0, 0.2, 0).ramp(0.0, 0.3, 2.0, 0).inputs, 6, false);
+  EXPECT_EQ(error_of({stuck}), "clutch state 0: the shaft never leaves stiction (largest drive torque at rest 0.004463 N m)");
+  // A ramp and a single level: speeds at one or two levels only.
+  const auto narrow = measure(rig, Program{}.hold(0.0, 0.2, 0).ramp(0.0, 0.6, 2.0, 0).hold(3.0, 1.0, 0).inputs, 7);
+  EXPECT_EQ(error_of({narrow}).substr(0, 62), "clutch state 0: no excitation in the needed range: 2 distinct ");
+  auto missing = stuck;
+  missing.names.erase(missing.names.begin() + 2);
+  missing.columns.erase(missing.columns.begin() + 2);
+  EXPECT_EQ(error_of({missing}), "sim.csv: missing column 'clutch' (has: t,v,r_load,rpm)");
+  auto short_run = measure(rig, Program{}.hold(1.0, 0.05, 0).inputs, 8);
+  EXPECT_EQ(error_of({short_run}), "sim.csv: too short: 50 rows (at least 100 needed)");
+  FrictionOptions bad;
+  bad.order = 4;
+  EXPECT_EQ(error_of({stuck}, bad), "--order must be 1, 2 or 3");
+}
+
+}  // namespace
+}  // namespace mcg::fit
