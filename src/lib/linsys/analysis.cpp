@@ -45,62 +45,46 @@ void add_unique(std::vector<double>& v, double x) {
   v.push_back(x);
 }
 
-/// Dense scan grid for crossovers of `fe` on [lo, hi].
-std::vector<double> scan_grid(const FreqEval& fe, double lo, double hi) {
-  const Tf& g = fe.tf();
+/// Dense scan grid for crossovers of `le` on [lo, hi].
+std::vector<double> scan_grid(const LoopEval& le, double lo, double hi) {
   const double decades = std::log10(hi / lo);
   std::vector<double> w = log_grid(lo, hi, std::max(200, static_cast<int>(decades * 400.0)));
   // Lightly damped roots turn the phase within a few percent of |root|: sample them finely.
-  auto dense_near = [&](Complex r) {
-    double wn = 0.0;
-    double zeta = 1.0;
-    if (g.discrete()) {
-      if (std::abs(r) == 0.0) return;
-      const Complex sr = std::log(r) / g.dt_s;
-      wn = std::abs(sr);
-      zeta = wn > 0.0 ? -sr.real() / wn : 1.0;
-    } else {
-      wn = std::abs(r);
-      zeta = wn > 0.0 ? -r.real() / wn : 1.0;
-    }
-    if (wn <= 0.0 || std::abs(zeta) > 0.2) return;
-    const double width = std::max(std::abs(zeta), 1e-6) * wn;
-    for (int k = -200; k <= 200; ++k) {
+  for (const FreqEval& fe : le.factors()) {
+    const Tf& g = fe.tf();
+    auto dense_near = [&](Complex r) {
+      double wn = 0.0;
+      double zeta = 1.0;
+      if (g.discrete()) {
+        if (std::abs(r) == 0.0) return;
+        const Complex sr = std::log(r) / g.dt_s;
+        wn = std::abs(sr);
+        zeta = wn > 0.0 ? -sr.real() / wn : 1.0;
+      } else {
+        wn = std::abs(r);
+        zeta = wn > 0.0 ? -r.real() / wn : 1.0;
+      }
+      if (wn <= 0.0 || std::abs(zeta) > 0.2) return;
+      const double width = std::max(std::abs(zeta), 1e-6) * wn;
       const double centre = g.discrete() ? std::abs(std::arg(r)) / g.dt_s : std::abs(r.imag());
-      const double x = centre + width * k / 20.0;
-      if (x > lo && x < hi) w.push_back(x);
-    }
-  };
-  for (const Complex& z : fe.zeros()) dense_near(z);
-  for (const Complex& p : fe.poles()) dense_near(p);
-  if (g.delay_s > 0.0) {
-    const double step = k_pi / (4.0 * g.delay_s);
-    const double count = (hi - lo) / step;
-    const double n = std::min(count, 200000.0);
+      for (int k = -200; k <= 200; ++k) {
+        const double x = centre + width * k / 20.0;
+        if (x > lo && x < hi) w.push_back(x);
+      }
+    };
+    for (const Complex& z : fe.zeros()) dense_near(z);
+    for (const Complex& p : fe.poles()) dense_near(p);
+  }
+  const double delay = le.delay_s();
+  if (delay > 0.0) {
+    const double step = k_pi / (4.0 * delay);
+    const double n = std::min((hi - lo) / step, 200000.0);
     for (int k = 0; k <= static_cast<int>(n); ++k) w.push_back(lo + step * k);
   }
   std::sort(w.begin(), w.end());
   w.erase(std::unique(w.begin(), w.end()), w.end());
   w.erase(std::remove_if(w.begin(), w.end(), [&](double x) { return x < lo || x > hi; }), w.end());
   return w;
-}
-
-/// The scan range for margins: wide enough to hold every crossover of `fe`.
-void scan_range(const FreqEval& fe, double& lo, double& hi) {
-  default_range(fe.tf(), lo, hi);
-  const Tf& g = fe.tf();
-  const bool integrating = zeros_at_origin(g.den) > 0 || (g.discrete() && [&] {
-    for (const Complex& p : fe.poles()) {
-      if (std::abs(p - Complex(1.0, 0.0)) < 1e-12) return true;
-    }
-    return false;
-  }());
-  for (int i = 0; i < 40 && integrating && fe.log_mag(lo) < std::log(1e4); ++i) lo /= 10.0;
-  if (!g.discrete()) {
-    for (int i = 0; i < 40 && g.strictly_proper() && fe.log_mag(hi) > std::log(1e-4); ++i) hi *= 10.0;
-    const bool differentiating = zeros_at_origin(g.num) > 0;
-    for (int i = 0; i < 40 && differentiating && fe.log_mag(lo) > std::log(1e-4); ++i) lo /= 10.0;
-  }
 }
 
 double dc_value(const Tf& g, double x) { return eval(g.num, x) / eval(g.den, x); }
@@ -154,12 +138,88 @@ void default_range(const Tf& g, double& lo, double& hi) {
 
 Margins margins(const Tf& loop) {
   if (!loop.proper()) fail("margins need a proper loop transfer function, got {}", tf_text(loop));
+  return margins(std::vector<Tf>{loop});
+}
+
+LoopEval::LoopEval(const std::vector<Tf>& factors) {
+  for (const Tf& f : factors) {
+    m_factors.emplace_back(f);
+    if (f.discrete()) m_dt_s = m_dt_s == 0.0 ? f.dt_s : std::min(m_dt_s, f.dt_s);
+  }
+}
+
+double LoopEval::log_mag(double w) const {
+  double acc = 0.0;
+  for (const FreqEval& f : m_factors) acc += f.log_mag(w);
+  return acc;
+}
+
+double LoopEval::phase_rad(double w) const {
+  double acc = 0.0;
+  for (const FreqEval& f : m_factors) acc += f.phase_rad(w);
+  return acc;
+}
+
+Complex LoopEval::value(double w) const {
+  Complex acc(1.0, 0.0);
+  for (const FreqEval& f : m_factors) acc *= f.value(w);
+  return acc;
+}
+
+double LoopEval::delay_s() const {
+  double acc = 0.0;
+  for (const FreqEval& f : m_factors) acc += f.tf().delay_s;
+  return acc;
+}
+
+bool LoopEval::all_discrete() const {
+  for (const FreqEval& f : m_factors) {
+    if (!f.tf().discrete()) return false;
+  }
+  return true;
+}
+
+void LoopEval::range(double& lo, double& hi) const {
+  lo = INFINITY;
+  hi = 0.0;
+  bool integrating = false;
+  bool differentiating = false;
+  bool strictly_proper = false;
+  for (const FreqEval& f : m_factors) {
+    double a = 0.0;
+    double b = 0.0;
+    default_range(f.tf(), a, b);
+    lo = std::min(lo, a);
+    hi = std::max(hi, b);
+    const Tf& g = f.tf();
+    integrating = integrating || zeros_at_origin(g.den) > 0;
+    differentiating = differentiating || zeros_at_origin(g.num) > 0;
+    strictly_proper = strictly_proper || g.strictly_proper();
+    if (g.discrete()) {
+      for (const Complex& p : f.poles()) integrating = integrating || std::abs(p - Complex(1.0, 0.0)) < 1e-12;
+      for (const Complex& z : f.zeros()) differentiating = differentiating || std::abs(z - Complex(1.0, 0.0)) < 1e-12;
+    }
+  }
+  if (m_dt_s > 0.0) {
+    hi = k_pi / m_dt_s;
+    lo = std::min(lo, hi * 1e-5);
+  }
+  for (int i = 0; i < 40 && integrating && log_mag(lo) < std::log(1e4); ++i) lo /= 10.0;
+  for (int i = 0; i < 40 && differentiating && log_mag(lo) > std::log(1e-4); ++i) lo /= 10.0;
+  if (m_dt_s == 0.0) {
+    for (int i = 0; i < 40 && strictly_proper && log_mag(hi) > std::log(1e-4); ++i) hi *= 10.0;
+  }
+}
+
+Margins margins(const std::vector<Tf>& factors) {
   Margins m;
-  if (is_zero(loop.num)) return m;
-  const FreqEval fe(loop);
+  for (const Tf& f : factors) {
+    if (is_zero(f.num)) return m;
+  }
+  const LoopEval fe(factors);
   double lo = 0.0;
   double hi = 0.0;
-  scan_range(fe, lo, hi);
+  fe.range(lo, hi);
   const std::vector<double> w = scan_grid(fe, lo, hi);
   std::vector<double> lm(w.size());
   std::vector<double> ph(w.size());
@@ -183,7 +243,7 @@ Margins margins(const Tf& loop) {
   }
   std::vector<double> axis_w;
   std::vector<double> axis_v;
-  real_axis_points(loop, axis_w, axis_v);
+  if (factors.size() == 1) real_axis_points(factors.front(), axis_w, axis_v);
   for (std::size_t i = 0; i < axis_w.size(); ++i) {
     if (axis_v[i] < 0.0) add_unique(m.phase_crossovers_rad_s, axis_w[i]);
   }

@@ -33,6 +33,30 @@ struct Margins {
 /// sign change of ln|L| and of the exactly unwrapped phase by bisection to machine precision.
 /// Throws mcg::Error for an improper loop.
 Margins margins(const Tf& loop);
+/// Margins of the product of `factors`, each evaluated in its own domain at the same ω: a
+/// discrete controller C(e^(jωT)) in series with a continuous plant P(jω) that already holds
+/// the sampling lag (the report's way). Any discrete factor limits ω to π/T.
+Margins margins(const std::vector<Tf>& factors);
+
+/// ln|L|, unwrapped arg L and L itself for a product of factors in s and/or z.
+class LoopEval {
+ public:
+  explicit LoopEval(const std::vector<Tf>& factors);
+  double log_mag(double omega_rad_s) const;
+  double phase_rad(double omega_rad_s) const;
+  Complex value(double omega_rad_s) const;
+  const std::vector<FreqEval>& factors() const { return m_factors; }
+  /// Sample period of the discrete factors (0 if none).
+  double dt_s() const { return m_dt_s; }
+  double delay_s() const;
+  bool all_discrete() const;
+  /// Scan range holding every crossover.
+  void range(double& lo_rad_s, double& hi_rad_s) const;
+
+ private:
+  std::vector<FreqEval> m_factors;
+  double m_dt_s = 0.0;
+};
 
 /// Closed-loop poles of L/(1 + L). A continuous delay uses its [6/6] Padé approximant
 /// (`padded` says so); a discrete delay is exact (z^−k).
