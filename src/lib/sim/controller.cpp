@@ -1,0 +1,186 @@
+// Emulation of the board's digital controller and the closed loop around the plant.
+#include "sim/controller.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+#include "common/error.hpp"
+#include "config/ini.hpp"
+
+namespace mcg::sim {
+
+namespace {
+constexpr const char* k_section = "controller";
+}
+
+Controller report_pi() { return Controller{}; }
+
+std::optional<Controller> controller_from_ini(const config::Ini& ini) {
+  if (!ini.has_section(k_section)) return std::nullopt;
+  Controller c;
+  for (const auto* e : ini.entries(k_section)) {
+    static const char* const known[] = {"type", "b", "a", "dt_s", "input_scale", "output", "duty_full_scale",
+                                        "round_output", "duty_resolution"};
+    if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return e->key == k; }) ==
+        std::end(known)) {
+      ini.reject(k_section, e->key, "unknown key");
+    }
+  }
+  if (auto v = ini.get(k_section, "type")) c.type = *v;
+  std::string output = ini.get(k_section, "output").value_or("duty_counts");
+  if (output == "duty") {
+    c.duty_full_scale = 1.0;
+    c.round_output = false;
+  } else if (output != "duty_counts") {
+    ini.reject(k_section, "output", "must be 'duty_counts' or 'duty', got '" + output + "'");
+  }
+  if (auto b = ini.numbers(k_section, "b")) c.b = *b;
+  if (auto a = ini.numbers(k_section, "a")) c.a = *a;
+  if (c.b.empty()) ini.reject(k_section, "b", "needs at least one coefficient");
+  if (c.a.empty() || c.a[0] == 0.0) ini.reject(k_section, "a", "needs a_0 != 0");
+  for (double x : c.b) {
+    if (!std::isfinite(x)) ini.reject(k_section, "b", "coefficients must be finite");
+  }
+  for (double x : c.a) {
+    if (!std::isfinite(x)) ini.reject(k_section, "a", "coefficients must be finite");
+  }
+  c.dt_s = ini.number_or(k_section, "dt_s", c.dt_s);
+  if (!(c.dt_s > 0.0) || !std::isfinite(c.dt_s)) ini.reject(k_section, "dt_s", "must be > 0");
+  c.input_scale = ini.number_or(k_section, "input_scale", c.input_scale);
+  if (!std::isfinite(c.input_scale) || c.input_scale == 0.0) {
+    ini.reject(k_section, "input_scale", "must be finite and non-zero");
+  }
+  if (output == "duty_counts") {
+    c.duty_full_scale = ini.number_or(k_section, "duty_full_scale", c.duty_full_scale);
+    if (!(c.duty_full_scale > 0.0) || !std::isfinite(c.duty_full_scale)) {
+      ini.reject(k_section, "duty_full_scale", "must be > 0");
+    }
+  }
+  const double round = ini.number_or(k_section, "round_output", c.round_output ? 1.0 : 0.0);
+  if (round != 0.0 && round != 1.0) ini.reject(k_section, "round_output", "must be 0 or 1");
+  c.round_output = round == 1.0;
+  c.duty_resolution = ini.number_or(k_section, "duty_resolution", c.duty_resolution);
+  if (!(c.duty_resolution >= 0.0 && c.duty_resolution < 1.0)) {
+    ini.reject(k_section, "duty_resolution", "must be in [0, 1)");
+  }
+  return c;
+}
+
+void controller_to_ini(const Controller& c, config::Ini& ini) {
+  auto list = [](const std::vector<double>& v) {
+    std::string s;
+    for (double x : v) {
+      if (!s.empty()) s += ' ';
+      s += config::format_number(x);
+    }
+    return s;
+  };
+  ini.set(k_section, "type", c.type);
+  ini.set(k_section, "b", list(c.b), "numerator on e, b_0 first");
+  ini.set(k_section, "a", list(c.a), "denominator on y, a_0 first");
+  ini.set(k_section, "dt_s", c.dt_s, "s");
+  ini.set(k_section, "input_scale", c.input_scale, "error units per rpm");
+  ini.set(k_section, "output", "duty_counts");
+  ini.set(k_section, "duty_full_scale", c.duty_full_scale, "output units at 100 % duty");
+  ini.set(k_section, "round_output", c.round_output ? 1.0 : 0.0);
+  ini.set(k_section, "duty_resolution", c.duty_resolution, "fraction of full scale");
+}
+
+ControllerState::ControllerState(const Controller& controller)
+    : m_c(controller), m_e(controller.b.size(), 0.0), m_y(controller.a.size() > 1 ? controller.a.size() - 1 : 0, 0.0) {
+  assert(!m_c.b.empty() && !m_c.a.empty() && m_c.a[0] != 0.0);
+}
+
+double ControllerState::step(double error_rpm) {
+  std::rotate(m_e.rbegin(), m_e.rbegin() + 1, m_e.rend());
+  m_e[0] = m_c.input_scale * error_rpm;
+  double acc = 0.0;
+  for (std::size_t k = 0; k < m_e.size(); ++k) acc += m_c.b[k] * m_e[k];
+  for (std::size_t k = 0; k < m_y.size(); ++k) acc -= m_c.a[k + 1] * m_y[k];
+  double y = acc / m_c.a[0];
+  if (m_c.round_output) y = std::round(y);
+  y = std::clamp(y, -m_c.duty_full_scale, m_c.duty_full_scale);
+  if (!m_y.empty()) {
+    std::rotate(m_y.rbegin(), m_y.rbegin() + 1, m_y.rend());
+    m_y[0] = y;
+  }
+  double duty = y / m_c.duty_full_scale;
+  if (m_c.duty_resolution > 0.0) duty = std::round(duty / m_c.duty_resolution) * m_c.duty_resolution;
+  return std::clamp(duty, -1.0, 1.0);
+}
+
+double WindowCounter::push(double t, double theta) {
+  if (m_hist.empty()) m_hist.emplace_back(t, theta);
+  const double tol = 1e-9 + 1e-6 * m_e.window_s;
+  const double t_back = t - m_e.window_s;
+  m_hist.emplace_back(t, theta);
+  // Keep one sample at or before t - W (the oldest needed), drop older ones.
+  std::size_t drop = 0;
+  while (drop + 1 < m_hist.size() && m_hist[drop + 1].first <= t_back + tol) ++drop;
+  if (drop > 0) m_hist.erase(m_hist.begin(), m_hist.begin() + static_cast<std::ptrdiff_t>(drop));
+  double theta_back = m_hist.front().second;
+  const auto& [t0, th0] = m_hist.front();
+  if (t_back > t0 + tol && m_hist.size() > 1) {
+    const auto& [t1, th1] = m_hist[1];
+    theta_back = th0 + (t_back - t0) / (t1 - t0) * (th1 - th0);
+  }
+  return (encoder_count(theta, m_e.counts_per_rev) - encoder_count(theta_back, m_e.counts_per_rev)) *
+         m_e.rpm_per_count();
+}
+
+ClosedLoopOutputs simulate_closed_loop(const model::Model& model, const Controller& controller,
+                                       const CountEstimator& estimator, const ClosedLoopInputs& in,
+                                       const model::SimOptions& options) {
+  const std::size_t n = in.t_s.size();
+  assert(in.rpm_cmd.size() == n && in.clutch.size() == n && in.r_load_ohm.size() == n);
+  ClosedLoopOutputs out;
+  out.plant.resize(n);
+  out.duty.assign(n, 0.0);
+  out.v_V.assign(n, 0.0);
+  if (n == 0) return out;
+  const double supply = model.params.supply_V;
+  model::Plant plant(model, options, static_cast<int>(in.clutch[0]));
+  ControllerState ctl(controller);
+  WindowCounter counter(estimator);
+  const double t0 = in.t_s[0];
+  // Ticks are counted, not accumulated, so that they stay exactly on t0 + k dt.
+  long tick = 0;
+  double duty = 0.0;
+  auto tick_time = [&](long k) { return t0 + static_cast<double>(k) * controller.dt_s; };
+  const double tol = 1e-9 * controller.dt_s;
+  for (std::size_t row = 0; row < n; ++row) {
+    const double t_row_end = row + 1 < n ? in.t_s[row + 1] : in.t_s[row];
+    const model::Drive base{0.0, static_cast<int>(in.clutch[row]), in.r_load_ohm[row]};
+    double t = in.t_s[row];
+    bool stored = false;
+    while (true) {
+      if (std::abs(tick_time(tick) - t) <= tol) {
+        const model::State s = plant.state();
+        const double rpm = counter.push(t, s.theta_rad);
+        duty = ctl.step(in.rpm_cmd[row] - rpm);
+        ++tick;
+      }
+      if (!stored) {
+        out.plant.store(row, plant.state());
+        out.duty[row] = duty;
+        out.v_V[row] = duty * supply;
+        stored = true;
+      }
+      if (row + 1 >= n) break;
+      const double t_next = std::min(t_row_end, tick_time(tick));
+      if (t_next - t <= tol) {
+        if (t_row_end - t <= tol) break;
+        continue;
+      }
+      model::Drive drive = base;
+      drive.v_V = duty * supply;
+      plant.step(t_next - t, drive);
+      t = t_next;
+      if (t_row_end - t <= tol) break;
+    }
+  }
+  return out;
+}
+
+}  // namespace mcg::sim

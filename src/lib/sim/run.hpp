@@ -1,0 +1,32 @@
+// mcg-sim: the rig simulated on a table of inputs (see man/mcg-sim.1).
+#pragma once
+
+#include <cstdint>
+#include <iosfwd>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace mcg::sim {
+
+struct RunOptions {
+  std::vector<std::string> configs;   ///< INI files (model parameters, effects, [controller])
+  std::vector<std::string> effects;   ///< "NAME:key=value,..."
+  int clutch = 2;                     ///< when the input has no 'clutch' column
+  double r_load_ohm = std::numeric_limits<double>::infinity();   ///< when it has no 'r_load' column
+  bool encoder = false;               ///< rpm as the board measures it; true speed in rpm_true
+  double window_s = 0.005;            ///< encoder count window
+  double counts_per_rev = 2048.0;     ///< 512 lines, x4 quadrature
+  bool open_loop = false;             ///< ignore an 'rpm_cmd' column, drive with v/duty
+  double noise_i_A = 0.0;             ///< Gaussian noise on i, standard deviation
+  double noise_v_gen_V = 0.0;         ///< Gaussian noise on v_gen, standard deviation
+  bool adc = false;                   ///< i through the board's 10-bit ADC (1 ohm shunt, 2.5 V offset)
+  std::uint64_t seed = 1;
+  double max_step_s = 1e-4;           ///< largest integration step
+};
+
+/// Reads the input table from `in` (named `source` in messages), simulates, writes the
+/// output table to `out`. Throws mcg::Error for bad input.
+void run(const RunOptions& options, std::istream& in, const std::string& source, std::ostream& out);
+
+}  // namespace mcg::sim
