@@ -28,14 +28,10 @@ uint8_t hal_board_id(void)
 /* Timer 2 overflow: latch the encoder count, count the tick. */
 void board_tick_isr(void) MCG_ISR(5)
 {
-  uint8_t hi;
-  uint8_t lo;
+  uint16_t count;
   TF2 = 0; /* the 80515 does not clear it in hardware */
-  do {
-    hi = TH0;
-    lo = TL0;
-  } while (hi != TH0);
-  s_count_at_tick = (uint16_t)((uint16_t)hi << 8 | lo);
+  C515_ENCODER_READ(count);
+  s_count_at_tick = count;
   if (s_ticks != 255u) {
     ++s_ticks;
   }

@@ -33,6 +33,18 @@
 #define C515_KEY_XADDR 0xFFC0u      /* key encoder: bits 0..3 key code, bit 7 data available */
 #define C515_KEY_AVAILABLE 0x80u
 
+/* Reads the 16-bit encoder count of Timer 0 while it runs: re-read until the high byte is stable.
+ * A macro, not a function: it runs inside the tick interrupt (no calls there). */
+#define C515_ENCODER_READ(count)                          \
+  do {                                                    \
+    uint8_t hi_, lo_;                                     \
+    do {                                                  \
+      hi_ = TH0;                                          \
+      lo_ = TL0;                                          \
+    } while (hi_ != TH0);                                 \
+    (count) = (uint16_t)((uint16_t)hi_ << 8 | lo_);       \
+  } while (0)
+
 void board_tick_isr(void) MCG_ISR(5);
 
 #endif

@@ -1,0 +1,99 @@
+/* bench_tick.c: machine cycles of the 1 ms control update on the 8051, measured in s51.
+ *
+ * The update as the 80C515 image runs it each tick: read the encoder counter (Timer 0, re-read),
+ * difference to the last count, control_tick (speed window, error, controller, compare-register
+ * PWM write through the c515 layer). Timer 1 in mode 1 counts machine cycles (f/12); its own
+ * reading overhead is measured with an empty interval and subtracted. For P, PI and PID, 256
+ * updates with varying encoder counts; min, max and sum of cycles go to external RAM at
+ * BENCH_XADDR and the run ends at bench_done() (scripts/bench-firmware.sh reads them). */
+#include <8051.h>   /* TMOD, TH0, TL0, TH1, TL1, TR0, TR1 */
+#include <stdint.h> /* uint8_t, uint16_t, uint32_t */
+
+#include "board_c515.h" /* C515_ENCODER_READ, board_tick_isr */
+#include "core.h"       /* core_init, control_tick, regs_write */
+#include "uart_mcs51.h" /* uart_isr (linked with the c515 layer) */
+
+#define BENCH_XADDR 0x9F00u
+#define BENCH_RUNS 256u
+
+/* Per mode (P, PI, PID): min, max (u16), sum (u32); then the empty-interval overhead (u16). */
+typedef struct {
+  uint16_t min, max;
+  uint32_t sum;
+} Figures;
+static Figures MCG_XDATA MCG_AT(BENCH_XADDR) s_fig[3];
+static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + 3u * sizeof(Figures)) s_overhead;
+
+static uint16_t s_last_count;
+
+static uint16_t cycles_now(void)
+{
+  uint8_t hi, lo;
+  do {
+    hi = TH1;
+    lo = TL1;
+  } while (hi != TH1);
+  return (uint16_t)((uint16_t)hi << 8 | lo);
+}
+
+/* The measured update: encoder read, pulses since the last tick, control_tick. */
+static void update(void)
+{
+  uint16_t count;
+  C515_ENCODER_READ(count);
+  control_tick((uint8_t)(count - s_last_count));
+  s_last_count = count;
+}
+
+void bench_done(void)
+{
+}
+
+void main(void)
+{
+  uint8_t m;
+  uint16_t i;
+  core_init();
+  TMOD = 0x15; /* Timer 1: 16-bit timer (machine cycles); Timer 0: 16-bit counter (encoder) */
+  TH1 = 0;
+  TL1 = 0;
+  TR1 = 1;
+  {
+    uint16_t t0 = cycles_now();
+    uint16_t t1 = cycles_now();
+    s_overhead = (uint16_t)(t1 - t0);
+  }
+  regs_write(MCG_REG_RPM_CMD, 420);
+  regs_write(MCG_REG_KP, 3000);
+  regs_write(MCG_REG_B0, 9000);
+  regs_write(MCG_REG_B1, -15000);
+  regs_write(MCG_REG_B2, 6100);
+  regs_write(MCG_REG_DUTY_BIAS, 300);
+  for (m = 0; m < 3; ++m) {
+    regs_write(MCG_REG_MODE, (int16_t)(MCG_MODE_P + m));
+    s_fig[m].min = 0xFFFFu;
+    s_fig[m].max = 0;
+    s_fig[m].sum = 0;
+    for (i = 0; i < BENCH_RUNS; ++i) {
+      uint16_t t0;
+      uint16_t dt;
+      /* The encoder moved by 6..30 pulses since the last tick: errors of both signs. */
+      uint16_t next = (uint16_t)(s_last_count + 6u + (i * 7u) % 25u);
+      TH0 = (uint8_t)(next >> 8);
+      TL0 = (uint8_t)(next & 0xFFu);
+      t0 = cycles_now();
+      update();
+      dt = (uint16_t)(cycles_now() - t0 - s_overhead);
+      if (dt < s_fig[m].min) {
+        s_fig[m].min = dt;
+      }
+      if (dt > s_fig[m].max) {
+        s_fig[m].max = dt;
+      }
+      s_fig[m].sum += dt;
+    }
+  }
+  bench_done();
+  for (;;) {
+  }
+}
