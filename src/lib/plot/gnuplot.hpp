@@ -1,0 +1,39 @@
+// mcg-plot-gnuplot: reads tables, builds the script and streams it into gnuplot's stdin.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace mcg::plot {
+
+/// The tool's options as the command line gives them.
+struct Options {
+  std::vector<std::string> files;  ///< tables; none = stdin; the second and later are overlaid
+  std::vector<std::string> overlays;  ///< --overlay tables, drawn dashed
+  std::string x = "t";
+  std::vector<std::string> y;
+  std::vector<std::string> y2;
+  bool bode = false;
+  bool xy = false;
+  bool steps = false;
+  bool logx = false;
+  bool logy = false;
+  std::optional<std::string> title;
+  std::string output;  ///< -o FILE: .png, .svg or .pdf
+  std::string term;    ///< "dumb" for text on stdout
+  std::string script;  ///< --script FILE: also (or, without -o/--term, only) write the script
+  std::optional<std::vector<int>> size;  ///< width,height: pixels, or characters for dumb
+};
+
+/// The gnuplot to run: $MCG_GNUPLOT if set, else "gnuplot" on PATH.
+std::string gnuplot_program();
+
+/// Plots as the options say: reads every table, builds the script, writes it to --script
+/// and/or pipes it to `gnuplot -d` (whose stdout is ours, for --term dumb). Without -o or
+/// --term the plot goes to an interactive window, or fails with a clear message when this
+/// gnuplot (gnuplot-nox) or this session (no DISPLAY) has none. Throws mcg::Error when
+/// gnuplot is missing or fails.
+void run(const Options& options);
+
+}  // namespace mcg::plot

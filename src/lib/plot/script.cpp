@@ -1,0 +1,238 @@
+// gnuplot scripts: terminal, inline data blocks, labels with units, plot commands.
+#include "plot/script.hpp"
+
+#include "common/error.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <utility>
+
+namespace mcg::plot {
+
+namespace {
+
+// Units of the data contract's columns (man/mcg-csv.5).
+constexpr std::array<std::pair<std::string_view, std::string_view>, 17> k_labels = {{
+    {"t", "t (s)"},
+    {"v", "v (V)"},
+    {"duty", "duty (1)"},
+    {"clutch", "clutch (state)"},
+    {"r_load", "r_load (ohm)"},
+    {"rpm", "rpm (rev/min)"},
+    {"omega", "omega (rad/s)"},
+    {"i", "i (A)"},
+    {"i_gen", "i_gen (A)"},
+    {"v_gen", "v_gen (V)"},
+    {"rpm_cmd", "rpm_cmd (rev/min)"},
+    {"counts", "counts (counts)"},
+    {"f_hz", "frequency (Hz)"},
+    {"mag_db", "magnitude (dB)"},
+    {"phase_deg", "phase (deg)"},
+    {"coherence", "coherence (1)"},
+    {"y", "y"},
+}};
+
+void append_number(std::string& out, double v) {
+  if (!std::isfinite(v)) {
+    out += "NaN";
+    return;
+  }
+  char text[32];
+  const auto result = std::to_chars(text, text + sizeof text, v);
+  out.append(text, result.ptr);
+}
+
+std::vector<std::string> joined_names(const std::vector<std::string>& a, const std::vector<std::string>& b) {
+  std::vector<std::string> all = a;
+  all.insert(all.end(), b.begin(), b.end());
+  return all;
+}
+
+// The columns drawn from each table, x first.
+struct Selection {
+  std::string x;
+  std::vector<std::string> y;
+  std::vector<std::string> y2;
+};
+
+Selection select(const Spec& spec, const table::Table& first) {
+  Selection s;
+  if (spec.mode == Mode::bode) {
+    s.x = "f_hz";
+    s.y = {"mag_db", "phase_deg"};
+    return s;
+  }
+  s.x = spec.x;
+  s.y2 = spec.y2;
+  s.y = spec.y;
+  if (s.y.empty()) {
+    for (const std::string& name : first.names) {
+      if (name != s.x && std::find(s.y2.begin(), s.y2.end(), name) == s.y2.end()) s.y.push_back(name);
+    }
+  }
+  if (s.y.empty() && s.y2.empty()) fail("{}: no column to plot besides '{}'", first.source, s.x);
+  return s;
+}
+
+void append_block(std::string& out, std::size_t index, const table::Table& tbl, const Selection& s) {
+  std::vector<const std::vector<double>*> columns{&tbl.col(s.x)};
+  for (const std::string& name : joined_names(s.y, s.y2)) columns.push_back(&tbl.col(name));
+  out += fmt::format("$data{} << EOD\n", index);
+  for (std::size_t r = 0; r < tbl.rows(); ++r) {
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      if (c > 0) out += ' ';
+      append_number(out, (*columns[c])[r]);
+    }
+    out += '\n';
+  }
+  out += "EOD\n";
+}
+
+std::string join_labels(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& name : names) {
+    if (!text.empty()) text += ", ";
+    text += label_for(name);
+  }
+  return text;
+}
+
+std::string terminal_lines(const Output& o) {
+  switch (o.kind) {
+    case Output::Kind::png:
+      return fmt::format("set terminal pngcairo size {},{} noenhanced font 'sans,10'\nset output {}\n", o.width,
+                         o.height, quote(o.path));
+    case Output::Kind::svg:
+      return fmt::format("set terminal svg size {},{} noenhanced font 'sans,10' background '#ffffff'\nset output {}\n",
+                         o.width, o.height, quote(o.path));
+    case Output::Kind::pdf:
+      return fmt::format("set terminal pdfcairo size {}in,{}in noenhanced font 'sans,10'\nset output {}\n",
+                         o.width / 100.0, o.height / 100.0, quote(o.path));
+    case Output::Kind::dumb:
+      return fmt::format("set terminal dumb size {},{} noenhanced\n", o.width, o.height);
+    case Output::Kind::window:
+      return fmt::format("set terminal {} size {},{} noenhanced\n", o.window_term, o.width, o.height);
+    case Output::Kind::none:
+      break;
+  }
+  return "set termoption noenhanced\n";
+}
+
+std::string style_of(const Spec& spec) {
+  if (spec.mode == Mode::xy) return "points pointtype 7 pointsize 0.5";
+  return spec.steps ? "steps" : "lines";
+}
+
+// Legend entry of column `name` from input `index` (file label only when overlaying).
+std::string legend(const std::string& name, const std::vector<Input>& inputs, std::size_t index) {
+  if (inputs.size() == 1) return quote(name);
+  return quote(fmt::format("{} ({})", name, inputs[index].label));
+}
+
+std::string curve(std::size_t block, std::size_t column, std::size_t color, bool overlay, bool y2,
+                  const std::string& style, const std::string& title) {
+  return fmt::format("$data{} using 1:{}{} with {} linecolor {}{} title {}", block, column,
+                     y2 ? " axes x1y2" : "", style, color, overlay ? " dashtype 2" : "", title);
+}
+
+}  // namespace
+
+std::string quote(std::string_view text) {
+  std::string out = "'";
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7f) continue;
+    if (c == '\'') out += '\'';
+    out += c;
+  }
+  out += '\'';
+  return out;
+}
+
+std::string label_for(std::string_view column) {
+  for (const auto& [name, label] : k_labels) {
+    if (name == column) return std::string(label);
+  }
+  return std::string(column);
+}
+
+Output::Kind kind_from_path(std::string_view path) {
+  const std::size_t dot = path.rfind('.');
+  std::string ext = dot == std::string_view::npos ? std::string() : std::string(path.substr(dot + 1));
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == "png") return Output::Kind::png;
+  if (ext == "svg") return Output::Kind::svg;
+  if (ext == "pdf") return Output::Kind::pdf;
+  fail("-o: unknown format '{}' (use .png, .svg or .pdf)", path);
+}
+
+std::optional<std::string> title_of(const Spec& spec, const std::vector<Input>& inputs) {
+  if (spec.title) return spec.title;
+  if (inputs.empty()) return std::nullopt;
+  if (auto title = inputs.front().table.meta.get("title")) return title;
+  if (auto excitation = inputs.front().table.meta.get("excitation")) return excitation;
+  return std::nullopt;
+}
+
+std::string build_script(const Spec& spec, const std::vector<Input>& inputs) {
+  if (inputs.empty()) fail("no input table");
+  const Selection s = select(spec, inputs.front().table);
+  std::string out = "# mcg-plot-gnuplot: data inline, edit freely\n";
+  out += terminal_lines(spec.output);
+  for (std::size_t i = 0; i < inputs.size(); ++i) append_block(out, i + 1, inputs[i].table, s);
+  const auto title = title_of(spec, inputs);
+  const std::string style = style_of(spec);
+  out += "set grid\n";
+  out += "set key top right\n";
+
+  if (spec.mode == Mode::bode) {
+    out += title ? fmt::format("set multiplot layout 2,1 title {}\n", quote(*title)) : "set multiplot layout 2,1\n";
+    out += "set logscale x\n";
+    out += fmt::format("set xlabel {}\n", quote(label_for("f_hz")));
+    for (std::size_t panel = 0; panel < 2; ++panel) {
+      out += fmt::format("set ylabel {}\n", quote(label_for(s.y[panel])));
+      std::string plot = "plot ";
+      for (std::size_t i = 0; i < inputs.size(); ++i) {
+        if (i > 0) plot += ", \\\n     ";
+        const std::string title_text = inputs.size() == 1 ? "notitle" : "title " + quote(inputs[i].label);
+        plot += fmt::format("$data{} using 1:{} with lines linecolor {}{} {}", i + 1, panel + 2, i + 1,
+                            i > 0 ? " dashtype 2" : "", title_text);
+      }
+      out += plot + "\n";
+    }
+    out += "unset multiplot\n";
+  } else {
+    if (title) out += fmt::format("set title {}\n", quote(*title));
+    out += fmt::format("set xlabel {}\n", quote(label_for(s.x)));
+    if (!s.y.empty()) out += fmt::format("set ylabel {}\n", quote(join_labels(s.y)));
+    if (!s.y2.empty()) {
+      out += fmt::format("set y2label {}\n", quote(join_labels(s.y2)));
+      out += "set ytics nomirror\nset y2tics\n";
+    }
+    if (spec.logx) out += "set logscale x\n";
+    if (spec.logy) out += fmt::format("set logscale y{}\n", s.y2.empty() ? "" : "y2");
+    std::string plot = "plot ";
+    bool first = true;
+    const std::vector<std::string> all = joined_names(s.y, s.y2);
+    for (std::size_t i = 0; i < inputs.size(); ++i) {
+      for (std::size_t j = 0; j < all.size(); ++j) {
+        if (!first) plot += ", \\\n     ";
+        first = false;
+        plot += curve(i + 1, j + 2, j + 1, i > 0, j >= s.y.size(), style, legend(all[j], inputs, i));
+      }
+    }
+    out += plot + "\n";
+  }
+  if (spec.output.kind == Output::Kind::png || spec.output.kind == Output::Kind::svg ||
+      spec.output.kind == Output::Kind::pdf) {
+    out += "unset output\n";
+  }
+  return out;
+}
+
+}  // namespace mcg::plot
