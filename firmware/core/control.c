@@ -1,15 +1,21 @@
 /* control.c: encoder speed over a 16 ms window and the 1 ms P / PI / PID controller in fixed point.
  *
- * Error, Q8 pulses per tick, saturated to +-MCG_ERR_LIMIT:
- *   e[n] = r - 256 * p[n],   r = rpm_cmd * 2048 * 256 / 60000 (rounded),  p[n] = pulses in tick n
+ * Error, Q8 pulses per tick:
+ *   e[n] = r[n] - 256 p[n],  r = rpm_cmd * 2048 * 256 / 60000 (rounded),  p[n] = pulses in tick n,
+ *   p[n] limited to p_hi = floor((r + 8191) / 256), so that -8191 <= e[n] <= r.
  * Output u in 1/1000 duty, held in an int32 accumulator U in Q(F + 8), F = g_coef_frac:
  *   P:    U[n] = bias * 2^(F+8) + Kp e[n]
  *   PI:   U[n] = sat(U[n-1] + b0 e[n] + b1 e[n-1])
  *   PID:  U[n] = sat(U[n-1] + b0 e[n] + b1 e[n-1] + b2 e[n-2])
- *   u[n] = sat((U[n] + 2^(F+7)) >> (F+8))   (round half up)
+ *   u[n] = (U[n] + 2^(F+7)) >> (F+8)   (round half up)
  * sat() limits to [duty_min, duty_max] * 2^(F+8): the incremental form stops integrating at the
  * limit (anti-windup). Each product is 16 x 16 -> 32 bits; |coef| <= 2^15 and |e| <= 2^13 bound every
  * product by 2^28 and, with |U| <= 1000 * 2^20, the sum stays below 2^31 for F <= 12: no overflow.
+ *
+ * Evaluation (exactly the sums above, arranged for an 8-bit multiplier):
+ *   sum_i b_i e[n-i] = R[n] - 256 sum_i b_i p[n-i],   R[n] = sum_i b_i r[n-i]
+ * R changes only when the command or a coefficient does: it is computed then, for the next three
+ * ticks (control_refresh). The pulse part goes to arith_pid_sum (arith.h): three 16 x 8 products.
  *
  * Speed: a 16 ms window gives rpm = c * 60000 / (2048 * 16) = c * 1875 / 1024 with c the pulses in
  * the window. One pulse more or less (window phase) is 1.83 rpm, rounding adds 0.5 rpm: +-2.4 rpm,
@@ -25,16 +31,20 @@ int16_t MCG_XDATA g_duty_min, g_duty_max, g_duty_bias;
 int16_t g_duty_out;
 uint8_t g_saturated;
 uint16_t g_counts_16ms;
+ArithPid g_pid;
 
 static uint8_t MCG_IDATA s_window[MCG_SPEED_WINDOW_MS]; /* pulses per tick, ring */
 static uint8_t s_window_pos;
-static int16_t s_r_q8;                /* command, Q8 pulses per tick */
-static int16_t s_e1, s_e2;            /* e[n-1], e[n-2] */
-static int32_t s_u;                   /* U, Q(F+8) duty */
-static int32_t s_u_min, s_u_max;      /* limits in Q(F+8) */
-static MCG_XDATA int32_t s_u_bias;              /* P-mode bias in Q(F+8) */
-static int32_t s_u_half;              /* 2^(F+7), rounding */
-static uint8_t s_shift;               /* F + 8 */
+static int16_t s_r_q8;                  /* command r[n], Q8 pulses per tick */
+static int16_t MCG_XDATA s_r1, s_r2;    /* r[n-1], r[n-2]: the commands of the last two ticks */
+static uint8_t s_p_hi;                  /* pulse limit keeping e >= -8191 */
+static int32_t MCG_IDATA s_big_r[3];    /* R for the next three ticks */
+static uint8_t s_big_r_k;               /* which of them is next (2 = settled) */
+static int32_t s_u;                     /* U, Q(F+8) duty */
+static int32_t s_u_min, s_u_max;        /* limits in Q(F+8) */
+static int32_t MCG_XDATA s_u_bias;      /* P-mode bias in Q(F+8) */
+static int32_t s_u_half;                /* 2^(F+7), rounding */
+static uint8_t s_shift;                 /* F + 8 */
 
 /* x * 2^shift without shifting a negative value (undefined in C). */
 static int32_t scale_up(int16_t x)
@@ -42,9 +52,15 @@ static int32_t scale_up(int16_t x)
   return (int32_t)x * ((int32_t)1 << s_shift);
 }
 
+/* (u + 2^(F+7)) >> (F+8), rounded half up. A constant shift by 16 is byte moves on the 8051, so
+ * the variable part is only F - 8 bits of a 16-bit value (none at the default F = 8). */
 static int16_t output_of(int32_t u)
 {
-  return (int16_t)((u + s_u_half) >> s_shift);
+  int32_t v = u + s_u_half;
+  if (s_shift >= 16u) {
+    return (int16_t)((int16_t)(v >> 16) >> (uint8_t)(s_shift - 16u));
+  }
+  return (int16_t)(v >> s_shift);
 }
 
 static void rescale(void)
@@ -91,27 +107,73 @@ void control_init(void)
   g_duty_bias = 0;
   g_duty_out = 0;
   g_saturated = 0;
-  s_e1 = 0;
-  s_e2 = 0;
   s_r_q8 = 0;
+  s_r1 = 0;
+  s_r2 = 0;
+  for (i = 0; i < 3; ++i) {
+    g_pid.p[i] = 0;
+  }
+  s_p_hi = 255;
   rescale();
+  control_refresh();
 }
 
 void control_set_rpm_cmd(int16_t rpm)
 {
+  int16_t hi;
   s_r_q8 = control_rpm_to_q8(rpm);
+  hi = (int16_t)((s_r_q8 + MCG_ERR_LIMIT) >> 8);
+  s_p_hi = hi > 255 ? 255u : (uint8_t)hi;
+  control_refresh();
+}
+
+/* The coefficients of the active mode, as R and the operands of arith_pid_sum use them. */
+static void active_coefs(int16_t *c0, int16_t *c1, int16_t *c2)
+{
+  *c0 = 0;
+  *c1 = 0;
+  *c2 = 0;
+  if (g_mode == MCG_MODE_P) {
+    *c0 = g_kp;
+  } else if (g_mode == MCG_MODE_PI || g_mode == MCG_MODE_PID) {
+    *c0 = g_b0;
+    *c1 = g_b1;
+    *c2 = g_mode == MCG_MODE_PID ? g_b2 : 0;
+  }
+}
+
+void control_refresh(void)
+{
+  int16_t c0, c1, c2;
+  int32_t now0;
+  active_coefs(&c0, &c1, &c2);
+  g_pid.bp[0] = (uint16_t)((uint16_t)c0 ^ 0x8000u);
+  g_pid.bp[1] = (uint16_t)((uint16_t)c1 ^ 0x8000u);
+  g_pid.bp[2] = (uint16_t)((uint16_t)c2 ^ 0x8000u);
+  now0 = arith_mul16(c0, s_r_q8);
+  s_big_r[0] = now0 + arith_mul16(c1, s_r1) + arith_mul16(c2, s_r2);
+  s_big_r[1] = now0 + arith_mul16(c1, s_r_q8) + arith_mul16(c2, s_r1);
+  s_big_r[2] = now0 + arith_mul16(c1, s_r_q8) + arith_mul16(c2, s_r_q8);
+  if (g_mode == MCG_MODE_P) {
+    s_big_r[0] += s_u_bias;
+    s_big_r[1] += s_u_bias;
+    s_big_r[2] += s_u_bias;
+  }
+  s_big_r_k = 0;
 }
 
 void control_set_mode(uint8_t mode)
 {
   (void)mode;
   s_u = scale_up(g_duty_out); /* bumpless: the integrator starts from the present output */
+  control_refresh();
 }
 
 void control_set_coef_frac(uint8_t frac_bits)
 {
   g_coef_frac = frac_bits;
   rescale();
+  control_refresh();
 }
 
 void control_set_limits(int16_t duty_min, int16_t duty_max)
@@ -130,62 +192,57 @@ void control_set_bias(int16_t duty_bias)
 {
   g_duty_bias = duty_bias;
   s_u_bias = scale_up(duty_bias);
+  control_refresh();
 }
 
-/* Limits u to [U_min, U_max] and records whether it had to. */
-static int32_t saturate(int32_t u)
-{
-  if (u > s_u_max) {
-    g_saturated = 1;
-    return s_u_max;
-  }
-  if (u < s_u_min) {
-    g_saturated = 1;
-    return s_u_min;
-  }
-  g_saturated = 0;
-  return u;
-}
+/* Limits U to [U_min, U_max], recording whether it had to (a macro: no call in the 1 ms path). */
+#define SATURATE(u)          \
+  do {                       \
+    g_saturated = 0;         \
+    if ((u) > s_u_max) {     \
+      (u) = s_u_max;         \
+      g_saturated = 1;       \
+    } else if ((u) < s_u_min) { \
+      (u) = s_u_min;         \
+      g_saturated = 1;       \
+    }                        \
+  } while (0)
 
 void control_tick(uint8_t pulses)
 {
-  int16_t e;
   int16_t out;
+  int32_t u;
 
   g_counts_16ms = (uint16_t)(g_counts_16ms + pulses - s_window[s_window_pos]);
   s_window[s_window_pos] = pulses;
   s_window_pos = (uint8_t)((s_window_pos + 1u) & (MCG_SPEED_WINDOW_MS - 1u));
 
-  if (pulses >= 128u) {
-    e = -MCG_ERR_LIMIT;
-  } else {
-    e = (int16_t)(s_r_q8 - (int16_t)((uint16_t)pulses << 8));
-    if (e > MCG_ERR_LIMIT) {
-      e = MCG_ERR_LIMIT;
-    } else if (e < -MCG_ERR_LIMIT) {
-      e = -MCG_ERR_LIMIT;
-    }
-  }
+  g_pid.p[2] = g_pid.p[1];
+  g_pid.p[1] = g_pid.p[0];
+  g_pid.p[0] = pulses > s_p_hi ? s_p_hi : pulses;
 
-  switch (g_mode) {
-  case MCG_MODE_P:
-    out = output_of(saturate(s_u_bias + arith_mul16(g_kp, e)));
-    break;
-  case MCG_MODE_PI:
-    s_u = saturate(s_u + arith_mul16(g_b0, e) + arith_mul16(g_b1, s_e1));
-    out = output_of(s_u);
-    break;
-  case MCG_MODE_PID:
-    s_u = saturate(s_u + arith_mul16(g_b0, e) + arith_mul16(g_b1, s_e1) + arith_mul16(g_b2, s_e2));
-    out = output_of(s_u);
-    break;
-  default:
+  if (g_mode == MCG_MODE_OPEN) {
     g_saturated = 0;
     out = g_duty_set;
-    break;
+  } else {
+    /* U = (PI, PID: U[n-1]) + R[n] + sum; mod 2^32, the exact result is in range (see above). */
+    u = (int32_t)((uint32_t)s_big_r[s_big_r_k] + (uint32_t)arith_pid_sum());
+    if (g_mode != MCG_MODE_P) {
+      u = (int32_t)((uint32_t)u + (uint32_t)s_u);
+    }
+    if (s_big_r_k < 2u) {
+      ++s_big_r_k;
+    }
+    SATURATE(u);
+    if (g_mode != MCG_MODE_P) {
+      s_u = u;
+    }
+    out = output_of(u);
   }
-  s_e2 = s_e1;
-  s_e1 = e;
+  if (s_r1 != s_r_q8 || s_r2 != s_r_q8) {
+    s_r2 = s_r1;
+    s_r1 = s_r_q8;
+  }
   g_duty_out = out;
   hal_pwm_write(out);
 }

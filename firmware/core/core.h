@@ -68,6 +68,8 @@ void control_set_rpm_cmd(int16_t rpm);
 void control_set_coef_frac(uint8_t frac_bits);
 void control_set_limits(int16_t duty_min, int16_t duty_max);
 void control_set_bias(int16_t duty_bias);
+/* Recomputes what depends on the command, the coefficients or the mode (after a change of any). */
+void control_refresh(void);
 /* Speed over the last MCG_SPEED_WINDOW_MS: rpm = counts * 1875 / 1024, rounded. */
 int16_t control_rpm(void);
 /* rpm -> Q8 pulses per tick: r = rpm * 2048 * 256 / 60000, rounded. */

@@ -161,10 +161,10 @@ uint8_t regs_write(uint8_t reg, int16_t v)
     }
     control_set_bias(v);
     break;
-  case MCG_REG_KP: g_kp = v; break;
-  case MCG_REG_B0: g_b0 = v; break;
-  case MCG_REG_B1: g_b1 = v; break;
-  case MCG_REG_B2: g_b2 = v; break;
+  case MCG_REG_KP: g_kp = v; control_refresh(); break;
+  case MCG_REG_B0: g_b0 = v; control_refresh(); break;
+  case MCG_REG_B1: g_b1 = v; control_refresh(); break;
+  case MCG_REG_B2: g_b2 = v; control_refresh(); break;
   case MCG_REG_COEF_FRAC:
     if (!in_range(v, 0, MCG_COEF_FRAC_BITS_MAX)) {
       return MCG_ST_RANGE;

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <utility>
 
 #include "fw_harness.hpp"
 
@@ -29,10 +30,12 @@ double q8_command(int rpm)
   return static_cast<double>(std::lround(rpm * 524288.0 / 60000.0)) / 256.0;
 }
 
-double clamp_error(double e)
+// e = r - p with p limited to floor((256 r + 8191) / 256), so that e >= -8191/256 (pulses/ms).
+double error_of(int rpm, int pulses)
 {
-  const double lim = MCG_ERR_LIMIT / 256.0;
-  return std::clamp(e, -lim, lim);
+  const long r_q8 = std::lround(rpm * 524288.0 / 60000.0);
+  const long p_hi = (r_q8 + MCG_ERR_LIMIT) / 256;
+  return static_cast<double>(r_q8 - 256 * std::min<long>(pulses, p_hi)) / 256.0;
 }
 
 struct Coefs {
@@ -57,7 +60,9 @@ void configure(Board& b, const Coefs& c, int rpm_cmd)
 // Runs the firmware and the double-precision equation side by side on the same pulse sequence,
 // starting from open loop at duty0 (the previous ticks counted no pulses), and returns the largest
 // |duty - u|; every step is also checked to be floor(u + 0.5).
-double compare(std::uint8_t mode, const Coefs& c, int rpm_cmd, int duty0, const std::vector<std::uint16_t>& pulses)
+// command_steps: (tick, rpm) pairs, the command written just before that tick.
+double compare(std::uint8_t mode, const Coefs& c, int rpm_cmd, int duty0, const std::vector<std::uint16_t>& pulses,
+               const std::vector<std::pair<std::size_t, int>>& command_steps = {})
 {
   Board b;
   configure(b, c, rpm_cmd);
@@ -66,13 +71,19 @@ double compare(std::uint8_t mode, const Coefs& c, int rpm_cmd, int duty0, const 
 
   const double scale = std::ldexp(1.0, -c.frac);
   const double kp = c.kp * scale, b0 = c.b0 * scale, b1 = c.b1 * scale, b2 = c.b2 * scale;
-  const double r = q8_command(rpm_cmd);
-  double e1 = clamp_error(r), e2 = clamp_error(r);
+  double e1 = error_of(rpm_cmd, 0), e2 = error_of(rpm_cmd, 0);
   double u_state = duty0;
   double worst = 0;
   for (std::size_t n = 0; n < pulses.size(); ++n) {
+    for (const auto& [tick, rpm] : command_steps) {
+      if (tick == n) {
+        EXPECT_EQ(regs_write(MCG_REG_RPM_CMD, static_cast<std::int16_t>(rpm)), MCG_ST_OK);
+        rpm_cmd = rpm;
+      }
+    }
     host_board_tick(pulses[n]);
-    const double e = pulses[n] >= 128 ? -MCG_ERR_LIMIT / 256.0 : clamp_error(r - pulses[n]);
+    const double e = error_of(rpm_cmd, pulses[n]);
+    EXPECT_GE(e, -MCG_ERR_LIMIT / 256.0);
     double u = 0;
     if (mode == MCG_MODE_P) {
       u = std::clamp(c.bias + kp * e, double(c.duty_min), double(c.duty_max));
@@ -160,10 +171,29 @@ TEST(FwControl, PidMatchesDoublePrecisionThroughSaturation)
   EXPECT_LE(compare(MCG_MODE_PID, c, 600, 400, p), 0.5);
 }
 
+// Command steps, also two in consecutive ticks: the stored errors keep the commands of their ticks.
+TEST(FwControl, CommandStepsFollowTheDifferenceEquation)
+{
+  Coefs c;
+  c.b0 = 7000;
+  c.b1 = -12000;
+  c.b2 = 5200;
+  const auto p = random_pulses(300, 10, 20, 6);
+  EXPECT_LE(compare(MCG_MODE_PID, c, 420, 300, p, {{40, 600}, {41, 333}, {120, 700}, {200, 120}}), 0.5);
+  Coefs pi;
+  pi.b0 = 2981;
+  pi.b1 = -1789;
+  EXPECT_LE(compare(MCG_MODE_PI, pi, 420, 300, p, {{10, 500}, {12, 450}}), 0.5);
+  Coefs prop;
+  prop.kp = 2000;
+  prop.bias = 100;
+  EXPECT_LE(compare(MCG_MODE_P, prop, 420, 0, p, {{50, 700}, {51, 720}}), 0.5);
+}
+
 TEST(FwControl, ErrorSaturatesAtItsStatedRange)
 {
-  // A runaway count (200 pulses/ms) and a stalled motor at the top of the range: e is held at
-  // +-MCG_ERR_LIMIT, so Kp e stays within 16 x 14 bits whatever the encoder does.
+  // A runaway count (200 pulses/ms) and a stalled motor at the top of the range: the pulses are
+  // limited so that e >= -MCG_ERR_LIMIT, and Kp e stays within 16 x 14 bits whatever the encoder does.
   Coefs c;
   c.kp = 32767;
   c.frac = 12;
@@ -187,7 +217,7 @@ TEST(FwControl, QuantisationErrorWithinItsBound)
   ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
   const auto p = random_pulses(200, 12, 17, 5);
   const double r = q8_command(420);
-  double u = 300, e1 = clamp_error(r), worst = 0, emax = 0;
+  double u = 300, e1 = r, worst = 0, emax = 0;
   for (std::size_t n = 0; n < p.size(); ++n) {
     host_board_tick(p[n]);
     const double e = r - p[n];
