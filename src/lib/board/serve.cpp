@@ -1,0 +1,79 @@
+// mcg-sim --board: the emulated board behind a pseudo-terminal, paced by the wall clock.
+#include <poll.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "board/board.hpp"
+#include "common/error.hpp"   // mcg::fail
+#include "common/tool.hpp"    // stderr_is_terminal
+#include "link/interrupt.hpp" // InterruptGuard
+#include "link/pty.hpp"       // PtyLink
+
+namespace mcg::board {
+
+namespace {
+
+/// Ticks run back to back at most this far behind the wall clock; a longer stall of the host
+/// (the machine busy) is skipped instead of replayed in a burst.
+constexpr double k_max_lag_s = 0.25;
+
+}  // namespace
+
+void serve(const ServeOptions& options) {
+  link::PtyLink pty(options.link_path);
+  EmulatedBoard board(options.board);
+  const link::InterruptGuard guard;
+  if (stderr_is_terminal()) {
+    std::fputs(fmt::format("mcg-sim: board at {} ({}); Ctrl-C ends\n", pty.link_path(), pty.slave_path()).c_str(),
+               stderr);
+  }
+
+  using Clock = std::chrono::steady_clock;
+  const double tick_s = 1e-3 / options.speed;  // wall-clock seconds per simulated tick
+  const auto limit_ticks = static_cast<std::uint64_t>(std::llround(options.seconds * 1e3));
+  auto start = Clock::now();
+  std::uint64_t ticks = 0;
+  std::vector<std::uint8_t> rx_pending;
+  std::uint8_t buf[4096];
+  while (!link::InterruptGuard::interrupted() && (limit_ticks == 0 || ticks < limit_ticks)) {
+    for (;;) {
+      const ssize_t n = ::read(pty.fd(), buf, sizeof buf);
+      if (n <= 0) break;
+      rx_pending.insert(rx_pending.end(), buf, buf + n);
+    }
+    double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+    auto due = static_cast<std::uint64_t>(wall_s / tick_s);
+    if (static_cast<double>(due - std::min(due, ticks)) * tick_s > k_max_lag_s) {
+      start += std::chrono::duration_cast<Clock::duration>(
+          std::chrono::duration<double>(static_cast<double>(due - ticks) * tick_s - k_max_lag_s));
+      due = ticks + static_cast<std::uint64_t>(k_max_lag_s / tick_s);
+    }
+    if (limit_ticks != 0) due = std::min(due, limit_ticks);
+    while (ticks < due) {
+      if (!rx_pending.empty()) {
+        const std::size_t taken = board.rx(rx_pending);
+        rx_pending.erase(rx_pending.begin(), rx_pending.begin() + static_cast<std::ptrdiff_t>(taken));
+      }
+      board.tick();
+      ++ticks;
+      // What does not fit into the pseudo-terminal is lost, as on a line nobody reads.
+      const std::size_t n = board.tx(buf);
+      if (n > 0 && ::write(pty.fd(), buf, n) < 0 && errno != EAGAIN) break;
+    }
+    wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+    const double wait_s = static_cast<double>(ticks + 1) * tick_s - wall_s;
+    pollfd p{pty.fd(), POLLIN, 0};
+    ::poll(&p, 1, wait_s > 0.0 ? static_cast<int>(std::ceil(wait_s * 1e3)) : 0);
+  }
+}
+
+}  // namespace mcg::board

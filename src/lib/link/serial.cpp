@@ -1,0 +1,320 @@
+// mcg-serial subcommands: list, get, set, load, dump, send, monitor (stream is in stream.cpp).
+#include "link/serial.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ostream>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "common/error.hpp"     // mcg::fail
+#include "config/ini.hpp"       // Ini
+#include "link/connection.hpp"  // Connection
+#include "link/interrupt.hpp"   // InterruptGuard
+#include "mcg/version.hpp"      // k_version
+#include "sim/encoder.hpp"      // format_rpm_estimator
+#include "table/table.hpp"      // Writer, read_path
+
+namespace mcg::link {
+
+std::unique_ptr<Connection> connect(const LinkOptions& link) {
+  auto c = std::make_unique<Connection>();
+  c->port = open_port(link.port, link.baud);
+  SessionOptions so;
+  so.reply_timeout_s = link.timeout_s;
+  so.attempts = link.attempts;
+  c->session = std::make_unique<Session>(*c->port, so);
+  c->version = c->session->hello();
+  return c;
+}
+
+int Connection::frac_bits() {
+  if (!m_frac_bits) m_frac_bits = session->read(require_register("coef_frac"));
+  return *m_frac_bits;
+}
+
+std::string Connection::board_text() const {
+  return fmt::format("{} firmware {}.{}.{}, protocol {}", board_name(version.board), version.major, version.minor,
+                     version.patch, version.protocol);
+}
+
+namespace {
+
+constexpr double k_pulses_to_rev = 1.0 / MCG_COUNTS_PER_REV;
+
+/// Writes `value` (engineering units) into `reg`, reads it back. Returns the raw value held.
+/// Notes a rounded value on `err`; throws when the board holds something else.
+std::int16_t write_verified(Connection& c, const RegisterInfo& reg, double value, std::string_view where,
+                            std::ostream& err) {
+  if (!reg.writable) fail("{}: {} is read-only", where, reg.name);
+  const int frac = reg.unit == Unit::Gain ? c.frac_bits() : 0;
+  const std::int16_t raw = to_raw(reg, value, frac);
+  c.session->write(reg, raw);
+  const std::int16_t held = c.session->read(reg);
+  if (held != raw) {
+    fail("{}: {}: the board holds {} after writing {}", c.port->name(), reg.name, format_value(reg, held, frac),
+         format_value(reg, raw, frac));
+  }
+  if (reg.name == "coef_frac") c.forget_frac_bits();
+  const double held_value = to_engineering(reg, held, frac);
+  if (held_value != value && reg.unit != Unit::Mode && reg.unit != Unit::SeqState) {
+    err << fmt::format("mcg-serial: note: {}: {} is held as {} (the register's resolution)\n", reg.name,
+                       config::format_number(value), format_value(reg, held, frac));
+  }
+  return held;
+}
+
+/// The order load writes registers in: the fixed-point format before the coefficients, the
+/// coefficients and limits before the mode that uses them, the mode last.
+int load_rank(const RegisterInfo& reg) {
+  if (reg.name == "coef_frac") return 0;
+  if (reg.unit == Unit::Gain) return 1;
+  if (reg.name == "mode") return 4;
+  if (reg.name == "stream" || reg.name == "seq_state") return 5;
+  if (reg.name.starts_with("duty")) return 2;
+  return 3;
+}
+
+void print_board_section(Connection& c, std::span<const RegisterInfo* const> regs, std::ostream& out) {
+  out << "[board]\n";
+  for (const RegisterInfo* reg : regs) {
+    const int frac = reg->unit == Unit::Gain ? c.frac_bits() : 0;
+    const std::int16_t raw = c.session->read(*reg);
+    const std::string_view unit = unit_suffix(reg->unit);
+    const std::string comment = unit.empty() ? std::string(reg->doc) : fmt::format("{}; {}", unit, reg->doc);
+    if (reg->writable) {
+      out << fmt::format("{} = {}  ; {}\n", reg->name, format_value(*reg, raw, frac), comment);
+    } else {
+      out << fmt::format("; {} = {}  (read-only) {}\n", reg->name, format_value(*reg, raw, frac), comment);
+    }
+  }
+}
+
+}  // namespace
+
+void run_list(std::ostream& out) {
+  for (const auto& p : list_ports()) out << p.name << '\t' << p.description << '\n';
+}
+
+void run_get(const LinkOptions& link, const std::vector<std::string>& names, std::ostream& out) {
+  std::vector<const RegisterInfo*> regs;
+  for (const auto& name : names) regs.push_back(&require_register(name));
+  auto c = connect(link);
+  if (names.empty()) {
+    for (const auto& reg : registers()) regs.push_back(&reg);
+    out << fmt::format("; mcg-serial get: {} on {}\n", c->board_text(), link.port);
+    print_board_section(*c, regs, out);
+    return;
+  }
+  for (const RegisterInfo* reg : regs) {
+    const int frac = reg->unit == Unit::Gain ? c->frac_bits() : 0;
+    out << format_value(*reg, c->session->read(*reg), frac) << '\n';
+  }
+}
+
+void run_set(const LinkOptions& link, const std::string& name, const std::string& value, std::ostream& err) {
+  const RegisterInfo& reg = require_register(name);
+  if (!reg.writable) fail("set: {} is read-only", reg.name);
+  const double v = parse_value(reg, value, "set");
+  auto c = connect(link);
+  write_verified(*c, reg, v, "set", err);
+}
+
+void run_load(const LinkOptions& link, const std::string& path, std::ostream& out, std::ostream& err) {
+  const config::Ini ini = config::Ini::load(path);
+  std::vector<std::pair<const RegisterInfo*, double>> writes;
+  std::vector<std::string> origins;
+  const auto add = [&](const RegisterInfo& reg, double value, const std::string& origin) {
+    for (auto& w : writes) {
+      if (w.first == &reg) {
+        w.second = value;
+        return;
+      }
+    }
+    writes.emplace_back(&reg, value);
+    origins.push_back(origin);
+  };
+  for (const auto* e : ini.entries("board")) {
+    const RegisterInfo* reg = find_register(e->key);
+    if (reg == nullptr) ini.reject("board", e->key, "not a register of the board");
+    if (!reg->writable) ini.reject("board", e->key, "read-only register");
+    add(*reg, parse_value(*reg, e->value, e->origin), e->origin);
+  }
+  for (const auto& [reg, value] : controller_registers(ini)) add(*reg, value, path);
+  if (writes.empty()) fail("{}: no [board] or [controller] section with registers to load", path);
+  std::vector<std::size_t> order(writes.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return load_rank(*writes[a].first) < load_rank(*writes[b].first); });
+
+  auto c = connect(link);
+  // duty_min and duty_max are checked against each other: when raising the floor above the
+  // old ceiling (or the reverse) the other one has to move first; one more pass settles it.
+  std::vector<std::size_t> deferred;
+  for (const std::size_t i : order) {
+    const auto& [reg, value] = writes[i];
+    try {
+      write_verified(*c, *reg, value, origins[i], err);
+    } catch (const Error&) {
+      if (!reg->name.starts_with("duty_m")) throw;
+      deferred.push_back(i);
+    }
+  }
+  for (const std::size_t i : deferred) write_verified(*c, *writes[i].first, writes[i].second, origins[i], err);
+
+  std::vector<const RegisterInfo*> regs;
+  for (const std::size_t i : order) regs.push_back(writes[i].first);
+  out << fmt::format("; mcg-serial load {}: {} on {}, every register read back\n", path, c->board_text(), link.port);
+  print_board_section(*c, regs, out);
+}
+
+void run_dump(const LinkOptions& link, const DumpOptions& options, std::ostream& out, std::ostream& err) {
+  auto c = connect(link);
+  Session& s = *c->session;
+  if (options.record) {
+    if (options.interval_ms != 0) {
+      write_verified(*c, require_register("log_interval"), options.interval_ms, "--interval", err);
+    }
+    const int interval_ms = s.read(require_register("log_interval"));
+    s.request(MCG_CMD_LOG_START, {}, "starting the log");
+    const InterruptGuard guard;
+    const double expected_s = MCG_LOG_POINTS * 1e-3 * interval_ms;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(expected_s + 2.0);
+    const RegisterInfo& flags = require_register("flags");
+    for (;;) {
+      if (InterruptGuard::interrupted()) fail("dump: interrupted while recording");
+      const auto f = static_cast<unsigned>(s.read(flags));
+      if ((f & MCG_FLAG_LOG_FULL) != 0 && (f & MCG_FLAG_LOGGING) == 0) break;
+      if (std::chrono::steady_clock::now() > deadline) {
+        fail("{}: the log did not fill within {} s", link.port, config::format_number(expected_s + 2.0));
+      }
+      s.receive(std::min(0.1, expected_s / 4.0 + 0.01));
+    }
+  }
+  const LogDump dump = s.dump_log();
+  if (dump.counts.empty()) {
+    fail("{}: the RAM log is empty (record one with 'dump --record', or with the keypad)", link.port);
+  }
+  const double interval_s = dump.interval_ms * 1e-3;
+  table::Writer w(out);
+  w.meta("source", fmt::format("mcg-serial {} dump", k_version));
+  w.meta("board", c->board_text());
+  w.meta("port", link.port);
+  w.meta("sample_period", config::format_number(interval_s));
+  sim::CountEstimator est;
+  est.window_s = interval_s;
+  est.counts_per_rev = MCG_COUNTS_PER_REV;
+  w.meta("rpm_estimator", sim::format_rpm_estimator(est));
+  w.meta("encoder", "512 lines, x4 quadrature decoding = 2048 counts/rev");
+  w.meta("timing", "counts and rpm over (t - sample_period, t]; t = 0 when the recording started");
+  w.header({"t", "rpm", "counts"});
+  for (std::size_t i = 0; i < dump.counts.size(); ++i) {
+    const double counts = dump.counts[i];
+    w.row({static_cast<double>(i + 1) * interval_s, counts * k_pulses_to_rev / interval_s * 60.0, counts});
+  }
+  w.finish();
+}
+
+void run_send(const LinkOptions& link, const SendOptions& options, std::ostream& out) {
+  const table::Table tbl = table::read_path(options.path);
+  const std::string src = tbl.source;
+  table::require_increasing(tbl, "t");
+  const auto& t = tbl.col("t");
+  std::vector<std::pair<const RegisterInfo*, const std::vector<double>*>> cols;
+  for (std::size_t k = 0; k < tbl.names.size(); ++k) {
+    if (tbl.names[k] == "t") continue;
+    const RegisterInfo* reg = find_register(tbl.names[k]);
+    if (reg == nullptr || reg->name != tbl.names[k]) continue;
+    if (!reg->writable) fail("{}: column '{}': read-only register", src, tbl.names[k]);
+    cols.emplace_back(reg, &tbl.columns[k]);
+  }
+  if (cols.empty()) fail("{}: no column names a writable register (e.g. rpm_cmd, duty, mode)", src);
+  if (!tbl.rows()) fail("{}: no rows", src);
+
+  auto c = connect(link);
+  std::vector<SeqEntry> entries;
+  std::vector<double> last(cols.size(), std::nan(""));
+  std::int64_t prev_ms = 0;
+  for (std::size_t row = 0; row < tbl.rows(); ++row) {
+    for (std::size_t k = 0; k < cols.size(); ++k) {
+      const RegisterInfo& reg = *cols[k].first;
+      const double v = (*cols[k].second)[row];
+      if (std::isnan(v) || v == last[k]) continue;
+      last[k] = v;
+      if (t[row] < 0.0) fail("{}:{}: t = {} s: a sequence starts at t = 0", src, tbl.line_of(row), t[row]);
+      const auto at_ms = static_cast<std::int64_t>(std::llround(t[row] * 1e3));
+      if (at_ms - prev_ms > 0xFFFF) {
+        fail("{}:{}: {} ms after the previous change; the board waits at most 65535 ms", src, tbl.line_of(row),
+             at_ms - prev_ms);
+      }
+      // The data contract's duty is a fraction of full scale; the register's unit is %.
+      const double value = reg.unit == Unit::Percent ? v * 100.0 : v;
+      const int frac = reg.unit == Unit::Gain ? c->frac_bits() : 0;
+      std::int16_t raw = 0;
+      try {
+        raw = to_raw(reg, value, frac);
+      } catch (const Error& e) {
+        fail("{}:{}: {}", src, tbl.line_of(row), e.what());
+      }
+      entries.push_back({static_cast<std::uint16_t>(at_ms - prev_ms), reg.id, raw});
+      prev_ms = at_ms;
+      if (entries.size() > MCG_SEQ_MAX) {
+        fail("{}:{}: more than {} register changes; the board's sequence holds {}", src, tbl.line_of(row),
+             MCG_SEQ_MAX, MCG_SEQ_MAX);
+      }
+    }
+  }
+  Session& s = *c->session;
+  s.write_sequence(entries);
+  const RegisterInfo& len = require_register("seq_len");
+  const std::int16_t stored = s.read(len);
+  if (stored != static_cast<std::int16_t>(entries.size())) {
+    fail("{}: the board holds {} sequence entries after loading {}", link.port, stored, entries.size());
+  }
+  if (!options.then.empty()) {
+    const RegisterInfo& state = require_register("seq_state");
+    s.write(state, static_cast<std::int16_t>(parse_value(state, options.then, "--then")));
+  }
+  out << fmt::format("sequence: {} entries over {} s loaded{}\n", entries.size(),
+                     config::format_number(static_cast<double>(prev_ms) * 1e-3),
+                     options.then.empty() ? "" : fmt::format(", {}ing", options.then));
+}
+
+void run_monitor(const LinkOptions& link, const MonitorOptions& options, std::ostream& out) {
+  if (::isatty(STDOUT_FILENO) != 1) fail("monitor: stdout is not a terminal (use 'stream' to capture data)");
+  auto c = connect(link);
+  Session& s = *c->session;
+  const InterruptGuard guard;
+  const RegisterInfo& rpm = require_register("rpm");
+  const RegisterInfo& rpm_cmd = require_register("rpm_cmd");
+  const RegisterInfo& duty = require_register("duty");
+  const RegisterInfo& mode = require_register("mode");
+  const RegisterInfo& flags = require_register("flags");
+  const RegisterInfo& clutch = require_register("clutch");
+  const RegisterInfo& load = require_register("load");
+  const auto start = std::chrono::steady_clock::now();
+  auto next = start;
+  for (;;) {
+    const std::string line =
+        fmt::format("rpm {:>6}  cmd {:>4}  duty {:>6} %  mode {:<4} clutch {} load {}  {}",
+                    format_value(rpm, s.read(rpm), 0), format_value(rpm_cmd, s.read(rpm_cmd), 0),
+                    format_value(duty, s.read(duty), 0), format_value(mode, s.read(mode), 0),
+                    format_value(clutch, s.read(clutch), 0), format_value(load, s.read(load), 0),
+                    format_value(flags, s.read(flags), 0));
+    out << "\r\033[K" << line << std::flush;
+    next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(options.period_s));
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (InterruptGuard::interrupted() || (options.seconds > 0.0 && elapsed >= options.seconds)) break;
+    while (!InterruptGuard::interrupted() && std::chrono::steady_clock::now() < next) {
+      s.receive(std::chrono::duration<double>(next - std::chrono::steady_clock::now()).count());
+    }
+    if (InterruptGuard::interrupted()) break;
+  }
+  out << '\n' << std::flush;
+}
+
+}  // namespace mcg::link

@@ -1,0 +1,75 @@
+// mcg-serial: the board from the terminal (see man/mcg-serial.1). One function per subcommand.
+#pragma once
+
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace mcg::link {
+
+/// Options every subcommand that talks to the board shares.
+struct LinkOptions {
+  std::string port;              ///< -p/--port
+  int baud = 9600;               ///< --baud
+  double timeout_s = 0.3;        ///< --timeout: wait for each answer
+  int attempts = 3;              ///< --tries: attempts per request
+};
+
+/// Exit status of a capture that lost samples (without --allow-loss).
+inline constexpr int k_exit_lost_samples = 3;
+
+/// list: every serial port with its description, "PATH<TAB>DESCRIPTION" per line.
+void run_list(std::ostream& out);
+
+/// get NAME...: each register's value in engineering units, one per line. Without names:
+/// every register as an INI [board] section (read-only ones as comments), which load reads.
+void run_get(const LinkOptions& link, const std::vector<std::string>& names, std::ostream& out);
+
+/// set NAME VALUE: writes one register in engineering units and reads it back. A value the
+/// register cannot hold exactly is rounded to its resolution (a note on stderr says so); a
+/// board that holds something else after the write is an error.
+void run_set(const LinkOptions& link, const std::string& name, const std::string& value, std::ostream& err);
+
+/// load FILE.ini: writes the [board] section (register = value, as get prints it) or the
+/// [controller] fixed-point section of mcg-design (docs/formats.md), verifies each register
+/// and prints what the board holds as a [board] section.
+void run_load(const LinkOptions& link, const std::string& path, std::ostream& out, std::ostream& err);
+
+struct StreamOptions {
+  double seconds = 0.0;            ///< stop after this much stream time (0: see samples)
+  std::int64_t samples = 0;        ///< stop after this many samples (0 with seconds 0: until Ctrl-C)
+  bool allow_loss = false;         ///< exit 0 even when samples were lost
+  int window_ms = 16;              ///< rpm estimator window, ms (a multiple of the 2 ms sample)
+  double idle_timeout_s = 1.0;     ///< no stream block for this long is an error
+};
+/// stream: turns the board's stream on, writes CSV rows (t, rpm, counts, duty, rpm_cmd) as
+/// the blocks arrive (flushed per block), turns it off at the end. Sequence gaps count as
+/// lost samples: reported on stderr, exit status k_exit_lost_samples unless allow_loss.
+/// SIGINT ends the capture cleanly. Returns the exit status.
+int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostream& out, std::ostream& err);
+
+struct DumpOptions {
+  bool record = false;       ///< start a recording first and wait until the log is full
+  int interval_ms = 0;       ///< with record: set log_interval first (0: keep the board's)
+};
+/// dump: the RAM log as CSV (t, rpm, counts), t = (i + 1) interval: point i holds the pulses
+/// counted over (t - interval, t] after the recording started.
+void run_dump(const LinkOptions& link, const DumpOptions& options, std::ostream& out, std::ostream& err);
+
+struct SendOptions {
+  std::string path;         ///< CSV: t and one column per register to change
+  std::string then;         ///< "", "play" or "loop": start playback after loading
+};
+/// send FILE.csv: turns a table of register values over time into the board's command
+/// sequence (an entry wherever a register column changes) and loads it into the board's RAM.
+void run_send(const LinkOptions& link, const SendOptions& options, std::ostream& out);
+
+struct MonitorOptions {
+  double seconds = 0.0;      ///< 0: until Ctrl-C
+  double period_s = 0.2;     ///< redraw period
+};
+/// monitor: one redrawn line of live values; stdout must be a terminal.
+void run_monitor(const LinkOptions& link, const MonitorOptions& options, std::ostream& out);
+
+}  // namespace mcg::link

@@ -1,0 +1,107 @@
+// mcg-serial: registers, live capture, the RAM log and command sequences of the board.
+#include <iostream>
+
+#include "common/tool.hpp"
+#include "link/relay.hpp"
+#include "link/serial.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "Talks to the motor-clutch-generator board (or mcg-sim --board) over a serial line: registers in\n"
+      "engineering units, live capture as CSV, the RAM log, command sequences. See man mcg-serial.",
+      "mcg-serial"};
+  app.require_subcommand(1);
+  mcg::link::LinkOptions link;
+  app.add_option("-p,--port", link.port, "serial port, e.g. /dev/ttyUSB0 or ./ttyMCG");
+  app.add_option("--baud", link.baud, "line rate")
+      ->check(CLI::IsMember({1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200}))
+      ->capture_default_str();
+  app.add_option("--timeout", link.timeout_s, "wait for each answer, s")->check(CLI::Range(0.01, 10.0))->capture_default_str();
+  app.add_option("--tries", link.attempts, "attempts per request")->check(CLI::Range(1, 20))->capture_default_str();
+
+  auto* list = app.add_subcommand("list", "list the serial ports with their descriptions");
+
+  std::vector<std::string> get_names;
+  auto* get = app.add_subcommand("get", "print registers (all, as an INI [board] section, without NAME)");
+  get->add_option("NAME", get_names, "register name");
+
+  std::string set_name;
+  std::string set_value;
+  auto* set = app.add_subcommand("set", "write a register in engineering units and verify it");
+  set->add_option("NAME", set_name, "register name")->required();
+  set->add_option("VALUE", set_value, "value: rpm, duty %, gain, ms, or a name (mode: open p pi pid)")->required();
+
+  std::string load_path;
+  auto* load = app.add_subcommand("load", "write every register of a [board] or [controller] INI and verify each");
+  load->add_option("FILE", load_path, "INI file (mcg-design output, or mcg-serial get)")->required()->check(CLI::ExistingFile);
+
+  mcg::link::StreamOptions stream_opt;
+  auto* stream = app.add_subcommand("stream", "write live samples as CSV (t, rpm, counts, duty, rpm_cmd) until done");
+  auto* seconds = stream->add_option("--seconds", stream_opt.seconds, "capture this much stream time, s")
+                      ->check(CLI::Range(0.002, 1e6));
+  stream->add_option("--samples", stream_opt.samples, "capture this many 2 ms samples")
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 40))
+      ->excludes(seconds);
+  stream->add_flag("--allow-loss", stream_opt.allow_loss, "exit 0 even when samples were lost");
+  stream->add_option("--window", stream_opt.window_ms, "rpm estimator window, ms (even)")
+      ->check(CLI::Range(2, 256) & CLI::Validator([](std::string& s) {
+                return std::stoi(s) % 2 == 0 ? std::string() : std::string("must be a multiple of 2 ms");
+              }, "EVEN"))
+      ->capture_default_str();
+  stream->add_option("--idle-timeout", stream_opt.idle_timeout_s, "no stream data for this long is an error, s")
+      ->check(CLI::Range(0.05, 60.0))
+      ->capture_default_str();
+
+  mcg::link::DumpOptions dump_opt;
+  auto* dump = app.add_subcommand("dump", "read the RAM log as CSV (t, rpm, counts)");
+  dump->add_flag("--record", dump_opt.record, "start a recording first and wait until the log is full");
+  dump->add_option("--interval", dump_opt.interval_ms, "with --record: log point spacing, ms")
+      ->check(CLI::Range(1, 255));
+
+  mcg::link::SendOptions send_opt;
+  auto* send = app.add_subcommand("send", "load a command sequence (CSV: t and register columns) into the board");
+  send->add_option("FILE", send_opt.path, "CSV file, - for stdin")->required();
+  send->add_option("--then", send_opt.then, "start playback after loading")->check(CLI::IsMember({"play", "loop"}));
+
+  mcg::link::MonitorOptions monitor_opt;
+  auto* monitor = app.add_subcommand("monitor", "show live values on one redrawn terminal line");
+  monitor->add_option("--seconds", monitor_opt.seconds, "stop after this long, s (default: Ctrl-C)")
+      ->check(CLI::Range(0.01, 1e6));
+
+  mcg::link::RelayOptions relay_opt;
+  auto* relay = app.add_subcommand("relay", "test aid: forward -p PORT to a new pty, corrupting, dropping, delaying");
+  relay->add_option("--link", relay_opt.link_path, "pseudo-terminal link to create for the tool")->required();
+  relay->add_option("--corrupt", relay_opt.corrupt, "probability per byte of a flipped bit")->check(CLI::Range(0.0, 1.0));
+  relay->add_option("--drop", relay_opt.drop, "probability per byte of losing it")->check(CLI::Range(0.0, 1.0));
+  relay->add_option("--stall", relay_opt.stall, "probability per byte of a pause before it")->check(CLI::Range(0.0, 1.0));
+  relay->add_option("--stall-ms", relay_opt.stall_ms, "longest pause, ms")->check(CLI::Range(0.0, 10000.0))->capture_default_str();
+  relay->add_option("--cut-after", relay_opt.cut_after_s, "close the line this long after the board's first byte, s")
+      ->check(CLI::Range(0.001, 1e6));
+  relay->add_option("--seconds", relay_opt.seconds, "end after this long, s")->check(CLI::Range(0.001, 1e6));
+  relay->add_flag("!--clean-to-board", relay_opt.to_board, "faults only on bytes towards the tool");
+  relay->add_option("--seed", relay_opt.seed, "seed of the faults")->capture_default_str();
+
+  const auto need_port = [&] {
+    if (link.port.empty()) throw CLI::RequiredError("-p,--port");
+  };
+  return mcg::tool_main_status(app, argc, argv, [&]() -> int {
+    if (*list) {
+      mcg::link::run_list(std::cout);
+      return 0;
+    }
+    need_port();
+    if (*get) mcg::link::run_get(link, get_names, std::cout);
+    if (*set) mcg::link::run_set(link, set_name, set_value, std::cerr);
+    if (*load) mcg::link::run_load(link, load_path, std::cout, std::cerr);
+    if (*stream) return mcg::link::run_stream(link, stream_opt, std::cout, std::cerr);
+    if (*dump) mcg::link::run_dump(link, dump_opt, std::cout, std::cerr);
+    if (*send) mcg::link::run_send(link, send_opt, std::cout);
+    if (*monitor) mcg::link::run_monitor(link, monitor_opt, std::cout);
+    if (*relay) {
+      relay_opt.port = link.port;
+      relay_opt.baud = link.baud;
+      mcg::link::run_relay(relay_opt, std::cerr);
+    }
+    return 0;
+  });
+}
