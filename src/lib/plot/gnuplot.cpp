@@ -136,7 +136,7 @@ void require_gnuplot(const std::string& program) {
 
 // The first interactive terminal this gnuplot offers, or a clear error.
 std::string window_terminal(const std::string& program) {
-  Child probe({program, "-d", "-e", "print GPVAL_TERMINALS"}, true);
+  Child probe({program, "-d", "-e", "set print '-'; print GPVAL_TERMINALS"}, true);
   probe.feed("");
   const std::string text = probe.read_all();
   probe.wait();
@@ -187,6 +187,10 @@ void run(const Options& o) {
   const bool plot = !o.output.empty() || text || o.script.empty();
   if (!o.output.empty()) {
     spec.output.kind = kind_from_path(o.output);
+    // Fail here, not in gnuplot, which would carry on and write the image to stdout.
+    if (!std::ofstream(o.output, std::ios::binary | std::ios::app)) {
+      fail("-o {}: cannot open: {}", o.output, std::strerror(errno));
+    }
     // gnuplot reads an output name starting with '|' as a command to pipe into.
     spec.output.path = o.output.front() == '|' ? "./" + o.output : o.output;
   } else if (text) {

@@ -82,6 +82,12 @@ Selection select(const Spec& spec, const table::Table& first) {
 void append_block(std::string& out, std::size_t index, const table::Table& tbl, const Selection& s) {
   std::vector<const std::vector<double>*> columns{&tbl.col(s.x)};
   for (const std::string& name : joined_names(s.y, s.y2)) columns.push_back(&tbl.col(name));
+  for (std::size_t c = 0; c < columns.size(); ++c) {
+    const auto& values = *columns[c];
+    if (std::none_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); })) {
+      fail("{}: column '{}' has no finite value to plot", tbl.source, c == 0 ? s.x : joined_names(s.y, s.y2)[c - 1]);
+    }
+  }
   out += fmt::format("$data{} << EOD\n", index);
   for (std::size_t r = 0; r < tbl.rows(); ++r) {
     for (std::size_t c = 0; c < columns.size(); ++c) {
