@@ -5,7 +5,9 @@
  * PWM write through the c515 layer). Timer 1 in mode 1 counts machine cycles (f/12); its own
  * reading overhead is measured with an empty interval and subtracted. For P, PI and PID, 256
  * updates with varying encoder counts; min, max and sum of cycles go to external RAM at
- * BENCH_XADDR and the run ends at bench_done() (scripts/bench-firmware.sh reads them). */
+ * BENCH_XADDR and the run ends at bench_done() (bench/bench-cycles.sh reads them). Every duty
+ * computed goes to BENCH_OUT_XADDR, where the ucsim test compares them with the C core on the
+ * host: the assembly parts of the 8051 build must give the same numbers. */
 #include <8051.h>   /* TMOD, TH0, TL0, TH1, TL1, TR0, TR1 */
 #include <stdint.h> /* uint8_t, uint16_t, uint32_t */
 
@@ -15,6 +17,7 @@
 
 #define BENCH_XADDR 0x9F00u
 #define BENCH_RUNS 256u
+#define BENCH_OUT_XADDR 0xA000u /* 3 x 256 duties, i16 */
 
 /* Per mode (P, PI, PID): min, max (u16), sum (u32); then the empty-interval overhead (u16). */
 typedef struct {
@@ -24,6 +27,7 @@ typedef struct {
 static Figures MCG_XDATA MCG_AT(BENCH_XADDR) s_fig[3];
 static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + 3u * sizeof(Figures)) s_overhead;
 
+static int16_t MCG_XDATA MCG_AT(BENCH_OUT_XADDR) s_out[3][BENCH_RUNS];
 static uint16_t s_last_count;
 
 static uint16_t cycles_now(void)
@@ -91,6 +95,7 @@ void main(void)
         s_fig[m].max = dt;
       }
       s_fig[m].sum += dt;
+      s_out[m][i] = g_duty_out;
     }
   }
   bench_done();

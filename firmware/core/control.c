@@ -25,8 +25,8 @@
 #include "arith.h" /* arith_mul16 */
 #include "hal.h"   /* hal_pwm_write */
 
-int16_t g_kp, g_b0, g_b1, g_b2;
-uint8_t g_coef_frac;
+int16_t MCG_XDATA g_kp, g_b0, g_b1, g_b2;
+uint8_t MCG_XDATA g_coef_frac;
 int16_t MCG_XDATA g_duty_min, g_duty_max, g_duty_bias;
 int16_t g_duty_out;
 uint8_t g_saturated;
@@ -144,8 +144,10 @@ static void active_coefs(int16_t *c0, int16_t *c1, int16_t *c2)
 
 void control_refresh(void)
 {
-  int16_t c0, c1, c2;
-  int32_t now0;
+  MCG_SLOW int16_t c0;
+  MCG_SLOW int16_t c1;
+  MCG_SLOW int16_t c2;
+  MCG_SLOW int32_t now0;
   active_coefs(&c0, &c1, &c2);
   g_pid.bp[0] = (uint16_t)((uint16_t)c0 ^ 0x8000u);
   g_pid.bp[1] = (uint16_t)((uint16_t)c1 ^ 0x8000u);

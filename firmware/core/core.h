@@ -34,15 +34,15 @@ void frame_rx_tick(void);
 void frame_rx_overrun(void);
 /* Sends a whole frame, or none (counting g_tx_drops) if the transmit buffer lacks room.
  * Returns 1 if queued. */
-uint8_t frame_send(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len);
+uint8_t frame_send(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len) MCG_REENTRANT;
 /* Sends an answer: CMD | MCG_REPLY_BIT, the status, then len bytes of data. */
-uint8_t frame_reply(uint8_t cmd, uint8_t status, const uint8_t MCG_XDATA *data, uint8_t len);
+uint8_t frame_reply(uint8_t cmd, uint8_t status, const uint8_t MCG_XDATA *data, uint8_t len) MCG_REENTRANT;
 extern uint16_t MCG_XDATA g_rx_errors; /* frames dropped by the parser */
 extern uint16_t MCG_XDATA g_tx_drops;  /* frames not sent for lack of room */
 
 /* regs.c: the register map ------------------------------------------------------------------- */
 /* MCG_ST_OK and the value in *value, or MCG_ST_BAD_REG. */
-uint8_t regs_read(uint8_t reg, int16_t *value);
+uint8_t regs_read(uint8_t reg, int16_t *value) MCG_REENTRANT;
 /* Range-checked write with its side effects (mode switch, log interval, outputs, ...);
  * MCG_ST_OK or the reason it was refused, the register then unchanged. */
 uint8_t regs_write(uint8_t reg, int16_t value);
@@ -74,8 +74,8 @@ void control_refresh(void);
 int16_t control_rpm(void);
 /* rpm -> Q8 pulses per tick: r = rpm * 2048 * 256 / 60000, rounded. */
 int16_t control_rpm_to_q8(int16_t rpm);
-extern int16_t g_kp, g_b0, g_b1, g_b2; /* Q(F) coefficients, 1/1000 duty per pulse/ms */
-extern uint8_t g_coef_frac;            /* F */
+extern int16_t MCG_XDATA g_kp, g_b0, g_b1, g_b2; /* Q(F) coefficients, 1/1000 duty per pulse/ms */
+extern uint8_t MCG_XDATA g_coef_frac; /* F */
 extern int16_t MCG_XDATA g_duty_min, g_duty_max, g_duty_bias;
 extern int16_t g_duty_out;    /* the duty written to the PWM by the last update */
 extern uint8_t g_saturated;   /* last update hit duty_min or duty_max */

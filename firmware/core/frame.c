@@ -106,10 +106,10 @@ void frame_rx_overrun(void)
   report_error(MCG_ST_OVERRUN);
 }
 
-uint8_t frame_send(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len)
+uint8_t frame_send(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len) MCG_REENTRANT
 {
-  MCG_SLOW uint16_t crc = MCG_CRC_INIT;
-  MCG_SLOW uint8_t i;
+  uint16_t crc = MCG_CRC_INIT;
+  uint8_t i;
   if (hal_uart_tx_free() < (uint8_t)(len + MCG_FRAME_OVERHEAD)) {
     ++g_tx_drops;
     return 0;
@@ -130,9 +130,9 @@ uint8_t frame_send(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len)
 
 static uint8_t MCG_XDATA s_reply[MCG_MAX_PAYLOAD];
 
-uint8_t frame_reply(uint8_t cmd, uint8_t status, const uint8_t MCG_XDATA *data, uint8_t len)
+uint8_t frame_reply(uint8_t cmd, uint8_t status, const uint8_t MCG_XDATA *data, uint8_t len) MCG_REENTRANT
 {
-  MCG_SLOW uint8_t i;
+  uint8_t i;
   s_reply[0] = status;
   for (i = 0; i < len; ++i) {
     s_reply[i + 1] = data[i];

@@ -48,9 +48,9 @@ static uint8_t flags(void)
   return f;
 }
 
-uint8_t regs_read(uint8_t reg, int16_t *value)
+uint8_t regs_read(uint8_t reg, int16_t *value) MCG_REENTRANT
 {
-  MCG_SLOW int16_t v;
+  int16_t v;
   switch (reg) {
   case MCG_REG_MODE: v = g_mode; break;
   case MCG_REG_RPM_CMD: v = g_rpm_cmd; break;

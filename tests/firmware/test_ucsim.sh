@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # test_ucsim.sh FIRMWARE_DIR WORKDIR UCSIM_CHECK: builds the SIM image with SDCC and runs it in s51
-# under ucsim_check (version, registers, resync, the RAM log at 0x9500). Exit 125 = skipped: no
+# under ucsim_check (version, registers, resync, the RAM log at 0x9500, the 8051 controller against
+# the host's). Exit 125 = skipped: no
 # sdcc or no s51 on this machine.
 set -euo pipefail
 firmware=$1
@@ -13,6 +14,8 @@ for tool in sdcc s51 timeout; do
   fi
 done
 mkdir -p "$work"
-make -s -C "$firmware" BUILD="$work/build" "$work/build/mcg-ucsim.ihx" > "$work/make.log" 2>&1 ||
+# All images: the 80C515 one must build and fit too.
+make -s -C "$firmware" BUILD="$work/build" all bench > "$work/make.log" 2>&1 ||
   { cat "$work/make.log" >&2; exit 1; }
-exec "$check" "$work/build/mcg-ucsim.ihx" "$work"
+grep -E '\.ihx:|code|external' "$work/make.log" || true
+exec "$check" "$work/build/mcg-ucsim.ihx" "$work" "$work/build/mcg-bench.ihx"

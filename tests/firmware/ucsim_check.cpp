@@ -1,12 +1,14 @@
 // ucsim_check: runs the SIM image in s51 (-t C517) and talks to it the way the PC talks to the board.
 //
-//   ucsim_check IMAGE.ihx WORKDIR
+//   ucsim_check IMAGE.ihx WORKDIR [BENCH.ihx]
 //
 // The UART goes through two FIFOs (binary clean); s51's command console listens on a TCP port and
 // is used to start the simulation and, at the end, to read the RAM log straight from external RAM
 // at 0x9500. Checks: version, register write and read-back (all eight bits), a refused write,
 // resynchronisation after garbage and a truncated frame, the 255 logged points (through the dump
 // frames and in memory), the LCD mirror. Prints one line per check and "N passed, M failed".
+// With BENCH.ihx (the cycle-benchmark image), also runs it and compares the 768 duties its P, PI and
+// PID updates computed, with MUL AB and assembly, to the C core on the host given the same pulses.
 // s51 runs under `timeout`; a watchdog ends everything if the simulator stops answering.
 #include <arpa/inet.h>
 #include <fcntl.h>
@@ -32,7 +34,9 @@
 #include <thread>
 #include <vector>
 
+#include "core.h"
 #include "fw_frames.hpp"
+#include "host_board.h"
 
 extern char** environ;
 
@@ -357,12 +361,88 @@ std::optional<int> read_reg(Sim& sim, std::uint8_t reg)
   return fwtest::i16_at(f->payload, 2);
 }
 
+// Runs the benchmark image to its end and returns the duties it stored at 0xA000 (3 x 256, i16).
+std::vector<int> bench_duties(const std::string& image, const std::string& dir)
+{
+  const std::string map = image.substr(0, image.size() - 4) + ".map";
+  std::FILE* m = std::fopen(map.c_str(), "r");
+  std::string done;
+  if (m) {
+    char line[256];
+    while (std::fgets(line, sizeof line, m)) {
+      char area[16], addr[32], sym[128];
+      if (std::sscanf(line, "%15s %31s %127s", area, addr, sym) == 3 && std::string(sym) == "_bench_done") {
+        done = addr;
+      }
+    }
+    std::fclose(m);
+  }
+  if (done.empty()) {
+    return {};
+  }
+  const std::string cfg = dir + "/bench-check.cfg";
+  std::FILE* c = std::fopen(cfg.c_str(), "w");
+  std::fprintf(c, "file \"%s\"\nbreak 0x%s\nrun\ndx 0xa000 0xa5ff 16\nquit\n", image.c_str(), done.c_str());
+  std::fclose(c);
+  const std::string cmd = "timeout 120 s51 -t C517 -X 12M -C '" + cfg + "' < /dev/null 2>&1";
+  std::FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) {
+    out.append(buf, n);
+  }
+  pclose(p);
+  static const std::regex ansi("\x1b\\[[0-9;]*[A-Za-z]");
+  std::istringstream lines(std::regex_replace(out, ansi, ""));
+  Bytes bytes;
+  std::string line;
+  while (std::getline(lines, line)) {
+    std::istringstream f(line);
+    std::string addr;
+    if (!(f >> addr) || addr.rfind("0xa", 0) != 0) {
+      continue;
+    }
+    for (int i = 0; i < 16; ++i) {
+      std::string h;
+      f >> h;
+      bytes.push_back(static_cast<std::uint8_t>(std::stoul(h, nullptr, 16)));
+    }
+  }
+  std::vector<int> duties;
+  for (std::size_t i = 0; i + 1 < bytes.size(); i += 2) {
+    duties.push_back(fwtest::i16_at(bytes, i));
+  }
+  return duties;
+}
+
+// The same updates on the host: the C core with the benchmark's registers and pulses.
+std::vector<int> host_duties()
+{
+  host_board_reset();
+  regs_write(MCG_REG_RPM_CMD, 420);
+  regs_write(MCG_REG_KP, 3000);
+  regs_write(MCG_REG_B0, 9000);
+  regs_write(MCG_REG_B1, -15000);
+  regs_write(MCG_REG_B2, 6100);
+  regs_write(MCG_REG_DUTY_BIAS, 300);
+  std::vector<int> duties;
+  for (int m = 0; m < 3; ++m) {
+    regs_write(MCG_REG_MODE, static_cast<std::int16_t>(static_cast<int>(MCG_MODE_P) + m));
+    for (unsigned i = 0; i < 256; ++i) {
+      control_tick(static_cast<std::uint8_t>(6u + (i * 7u) % 25u));
+      duties.push_back(g_duty_out);
+    }
+  }
+  return duties;
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
 {
-  if (argc != 3) {
-    std::fprintf(stderr, "usage: ucsim_check IMAGE.ihx WORKDIR\n");
+  if (argc != 3 && argc != 4) {
+    std::fprintf(stderr, "usage: ucsim_check IMAGE.ihx WORKDIR [BENCH.ihx]\n");
     return 2;
   }
   signal(SIGALRM, on_watchdog);
@@ -464,6 +544,17 @@ int main(int argc, char** argv)
     const Bytes lcd = read_xram(sim, 0x9F20, 0x9F2F);
     const std::string row(lcd.begin(), lcd.end());
     check(row == "open   d  40.0% ", "LCD line 2: '" + row + "'");
+  }
+  if (argc == 4) {
+    const std::vector<int> sim = bench_duties(argv[3], argv[2]);
+    const std::vector<int> host = host_duties();
+    std::size_t first_diff = 0;
+    while (first_diff < host.size() && first_diff < sim.size() && sim[first_diff] == host[first_diff]) {
+      ++first_diff;
+    }
+    check(sim.size() == 768 && first_diff == host.size(),
+          "8051 P/PI/PID updates equal the host C core: " + std::to_string(first_diff) + " of " +
+              std::to_string(host.size()) + " duties identical");
   }
   std::printf("%d passed, %d failed\n", g_pass, g_fail);
   return g_fail == 0 ? 0 : 1;
