@@ -72,8 +72,9 @@ std::vector<bool> transient_mask(const model::Inputs& inputs) {
   const std::size_t rows = inputs.t_s.size();
   std::vector<bool> mask(rows, false);
   for (std::size_t e : event_rows(inputs)) {
-    const double t_end = inputs.t_s[e] + k_transient_window_s;
-    for (std::size_t n = e; n < rows && inputs.t_s[n] < t_end; ++n) mask[n] = true;
+    for (std::size_t n = e; n < rows && inputs.t_s[n] - inputs.t_s[e] < k_transient_window_s - 1e-9; ++n) {
+      mask[n] = true;
+    }
   }
   return mask;
 }
@@ -208,36 +209,36 @@ Whiteness whiteness(std::span<const double> residual, std::span<const double> in
   }
   w.bound = 2.58 / std::sqrt(static_cast<double>(finite));
   if (rr <= 0.0) return w;
+  constexpr double k_z99 = 2.326;
+  const auto big_n = static_cast<double>(finite);
   std::size_t auto_lags = 0;
-  std::size_t auto_out = 0;
   for (std::size_t lag = first_lag; lag <= max_lag && lag < n; ++lag) {
     double s = 0.0;
     for (std::size_t k = lag; k < n; ++k) s += r[k] * r[k - lag];
-    const double rho = std::abs(s / rr);
+    const double rho = s / rr;
     ++auto_lags;
-    if (rho > w.bound) ++auto_out;
-    if (rho > w.max_auto) {
-      w.max_auto = rho;
+    w.q_auto += big_n * (big_n + 2.0) * rho * rho / (big_n - static_cast<double>(lag));
+    if (std::abs(rho) > w.max_auto) {
+      w.max_auto = std::abs(rho);
       w.max_auto_lag = lag;
     }
   }
-  w.auto_outside = auto_lags > 0 ? static_cast<double>(auto_out) / static_cast<double>(auto_lags) : 0.0;
+  w.q_auto_limit = auto_lags > 0 ? chi_square_quantile(static_cast<double>(auto_lags), k_z99) : 0.0;
   if (uu > 0.0) {
     const double norm = std::sqrt(rr * uu);
-    std::size_t cross_out = 0;
     std::size_t cross_lags = 0;
     for (std::size_t lag = 0; lag <= max_lag && lag < n; ++lag) {
       double s = 0.0;
       for (std::size_t k = lag; k < n; ++k) s += r[k] * u[k - lag];
-      const double rho = std::abs(s / norm);
+      const double rho = s / norm;
       ++cross_lags;
-      if (rho > w.bound) ++cross_out;
-      if (rho > w.max_cross) {
-        w.max_cross = rho;
+      w.q_cross += big_n * rho * rho;
+      if (std::abs(rho) > w.max_cross) {
+        w.max_cross = std::abs(rho);
         w.max_cross_lag = lag;
       }
     }
-    w.cross_outside = static_cast<double>(cross_out) / static_cast<double>(cross_lags);
+    w.q_cross_limit = chi_square_quantile(static_cast<double>(cross_lags), k_z99);
   }
   return w;
 }
@@ -269,6 +270,13 @@ NoiseFloor current_noise_floor(std::span<const double> i_measured, const std::ve
   nf.chain = std::sqrt(sigma_A * sigma_A + adc_step_A * adc_step_A / 12.0);
   nf.data = second_difference_noise(i_measured, [&](std::size_t n) { return !transient[n]; });
   return nf;
+}
+
+double chi_square_quantile(double dof, double z_p) {
+  assert(dof > 0.0);
+  const double a = 2.0 / (9.0 * dof);
+  const double c = 1.0 - a + z_p * std::sqrt(a);
+  return dof * c * c * c;
 }
 
 double rms_finite(std::span<const double> x) {

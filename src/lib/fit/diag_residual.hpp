@@ -24,7 +24,7 @@ inline constexpr double k_low_speed_rpm = 150.0;
 std::vector<std::size_t> event_rows(const model::Inputs& inputs);
 
 /// Per row: true when the row lies within k_transient_window_s after an event row
-/// (t(event) <= t(n) < t(event) + 0.1 s).
+/// (0 <= t(n) - t(event) < 0.1 s, the comparison tolerant of rounding in t by 1e-9 s).
 std::vector<bool> transient_mask(const model::Inputs& inputs);
 
 /// One regime of the breakdown: which samples, the RMS of the residual over them and
@@ -63,24 +63,27 @@ const std::vector<double>& band_edges_hz();
 std::vector<RegimeStat> band_breakdown(std::span<const double> residual, double dt_s);
 
 /// Whiteness and input-independence of a residual (Ljung, System Identification, 16.6):
-///   rho_rr(k) = sum r_n r_{n-k} / sum r_n^2 for lags 1..max_lag,
+///   rho_rr(k) = sum r_n r_{n-k} / sum r_n^2 for lags first_lag..max_lag,
 ///   rho_ru(k) = sum r_n u_{n-k} / sqrt(sum r^2 sum u^2) for lags 0..max_lag (u = input minus
-///   its mean), both over the finite residual samples (r mean-removed).
-/// A white residual independent of the input keeps |rho| within bound = 2.58/sqrt(N) (99 %).
-/// The speed estimator correlates its own noise over its window, so the autocorrelation
-/// test uses the lags beyond `first_lag` only.
+///   its mean), both over the finite samples (r mean-removed).
+/// Portmanteau tests at the 99 % level: Ljung-Box Q_rr = N (N + 2) sum rho_rr(k)^2 / (N - k)
+/// and Q_ru = N sum rho_ru(k)^2, each against the chi-square quantile with as many degrees
+/// of freedom as lags (Wilson-Hilferty approximation). The speed estimator correlates its own
+/// noise over its window, so the autocorrelation test starts after it (first_lag).
 struct Whiteness {
   std::size_t samples = 0;
-  double bound = 0.0;                ///< 2.58 / sqrt(N)
+  double bound = 0.0;                ///< 2.58 / sqrt(N): the 99 % band of a single rho
   std::size_t first_lag = 1;         ///< first autocorrelation lag tested
-  double max_auto = 0.0;             ///< max |rho_rr(k)| over first_lag <= k <= max_lag
+  double max_auto = 0.0;             ///< max |rho_rr(k)| over the tested lags
   std::size_t max_auto_lag = 0;
-  double auto_outside = 0.0;         ///< fraction of tested lags with |rho_rr| > bound
+  double q_auto = 0.0;               ///< Ljung-Box statistic
+  double q_auto_limit = 0.0;         ///< its 99 % chi-square quantile
   double max_cross = 0.0;            ///< max |rho_ru(k)| over 0 <= k <= max_lag
   std::size_t max_cross_lag = 0;
-  double cross_outside = 0.0;        ///< fraction of lags with |rho_ru| > bound
-  bool white() const { return max_auto <= bound; }
-  bool independent() const { return max_cross <= bound; }
+  double q_cross = 0.0;
+  double q_cross_limit = 0.0;
+  bool white() const { return q_auto <= q_auto_limit; }
+  bool independent() const { return q_cross <= q_cross_limit; }
 };
 Whiteness whiteness(std::span<const double> residual, std::span<const double> input, std::size_t max_lag,
                     std::size_t first_lag);
@@ -106,6 +109,10 @@ NoiseFloor rpm_noise_floor(std::span<const double> rpm_measured, const std::vect
 /// chain = sqrt(sigma^2 + step^2 / 12); data as for the speed, over the steady rows.
 NoiseFloor current_noise_floor(std::span<const double> i_measured, const std::vector<bool>& transient,
                                double adc_step_A, double sigma_A);
+
+/// The p-quantile of the chi-square distribution with `dof` degrees of freedom
+/// (Wilson-Hilferty: dof (1 - 2/(9 dof) + z_p sqrt(2/(9 dof)))^3, z_p the normal quantile).
+double chi_square_quantile(double dof, double z_p);
 
 /// RMS over the finite values of `x` (NaN when there are none).
 double rms_finite(std::span<const double> x);

@@ -1,0 +1,343 @@
+// The gap diagnosis: residual analysis in closed form, data preparation, and diagnoses of
+// runs generated with one effect withheld from the nominal model (the Slow* tests; they
+// simulate dozens of runs and are left out of the sanitizer build).
+#include "common/error.hpp"
+#include "fit/diag_residual.hpp"
+#include "fit/gap.hpp"
+#include "sim/run.hpp"
+#include "table/table.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <sstream>
+
+namespace mcg::fit {
+namespace {
+
+constexpr double k_inf = std::numeric_limits<double>::infinity();
+
+model::Inputs constant_inputs(std::size_t rows, double dt_s, double v_V, int clutch, double r_load_ohm) {
+  model::Inputs in;
+  for (std::size_t n = 0; n < rows; ++n) {
+    in.t_s.push_back(static_cast<double>(n) * dt_s);
+    in.v_V.push_back(v_V);
+    in.clutch.push_back(clutch);
+    in.r_load_ohm.push_back(r_load_ohm);
+  }
+  return in;
+}
+
+TEST(GapEvents, ClutchRelayAndVoltageJumpsAreEventsSmallStepsAreNot) {
+  model::Inputs in = constant_inputs(1000, 0.001, 2.0, 1, k_inf);
+  in.v_V[100] = 2.9;                                      // 0.9 V: not an event
+  for (std::size_t n = 200; n < 1000; ++n) in.v_V[n] = 4.0;   // 1.1 V over row 199 (2.0): event at 200
+  for (std::size_t n = 400; n < 1000; ++n) in.clutch[n] = 2;  // event at 400
+  for (std::size_t n = 600; n < 1000; ++n) in.r_load_ohm[n] = 5.6;  // relay closes at 600
+  for (std::size_t n = 800; n < 1000; ++n) in.r_load_ohm[n] = 10.0; // another resistor at 800
+  const std::vector<std::size_t> expected{200, 400, 600, 800};
+  EXPECT_EQ(event_rows(in), expected) << "a 0.9 V blip up and back down is two 0.9 V changes, no event";
+  const std::vector<bool> mask = transient_mask(in);
+  EXPECT_FALSE(mask[199]);
+  EXPECT_TRUE(mask[200]);
+  EXPECT_TRUE(mask[299]);   // t = 0.299 < 0.2 + 0.1
+  EXPECT_FALSE(mask[300]);  // t = 0.300 is 100 ms after the event
+}
+
+TEST(GapRegimes, RmsAndSharesPerRegimeAreExact) {
+  model::Inputs in = constant_inputs(400, 0.001, 3.0, 0, k_inf);
+  std::vector<double> rpm(400, 500.0);
+  std::vector<double> r(400, 1.0);
+  for (std::size_t n = 100; n < 400; ++n) {
+    in.clutch[n] = 2;  // event at 100: rows 100..199 transient
+    r[n] = 2.0;
+  }
+  for (std::size_t n = 300; n < 400; ++n) rpm[n] = -100.0;  // reverse, below 150 rpm
+  rpm[0] = 0.0;                                               // stuck
+  r[5] = std::numeric_limits<double>::quiet_NaN();            // not measured: not counted
+  const RegimeContext ctx{&in, rpm, 5.859375};
+  const std::vector<RegimeStat> stats = regime_breakdown(ctx, r);
+  auto find = [&](std::string_view regime) {
+    for (const auto& s : stats) {
+      if (s.regime == regime) return s;
+    }
+    ADD_FAILURE() << "no regime " << regime;
+    return RegimeStat{};
+  };
+  const double total = 99.0 * 1.0 + 300.0 * 4.0;
+  EXPECT_EQ(find("all").samples, 399U);
+  EXPECT_DOUBLE_EQ(find("all").rms, std::sqrt(total / 399.0));
+  EXPECT_DOUBLE_EQ(find("state 0").rms, 1.0);
+  EXPECT_DOUBLE_EQ(find("state 0").share, 99.0 / total);
+  EXPECT_DOUBLE_EQ(find("state 2").rms, 2.0);
+  EXPECT_DOUBLE_EQ(find("state 2").share, 1200.0 / total);
+  EXPECT_EQ(find("state 1").samples, 0U);
+  EXPECT_TRUE(std::isnan(find("state 1").rms));
+  EXPECT_EQ(find("stuck").samples, 1U);
+  EXPECT_EQ(find("< 150 rpm").samples, 100U);
+  EXPECT_EQ(find(">= 150 rpm").samples, 298U);
+  EXPECT_EQ(find("reverse").samples, 100U);
+  EXPECT_EQ(find("transient").samples, 100U);
+  EXPECT_DOUBLE_EQ(find("transient").share, 400.0 / total);
+  EXPECT_EQ(find("open").samples, 399U);
+  for (std::string_view group : {"clutch", "load", "speed", "direction", "timing"}) {
+    double share = 0.0;
+    for (const auto& s : stats) {
+      if (s.group == group) share += s.share;
+    }
+    EXPECT_NEAR(share, 1.0, 1e-12) << group;
+  }
+}
+
+TEST(GapBands, SinusoidPowerLandsInItsBandWithItsRms) {
+  const double dt = 0.001;
+  std::vector<double> r(4096);
+  for (std::size_t n = 0; n < r.size(); ++n) r[n] = 3.0 * std::sin(2.0 * std::numbers::pi * 25.0 * static_cast<double>(n) * dt);
+  const auto bands = band_breakdown(r, dt);
+  ASSERT_EQ(bands.size(), 4U);
+  EXPECT_EQ(bands[2].regime, "10-50 Hz");
+  EXPECT_EQ(bands[3].regime, "50-500 Hz");
+  EXPECT_GT(bands[2].share, 0.99);
+  EXPECT_NEAR(bands[2].rms, 3.0 / std::sqrt(2.0), 0.03);
+  double share = 0.0;
+  for (const auto& b : bands) share += b.share;
+  EXPECT_NEAR(share, 1.0, 1e-12);
+}
+
+TEST(GapWhiteness, WhiteNoisePassesDelayedInputAndColouredNoiseFail) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const std::size_t n = 20000;
+  std::vector<double> u(n);
+  std::vector<double> e(n);
+  for (auto& x : u) x = normal(rng);
+  for (auto& x : e) x = normal(rng);
+  const Whiteness white = whiteness(e, u, 30, 1);
+  EXPECT_NEAR(white.bound, 2.58 / std::sqrt(20000.0), 1e-12);
+  EXPECT_TRUE(white.white());
+  EXPECT_TRUE(white.independent());
+
+  // r_n = u_{n-7} + noise: the input reaches the residual 7 samples later.
+  std::vector<double> delayed(n, 0.0);
+  for (std::size_t k = 7; k < n; ++k) delayed[k] = u[k - 7] + 0.5 * e[k];
+  const Whiteness cross = whiteness(delayed, u, 30, 1);
+  EXPECT_FALSE(cross.independent());
+  EXPECT_EQ(cross.max_cross_lag, 7U);
+  EXPECT_NEAR(cross.max_cross, 1.0 / std::sqrt(1.25), 0.02);
+
+  // A moving average over 10 samples: rho(1) = 0.9, and nothing beyond lag 9 but the
+  // (Bartlett-inflated) sampling scatter.
+  std::vector<double> ma(n, 0.0);
+  for (std::size_t k = 9; k < n; ++k) {
+    for (std::size_t j = 0; j < 10; ++j) ma[k] += e[k - j];
+  }
+  const Whiteness coloured = whiteness(ma, u, 30, 1);
+  EXPECT_FALSE(coloured.white());
+  EXPECT_EQ(coloured.max_auto_lag, 1U);
+  EXPECT_NEAR(coloured.max_auto, 0.9, 0.02);
+  EXPECT_LT(whiteness(ma, u, 30, 10).max_auto, 0.06);
+}
+
+TEST(GapWhiteness, ChiSquareQuantileMatchesTables) {
+  EXPECT_NEAR(chi_square_quantile(10.0, 2.326), 23.209, 0.05);
+  EXPECT_NEAR(chi_square_quantile(50.0, 2.326), 76.154, 0.1);
+}
+
+TEST(GapNoiseFloor, EncoderChainIsResolutionOverRootSixWhileMoving) {
+  const double q = 60.0 / (0.005 * 2048.0);
+  // A shaft accelerating slowly through a quantised window estimator: the data estimate
+  // of the noise must agree with the chain's q / sqrt(6).
+  const std::size_t rows = 20000;
+  std::vector<double> t(rows);
+  std::vector<double> theta(rows);
+  for (std::size_t n = 0; n < rows; ++n) {
+    t[n] = 0.001 * static_cast<double>(n);
+    theta[n] = 60.0 * t[n] + t[n] * t[n];  // w = 60 + 2 t rad/s
+  }
+  const std::vector<double> rpm = sim::estimate_rpm(t, theta, sim::CountEstimator{});
+  const std::vector<bool> steady(rows, false);
+  const NoiseFloor nf = rpm_noise_floor(rpm, steady, 0.005, 2048.0);
+  EXPECT_NEAR(nf.chain, q / std::sqrt(6.0), 1e-3);  // one stuck sample at t = 0 of 20000
+  EXPECT_NEAR(nf.data, nf.chain, 0.15 * nf.chain);
+
+  const std::vector<double> stuck(rows, 0.0);
+  EXPECT_EQ(rpm_noise_floor(stuck, steady, 0.005, 2048.0).chain, 0.0);
+
+  const NoiseFloor i = current_noise_floor(stuck, steady, 5.0 / 1024.0, 0.003);
+  EXPECT_DOUBLE_EQ(i.chain, std::sqrt(0.003 * 0.003 + std::pow(5.0 / 1024.0, 2) / 12.0));
+  EXPECT_EQ(i.data, 0.0);
+}
+
+// ---------------------------------------------------------------------------------------
+// Generated runs: inputs, then sim::run (mcg-sim) with the effect, the encoder and the
+// current measurement chain of the rig.
+
+struct Program {
+  std::vector<double> v;
+  std::vector<int> clutch;
+  std::vector<double> r_load;
+};
+
+std::string input_csv(const Program& p) {
+  std::string s = "# sample_period: 0.001\nt,v,clutch,r_load\n";
+  for (std::size_t n = 0; n < p.v.size(); ++n) {
+    s += fmt::format("{:.3f},{:.4f},{},{}\n", 0.001 * static_cast<double>(n), p.v[n], p.clutch[n],
+                     std::isinf(p.r_load[n]) ? std::string("inf") : fmt::format("{}", p.r_load[n]));
+  }
+  return s;
+}
+
+table::Table measure(const Program& p, const std::vector<std::string>& effects, std::uint64_t seed,
+                     const std::string& name) {
+  sim::RunOptions o;
+  o.effects = effects;
+  o.encoder = true;
+  o.noise_i_A = 0.003;
+  o.adc = true;
+  o.seed = seed;
+  std::istringstream in(input_csv(p));
+  std::ostringstream out;
+  sim::run(o, in, name, out);
+  std::istringstream back(out.str());
+  return table::read(back, name);
+}
+
+/// Steps between random levels (held 0.3-0.6 s), clutch and relay switched on a schedule.
+Program steps(double seconds, double lo_V, double hi_V, std::uint64_t seed, int clutch, bool toggle_load) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> level(lo_V, hi_V);
+  std::uniform_int_distribution<int> hold(300, 600);
+  Program p;
+  const auto rows = static_cast<std::size_t>(seconds * 1000.0);
+  double v = 0.0;
+  int left = 100;
+  bool closed = false;
+  for (std::size_t n = 0; n < rows; ++n) {
+    if (--left <= 0) {
+      v = level(rng);
+      left = hold(rng);
+      if (toggle_load) closed = !closed;
+    }
+    p.v.push_back(v);
+    p.clutch.push_back(clutch);
+    p.r_load.push_back(closed ? 5.6 : k_inf);
+  }
+  return p;
+}
+
+/// A PRBS around a bias: +-amp, bit time 4-20 ms drawn at random.
+Program prbs(double seconds, double bias_V, double amp_V, std::uint64_t seed, int clutch, double r_load) {
+  std::mt19937_64 rng(seed);
+  std::bernoulli_distribution coin(0.5);
+  std::uniform_int_distribution<int> bit(4, 20);
+  Program p;
+  const auto rows = static_cast<std::size_t>(seconds * 1000.0);
+  double v = bias_V;
+  int left = 0;
+  for (std::size_t n = 0; n < rows; ++n) {
+    if (--left <= 0) {
+      v = bias_V + (coin(rng) ? amp_V : -amp_V);
+      left = bit(rng);
+    }
+    p.v.push_back(n < 200 ? bias_V : v);
+    p.clutch.push_back(clutch);
+    p.r_load.push_back(r_load);
+  }
+  return p;
+}
+
+TEST(GapData, SingleFileIsSplitAtTheEventNearestSixtyPercent) {
+  Program p = steps(3.0, 2.0, 8.0, 1, 2, false);
+  for (std::size_t n = 0; n < p.v.size(); ++n) p.v[n] = n < 1900 ? 3.0 : 6.0;  // one event at 1.900 s
+  const table::Table t = measure(p, {}, 1, "one.csv");
+  const GapData data = prepare_gap_data({t}, {}, model::builtin_rig(), 0.6);
+  ASSERT_EQ(data.train.size(), 1U);
+  ASSERT_EQ(data.validate.size(), 1U);
+  EXPECT_EQ(data.train[0].inputs.t_s.size(), 1900U);
+  EXPECT_EQ(data.validate[0].first_scored, 1900U);
+  EXPECT_EQ(data.validate[0].run.inputs.t_s.size(), 3000U);
+  EXPECT_NE(data.split_note.find("t = 1.900 s (63 % of its duration, at an input event)"), std::string::npos)
+      << data.split_note;
+}
+
+TEST(GapData, CurrentAtTheAdcRailsIsNotMeasured) {
+  Program p = steps(1.0, 12.0, 14.0, 2, 0, false);  // 12 V into a stalled motor: about 3 A
+  const table::Table t = measure(p, {}, 2, "rails.csv");
+  ASSERT_TRUE(t.meta.get("i_measurement").has_value());
+  const GapData data = prepare_gap_data({t}, {t}, model::builtin_rig(), 0.6);
+  const auto& run = data.validate[0].run;
+  ASSERT_EQ(run.outputs, (std::vector<std::string>{"rpm", "i"}));
+  EXPECT_NEAR(data.validate[0].i_step_A, 5.0 / 1024.0, 1e-12);
+  EXPECT_DOUBLE_EQ(data.validate[0].i_sigma_A, 0.003);
+  const auto& raw = t.col("i");
+  std::size_t dropped = 0;
+  for (std::size_t n = 0; n < raw.size(); ++n) {
+    const bool rail = raw[n] >= 2.49 || raw[n] <= -2.49;
+    EXPECT_EQ(std::isnan(run.measured[1][n]), rail) << "row " << n;
+    dropped += rail ? 1 : 0;
+  }
+  EXPECT_GT(dropped, 0U);
+}
+
+TEST(GapData, ErrorsNameTheProblem) {
+  Program p = steps(1.0, 2.0, 8.0, 3, 2, false);
+  const table::Table t = measure(p, {}, 3, "a.csv");
+  try {
+    prepare_gap_data({}, {t}, model::builtin_rig(), 0.6);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "--train: no training file");
+  }
+  try {
+    prepare_gap_data({t, t}, {}, model::builtin_rig(), 0.6);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "--validate: no validation file (only a single --train file is split)");
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Withheld effects: the diagnosis sees only the data and the nominal model.
+
+struct Case {
+  std::vector<std::string> effects_train;
+  std::vector<std::string> effects_validate;
+  Program train;
+  Program validate;
+};
+
+GapReport diagnose_case(const Case& c) {
+  const table::Table train = measure(c.train, c.effects_train, 11, "train.csv");
+  const table::Table validate = measure(c.validate, c.effects_validate, 12, "validate.csv");
+  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+  return diagnose_gap(model::Model{}, data, GapSettings{});
+}
+
+/// The share of the gap above the noise floor that the diagnosis removes, in %.
+double gap_shrink_pct(const GapReport& r) {
+  const double floor = r.floors.front().floor;
+  const auto& none = *std::find_if(r.candidates.begin(), r.candidates.end(), [](const auto& c) { return c.name == "none"; });
+  auto above = [&](double rms) { return std::sqrt(std::max(0.0, rms * rms - floor * floor)); };
+  return 100.0 * (1.0 - above(r.candidates.front().rms[0]) / above(none.rms[0]));
+}
+
+TEST(SlowGap, NoEffectIsDiagnosedNone) {
+  const Case c{{}, {}, steps(3.0, 2.0, 12.0, 21, 2, true), prbs(3.0, 7.0, 2.0, 22, 0, k_inf)};
+  const GapReport r = diagnose_case(c);
+  EXPECT_EQ(r.diagnosis, "none") << r.reason;
+  EXPECT_FALSE(r.candidates.front().significant);
+}
+
+TEST(SlowGap, DeadTimeIsNamedAndShrinksTheGap) {
+  const Case c{{"dead_time:tau_d_s=0.003"}, {"dead_time:tau_d_s=0.003"}, prbs(3.0, 8.0, 2.5, 31, 0, k_inf),
+               steps(3.0, 3.0, 12.0, 32, 2, true)};
+  const GapReport r = diagnose_case(c);
+  EXPECT_EQ(r.diagnosis, "dead_time") << r.reason;
+  EXPECT_GE(gap_shrink_pct(r), 60.0);
+}
+
+}  // namespace
+}  // namespace mcg::fit
