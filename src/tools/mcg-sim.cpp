@@ -1,6 +1,7 @@
 // mcg-sim: the motor-clutch-generator rig simulated on a table of inputs.
 #include <iostream>
 
+#include "board/board.hpp"
 #include "common/tool.hpp"
 #include "sim/run.hpp"
 
@@ -37,5 +38,19 @@ int main(int argc, char** argv) {
   app.add_option("--max-step", opt.max_step_s, "largest integration step, s")
       ->check(CLI::Range(1e-7, 1e-3))
       ->capture_default_str();
-  return mcg::tool_main(app, argc, argv, [&] { mcg::sim::run(opt, std::cin, "<stdin>", std::cout); });
+  mcg::board::ServeOptions board;
+  app.add_option("--board", board.link_path,
+                 "instead: serve the emulated board (firmware core + this model) on a pty linked at PATH");
+  app.add_option("--speed", board.speed, "with --board: simulated seconds per wall-clock second")
+      ->check(CLI::Range(0.01, 100.0))
+      ->capture_default_str();
+  return mcg::tool_main(app, argc, argv, [&] {
+    if (!board.link_path.empty()) {
+      board.configs = opt.configs;
+      board.effects = opt.effects;
+      mcg::board::serve(board);
+      return;
+    }
+    mcg::sim::run(opt, std::cin, "<stdin>", std::cout);
+  });
 }

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "model/model.hpp"  // Model, Plant, State
 
@@ -53,10 +54,15 @@ class EmulatedBoard {
   std::uint16_t m_pulses = 0; ///< pulses counted during the last tick
 };
 
+/// The model of mcg-sim's --config files and --effect texts (later ones win).
+model::Model load_model(const std::vector<std::string>& configs, const std::vector<std::string>& effects);
+
 /// Where and how fast mcg-sim --board serves the emulated board.
 struct ServeOptions {
   std::string link_path;           ///< the pseudo-terminal's link, e.g. ./ttyMCG
-  BoardOptions board;
+  std::vector<std::string> configs;   ///< INI files of the model (mcg-sim --config)
+  std::vector<std::string> effects;   ///< "NAME:key=value,..." (mcg-sim --effect)
+  BoardOptions board;              ///< board.model is replaced by the model of configs and effects
   double speed = 1.0;              ///< simulated seconds per wall-clock second (> 0)
   double seconds = 0.0;            ///< stop after this much simulated time; 0 = until a signal
 };

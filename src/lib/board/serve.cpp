@@ -14,6 +14,7 @@
 
 #include "board/board.hpp"
 #include "common/error.hpp"   // mcg::fail
+#include "config/ini.hpp"     // Ini
 #include "common/tool.hpp"    // stderr_is_terminal
 #include "link/interrupt.hpp" // InterruptGuard
 #include "link/pty.hpp"       // PtyLink
@@ -28,9 +29,26 @@ constexpr double k_max_lag_s = 0.25;
 
 }  // namespace
 
+model::Model load_model(const std::vector<std::string>& configs, const std::vector<std::string>& effects) {
+  model::Model model = model::model_from_ini(config::Ini::load_all(configs));
+  for (const auto& text : effects) {
+    model::Effect effect = model::parse_effect(text, "--effect");
+    const auto it = std::find_if(model.effects.begin(), model.effects.end(),
+                                 [&](const model::Effect& e) { return e.name == effect.name; });
+    if (it != model.effects.end()) {
+      *it = effect;
+    } else {
+      model.effects.push_back(effect);
+    }
+  }
+  return model;
+}
+
 void serve(const ServeOptions& options) {
+  BoardOptions board_options = options.board;
+  board_options.model = load_model(options.configs, options.effects);
   link::PtyLink pty(options.link_path);
-  EmulatedBoard board(options.board);
+  EmulatedBoard board(board_options);
   const link::InterruptGuard guard;
   if (stderr_is_terminal()) {
     std::fputs(fmt::format("mcg-sim: board at {} ({}); Ctrl-C ends\n", pty.link_path(), pty.slave_path()).c_str(),

@@ -84,8 +84,7 @@ void print_board_section(Connection& c, std::span<const RegisterInfo* const> reg
   for (const RegisterInfo* reg : regs) {
     const int frac = reg->unit == Unit::Gain ? c.frac_bits() : 0;
     const std::int16_t raw = c.session->read(*reg);
-    const std::string_view unit = unit_suffix(reg->unit);
-    const std::string comment = unit.empty() ? std::string(reg->doc) : fmt::format("{}; {}", unit, reg->doc);
+    const std::string_view comment = reg->doc;
     if (reg->writable) {
       out << fmt::format("{} = {}  ; {}\n", reg->name, format_value(*reg, raw, frac), comment);
     } else {
