@@ -55,6 +55,7 @@ inline table::Table measure(const model::Model& model, const model::Inputs& inpu
   t.source = "sim.csv";
   t.meta.set("sample_period", "0.001");
   t.meta.set("rpm_estimator", "counts over 0.005 s window, 2048 counts/rev");
+  t.meta.set("i_measurement", "1 ohm shunt, 10-bit ADC (range -2.5..2.495 A, saturates), noise sigma 0.003 A");
   const std::size_t n = inputs.t_s.size();
   std::vector<double> rpm(n), current(n);
   const auto lag = static_cast<std::size_t>(std::lround(k_window_s / 1e-3));

@@ -42,7 +42,9 @@ struct Run {
 };
 
 /// Builds a run from a table with columns t, v (or duty, then v = duty * supply_V), clutch,
-/// r_load and the measured `outputs` (empty: every measurable column present). Throws mcg::Error naming the file (and line) for a missing column, a bad
+/// r_load and the measured `outputs` (empty: every measurable column present). When the
+/// `# i_measurement:` metadata names the ADC range ("range -2.5..2.495 A"), current samples
+/// at either end of it are saturated and count as not measured. Throws mcg::Error naming the file (and line) for a missing column, a bad
 /// input value, or fewer than `min_rows` rows ("too short").
 Run make_run(const table::Table& table, const std::vector<std::string>& outputs, const model::Params& params,
              std::size_t min_rows = 50);

@@ -1,0 +1,306 @@
+// mcg-fit friction, tf and model: reading the files, calling the fits, writing INI or CSV.
+#include "fit/run.hpp"
+
+#include "common/error.hpp"
+#include "common/tool.hpp"
+#include "config/ini.hpp"
+#include "fit/greybox.hpp"
+#include "mcg/version.hpp"
+#include "model/model.hpp"
+#include "table/table.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <iostream>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+namespace mcg::fit {
+
+const std::vector<std::string> k_default_free{"motor.J_kg_m2", "motor.R_ohm", "motor.Kt_Nm_A", "motor.Ke_V_s_rad",
+                                              "motor.Tc_Nm"};
+
+namespace {
+
+/// Six significant digits: what the data supports, and readable in an INI file.
+std::string num6(double x) { return fmt::format("{:.6g}", x); }
+
+std::string se_comment(double se, std::string_view unit) {
+  return std::isfinite(se) ? fmt::format("+- {} {}", num6(se), unit) : std::string("not determined by the data");
+}
+
+std::vector<table::Table> read_all(const std::vector<std::string>& files) {
+  std::vector<table::Table> tables;
+  tables.reserve(files.size());
+  for (const auto& f : files) tables.push_back(table::read_path(f));
+  return tables;
+}
+
+void write_friction(config::Ini& ini, const std::string& section, const FrictionTerm& term, std::string_view origin) {
+  ini.set(section, "Ts_Nm", num6(term.value.Ts_Nm), se_comment(term.se.Ts_Nm, "N m, " + std::string(origin)));
+  ini.set(section, "Tc_Nm", num6(term.value.Tc_Nm), se_comment(term.se.Tc_Nm, "N m"));
+  static const char* const keys[3] = {"visc1_Nm_s_rad", "visc2_Nm_s2_rad2", "visc3_Nm_s3_rad3"};
+  static const char* const units[3] = {"N m s/rad", "N m s^2/rad^2", "N m s^3/rad^3"};
+  for (std::size_t c = 0; c < 3; ++c) {
+    ini.set(section, keys[c], num6(term.value.viscous[c]), se_comment(term.se.viscous[c], units[c]));
+  }
+}
+
+/// "motor.J_kg_m2" -> the INI section and key model_to_ini() wrote it under.
+std::optional<std::pair<std::string, std::string>> ini_place(const config::Ini& ini, const std::string& name) {
+  const auto dot = name.find('.');
+  if (dot == std::string::npos) return std::nullopt;
+  const std::string section = name.substr(0, dot);
+  const std::string key = name.substr(dot + 1);
+  if (ini.has(section, key)) return std::pair{section, key};
+  if (ini.has("effect." + section, key)) return std::pair{"effect." + section, key};
+  return std::nullopt;
+}
+
+std::string unit_of(const std::vector<model::ParamInfo>& infos, const std::string& name) {
+  for (const auto& p : infos) {
+    if (p.name == name) return p.unit;
+  }
+  return {};
+}
+
+unsigned worker_count(unsigned requested, std::size_t jobs) {
+  unsigned n = requested != 0 ? requested : std::max(1U, std::thread::hardware_concurrency());
+  return static_cast<unsigned>(std::min<std::size_t>(n, std::max<std::size_t>(jobs, 1)));
+}
+
+void write_model_ini(const FitResult& r, std::ostream& out) {
+  config::Ini ini;
+  model::model_to_ini(r.model, ini);
+  const auto infos = model::parameters(r.model);
+  const auto& n = r.nls;
+  for (std::size_t i = 0; i < n.names.size(); ++i) {
+    const auto place = ini_place(ini, n.names[i]);
+    const auto k = static_cast<Eigen::Index>(i);
+    if (place) ini.set(place->first, place->second, num6(n.values[k]), "fitted, " + se_comment(n.std_errors[k], unit_of(infos, n.names[i])));
+  }
+  const std::string sec = "fit.model";
+  ini.set(sec, "source", fmt::format("mcg-fit {}", k_version));
+  ini.set(sec, "converged", n.converged ? "yes" : "no");
+  ini.set(sec, "reason", n.reason);
+  ini.set(sec, "iterations", static_cast<double>(n.iterations));
+  ini.set(sec, "evaluations", static_cast<double>(n.evaluations));
+  std::string free;
+  for (const auto& name : n.names) free += (free.empty() ? "" : " ") + name;
+  ini.set(sec, "free", free);
+  for (std::size_t i = 0; i < n.names.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    ini.set(sec, n.names[i], num6(n.values[k]));
+    ini.set(sec, n.names[i] + ".se", num6(n.std_errors[k]));
+  }
+  for (std::size_t i = 0; i < n.names.size(); ++i) {
+    std::string row;
+    for (std::size_t j = 0; j < n.names.size(); ++j) {
+      row += (j == 0 ? "" : " ") + fmt::format("{:.3f}", n.correlation(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)));
+    }
+    ini.set(sec, "correlation." + n.names[i], row, i == 0 ? "rows of the correlation matrix, columns in the order of free" : "");
+  }
+  for (std::size_t f = 0; f < r.runs.size(); ++f) {
+    const auto& run = r.runs[f];
+    ini.set(sec, fmt::format("file{}", f + 1), run.source);
+    for (std::size_t k = 0; k < run.outputs.size(); ++k) {
+      ini.set(sec, fmt::format("file{}.fit_{}", f + 1, run.outputs[k]), fmt::format("{:.2f}", run.fit_percent[k]),
+              "% (NRMSE, as MATLAB compare)");
+      ini.set(sec, fmt::format("file{}.rms_{}", f + 1, run.outputs[k]), num6(run.rms[k]));
+    }
+  }
+  ini.write(out);
+}
+
+}  // namespace
+
+void run_friction(const FrictionRunOptions& options, std::ostream& out) {
+  if (options.files.empty()) fail("friction: no input files");
+  const model::Params base = model::from_ini(config::Ini::load_all(options.config));
+  const FrictionResult result = fit_friction(read_all(options.files), base, options.fit);
+  config::Ini ini;
+  if (result.motor) {
+    write_friction(ini, "motor", *result.motor, "state 0");
+    write_friction(ini, "generator", *result.motor, "= motor (equivalent machines)");
+  }
+  if (result.clutch_disengaged) write_friction(ini, "clutch_disengaged", *result.clutch_disengaged, "state 1 - motor");
+  if (result.clutch_engaged) {
+    write_friction(ini, "clutch_engaged", *result.clutch_engaged, "state 2 - motor - generator");
+  }
+  const std::string sec = "fit.friction";
+  ini.set(sec, "source", fmt::format("mcg-fit {}", k_version));
+  ini.set(sec, "order", static_cast<double>(options.fit.order));
+  for (const auto& st : result.states) {
+    const std::string p = fmt::format("state{}.", st.clutch);
+    ini.set(sec, p + "windows", static_cast<double>(st.windows), "quasi-steady windows while moving");
+    ini.set(sec, p + "breakaways", static_cast<double>(st.breakaways), "starts from rest");
+    ini.set(sec, p + "speed_range_rad_s", fmt::format("{} {}", num6(st.omega_min_rad_s), num6(st.omega_max_rad_s)));
+    ini.set(sec, p + "torque_from", st.from_current ? "current" : "voltage balance");
+    ini.set(sec, p + "total_Ts_Nm", num6(st.total.value.Ts_Nm), se_comment(st.total.se.Ts_Nm, "N m"));
+    ini.set(sec, p + "total_Tc_Nm", num6(st.total.value.Tc_Nm), se_comment(st.total.se.Tc_Nm, "N m"));
+  }
+  ini.write(out);
+}
+
+void run_tf(const TfRunOptions& options, std::ostream& out) {
+  const FrequencyResponse fr = read_frequency_response(table::read_path(options.file));
+  const TfFit fit = fit_tf(fr, options.fit);
+  config::Ini ini;
+  ini.set("plant", "tf", format_factored(fit), "omega/v, rad/s per V");
+  std::string num;
+  std::string den;
+  for (double c : fit.tf.num) num += (num.empty() ? "" : " ") + config::format_number(c);
+  for (double c : fit.tf.den) den += (den.empty() ? "" : " ") + config::format_number(c);
+  ini.set("plant", "num", num, "descending powers of s");
+  ini.set("plant", "den", den, "descending powers of s");
+  ini.set("plant", "domain", "s");
+  const std::string sec = "fit.tf";
+  ini.set(sec, "source", fmt::format("mcg-fit {}", k_version));
+  ini.set(sec, "poles", static_cast<double>(options.fit.poles));
+  ini.set(sec, "zeros", static_cast<double>(options.fit.zeros));
+  ini.set(sec, "gain", num6(fit.gain), se_comment(fit.gain_se, ""));
+  const auto corners = [&](const std::vector<Factor>& list, const char* what) {
+    for (std::size_t k = 0; k < list.size(); ++k) {
+      const Factor& f = list[k];
+      const std::string key = fmt::format("{}{}", what, k + 1);
+      ini.set(sec, key + "_rad_s", num6(f.corner_rad_s),
+              fmt::format("{}{}", se_comment(f.corner_se, "rad/s"),
+                          f.complex_pair ? ", complex pair" : (f.unstable ? ", right half-plane" : "")));
+      if (f.complex_pair) ini.set(sec, key + "_zeta", num6(f.zeta), se_comment(f.zeta_se, ""));
+    }
+  };
+  corners(fit.poles, "pole");
+  corners(fit.zeros, "zero");
+  ini.set(sec, "points", static_cast<double>(fit.points));
+  ini.set(sec, "rms_mag_db", num6(fit.rms_mag_db));
+  ini.set(sec, "rms_phase_deg", num6(fit.rms_phase_deg));
+  ini.set(sec, "iterations", static_cast<double>(fit.nls.iterations));
+  ini.write(out);
+}
+
+int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& err) {
+  const model::Model base = model::model_from_ini(config::Ini::load_all(options.config));
+  if (options.list) {
+    for (const auto& p : model::parameters(base)) {
+      out << fmt::format("{} = {} ; {}, {}..{}\n", p.name, config::format_number(p.value), p.unit,
+                         config::format_number(p.lower), config::format_number(p.upper));
+    }
+    return 0;
+  }
+  if (options.files.empty()) fail("model: no input files");
+  FitProblem problem;
+  problem.model = base;
+  problem.free = options.free.empty() ? k_default_free : options.free;
+  problem.sim.max_step_s = options.max_step_s;
+  problem.nls.max_evaluations = options.max_evaluations;
+
+  if (!options.batch) {
+    for (const auto& f : options.files) problem.runs.push_back(make_run(table::read_path(f), options.outputs, base.params));
+    problem.nls.threads = worker_count(options.threads, problem.free.size());
+    const FitResult result = fit_model(problem);
+    write_model_ini(result, out);
+    if (!result.nls.converged) {
+      err << fmt::format("mcg-fit: error: the fit did not converge: {} (after {} iterations)\n", result.nls.reason,
+                         result.nls.iterations);
+      return 3;
+    }
+    return 0;
+  }
+
+  // Batch: one independent fit per file, in parallel, rows in input order.
+  struct Outcome {
+    std::optional<FitResult> result;
+    std::string error;
+  };
+  const std::size_t count = options.files.size();
+  std::vector<Outcome> outcomes(count);
+  std::atomic<std::size_t> next{0};
+  std::atomic<std::size_t> done{0};
+  std::mutex progress_mutex;
+  const bool progress = stderr_is_terminal() && &err == &std::cerr;
+  const auto work = [&] {
+    for (std::size_t k = next++; k < count; k = next++) {
+      try {
+        FitProblem p = problem;
+        p.runs.push_back(make_run(table::read_path(options.files[k]), options.outputs, base.params));
+        outcomes[k].result = fit_model(p);
+      } catch (const Error& e) {
+        outcomes[k].error = e.what();
+      }
+      const std::size_t finished = ++done;
+      if (progress) {
+        const std::lock_guard<std::mutex> lock(progress_mutex);
+        err << fmt::format("\rmcg-fit: model: {}/{} files", finished, count) << std::flush;
+      }
+    }
+  };
+  const unsigned workers = worker_count(options.threads, count);
+  std::vector<std::thread> pool;
+  for (unsigned w = 1; w < workers; ++w) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (progress) err << '\n';
+
+  std::vector<std::string> outputs = options.outputs;
+  if (outputs.empty()) {
+    for (const auto& o : outcomes) {
+      if (!o.result) continue;
+      for (const auto& name : o.result->runs[0].outputs) {
+        if (std::find(outputs.begin(), outputs.end(), name) == outputs.end()) outputs.push_back(name);
+      }
+    }
+  }
+  table::Writer w(out);
+  w.meta("source", fmt::format("mcg-fit {} model --batch", k_version));
+  for (std::size_t k = 0; k < count; ++k) w.meta(fmt::format("file.{}", k + 1), options.files[k]);
+  std::vector<std::string> header{"file"};
+  for (const auto& name : problem.free) {
+    header.push_back(name);
+    header.push_back(name + ".se");
+  }
+  for (const auto& name : outputs) header.push_back("fit_" + name);
+  header.push_back("converged");
+  header.push_back("iterations");
+  w.header(header);
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  int status = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    std::vector<double> row{static_cast<double>(k + 1)};
+    const auto& o = outcomes[k];
+    for (std::size_t i = 0; i < problem.free.size(); ++i) {
+      const auto idx = static_cast<Eigen::Index>(i);
+      row.push_back(o.result ? o.result->nls.values[idx] : nan);
+      row.push_back(o.result ? o.result->nls.std_errors[idx] : nan);
+    }
+    for (const auto& name : outputs) {
+      double fit = nan;
+      if (o.result) {
+        const auto& run = o.result->runs[0];
+        const auto it = std::find(run.outputs.begin(), run.outputs.end(), name);
+        if (it != run.outputs.end()) fit = run.fit_percent[static_cast<std::size_t>(it - run.outputs.begin())];
+      }
+      row.push_back(fit);
+    }
+    row.push_back(o.result && o.result->nls.converged ? 1.0 : 0.0);
+    row.push_back(o.result ? static_cast<double>(o.result->nls.iterations) : nan);
+    w.row(row);
+  }
+  w.finish();
+  for (std::size_t k = 0; k < count; ++k) {
+    const auto& o = outcomes[k];
+    if (!o.result) {
+      err << fmt::format("mcg-fit: error: {}\n", o.error);
+      status = 1;
+    } else if (!o.result->nls.converged) {
+      err << fmt::format("mcg-fit: error: {}: the fit did not converge: {}\n", options.files[k], o.result->nls.reason);
+      if (status == 0) status = 3;
+    }
+  }
+  return status;
+}
+
+}  // namespace mcg::fit

@@ -1,0 +1,59 @@
+// The mcg-fit subcommands friction, tf and model: files in, INI or CSV out.
+#pragma once
+
+#include "fit/friction.hpp"
+#include "fit/tf.hpp"
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace mcg::fit {
+
+/// Options of `mcg-fit friction`.
+struct FrictionRunOptions {
+  std::vector<std::string> config;  ///< --config files: R, Ke, Kt, J, supply and the base frictions
+  std::vector<std::string> files;   ///< runs ("-" = stdin)
+  FrictionOptions fit;
+};
+
+/// Writes the stacked frictions as INI ([motor], [generator], [clutch_disengaged],
+/// [clutch_engaged]; each value with its standard error as a comment) and the evidence per
+/// clutch state in [fit.friction].
+void run_friction(const FrictionRunOptions& options, std::ostream& out);
+
+/// Options of `mcg-fit tf`.
+struct TfRunOptions {
+  std::string file = "-";
+  TfFitOptions fit;
+};
+
+/// Writes [plant] (tf in the syntax mcg-design reads, num/den in descending powers of s,
+/// domain = s) and [fit.tf] (gain, corners and dampings with standard errors, RMS errors).
+void run_tf(const TfRunOptions& options, std::ostream& out);
+
+/// Options of `mcg-fit model`.
+struct ModelRunOptions {
+  std::vector<std::string> config;
+  std::vector<std::string> files;
+  std::vector<std::string> free;     ///< empty: k_default_free
+  std::vector<std::string> outputs;  ///< empty: every measured column present
+  bool batch = false;                ///< one fit per file, one CSV row each
+  bool list = false;                 ///< print the parameter names and stop
+  unsigned threads = 0;              ///< 0: every core
+  double max_step_s = 2.5e-4;        ///< integrator step bound during the fit
+  int max_evaluations = 4000;
+};
+
+/// The parameters fitted when --free is not given.
+extern const std::vector<std::string> k_default_free;
+
+/// Joint fit: the fitted model as INI (every parameter, the free ones with their standard
+/// errors as comments) plus [fit.model] (convergence, correlations, fit % per file). Batch:
+/// a CSV with one row per file (file index, each free parameter and its standard error,
+/// fit % per output, converged, iterations), files fitted in parallel, rows in input order,
+/// progress on `err` when it is a terminal. Returns the exit status: 0, or 3 when a fit did
+/// not converge (the result is still written, marked converged = 0/no, and `err` says why).
+int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& err);
+
+}  // namespace mcg::fit

@@ -1,0 +1,71 @@
+// mcg-fit: parameters from measured runs: friction, transfer function, grey-box model.
+#include "common/tool.hpp"
+#include "fit/run.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+int main(int argc, char** argv) {
+  CLI::App app{"Identify the rig from measured runs: friction, a transfer function, the nonlinear model.", "mcg-fit"};
+  app.require_subcommand(1);
+
+  mcg::fit::FrictionRunOptions friction;
+  CLI::App* fr = app.add_subcommand("friction", "static, Coulomb and viscous friction per clutch state, stacked");
+  fr->add_option("--config", friction.config, "INI parameter set (R, Kt, Ke, J; later files win)");
+  fr->add_option("--order", friction.fit.order, "order of the viscous polynomial")
+      ->check(CLI::Range(1, 3))
+      ->capture_default_str();
+  fr->add_option("--settle", friction.fit.settle_s, "time skipped after a jump of v, s")
+      ->check(CLI::Range(0.0, 100.0))
+      ->capture_default_str();
+  fr->add_option("--jump", friction.fit.jump_V, "change of v between rows that counts as a jump, V")
+      ->check(CLI::Range(0.0, 100.0))
+      ->capture_default_str();
+  fr->add_option("--window", friction.fit.window_s, "averaging window, s")
+      ->check(CLI::Range(0.002, 100.0))
+      ->capture_default_str();
+  fr->add_flag("!--no-current", friction.fit.use_current, "ignore a measured current (use the voltage balance)");
+  fr->add_option("files", friction.files, "runs with t, v, clutch, r_load, rpm [, i] ('-' = stdin)")->required();
+
+  mcg::fit::TfRunOptions tf;
+  CLI::App* tfc = app.add_subcommand("tf", "rational transfer function fitted to a frequency response");
+  tfc->add_option("--poles", tf.fit.poles, "number of poles")->check(CLI::Range(1, 12))->capture_default_str();
+  tfc->add_option("--zeros", tf.fit.zeros, "number of zeros")->check(CLI::Range(0, 12))->capture_default_str();
+  tfc->add_option("--f-min", tf.fit.f_min_hz, "ignore frequencies below, Hz")->check(CLI::Range(0.0, 1e9));
+  tfc->add_option("--f-max", tf.fit.f_max_hz, "ignore frequencies above, Hz")->check(CLI::Range(0.0, 1e9));
+  tfc->add_flag("!--no-coherence", tf.fit.use_coherence, "weight all frequencies alike");
+  tfc->add_option("file", tf.file, "f_hz,mag_db,phase_deg[,coherence] table ('-' = stdin)")->capture_default_str();
+
+  mcg::fit::ModelRunOptions model;
+  CLI::App* md = app.add_subcommand("model", "grey-box fit of the nonlinear model to time series");
+  md->add_option("--config", model.config, "INI parameter set: initial and fixed values (later files win)");
+  md->add_option("--free", model.free, "parameters to fit, comma separated (default: J, R, Kt, Ke, Tc of the motor)")
+      ->delimiter(',');
+  md->add_option("--outputs", model.outputs, "measured columns compared (default: all present of rpm,i,i_gen,v_gen)")
+      ->delimiter(',');
+  md->add_flag("--batch", model.batch, "one fit per file, one CSV row each, files in parallel");
+  md->add_flag("--list", model.list, "list the parameter names, values, units and bounds, then stop");
+  md->add_option("--threads", model.threads, "worker threads (0 = every core)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+  md->add_option("--max-step", model.max_step_s, "integrator step bound during the fit, s")
+      ->check(CLI::Range(1e-6, 1e-3))
+      ->capture_default_str();
+  md->add_option("--max-evaluations", model.max_evaluations, "simulation budget of the solver")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  md->add_option("files", model.files, "measured runs ('-' = stdin)");
+
+  return mcg::tool_main_status(app, argc, argv, [&]() -> int {
+    if (fr->parsed()) {
+      mcg::fit::run_friction(friction, std::cout);
+      return 0;
+    }
+    if (tfc->parsed()) {
+      mcg::fit::run_tf(tf, std::cout);
+      return 0;
+    }
+    return mcg::fit::run_model(model, std::cout, std::cerr);
+  });
+}
