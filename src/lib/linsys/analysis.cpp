@@ -136,6 +136,13 @@ void default_range(const Tf& g, double& lo, double& hi) {
   }
 }
 
+std::vector<double> scan_frequencies(const LoopEval& le) {
+  double lo = 0.0;
+  double hi = 0.0;
+  le.range(lo, hi);
+  return scan_grid(le, lo, hi);
+}
+
 Margins margins(const Tf& loop) {
   if (!loop.proper()) fail("margins need a proper loop transfer function, got {}", tf_text(loop));
   return margins(std::vector<Tf>{loop});

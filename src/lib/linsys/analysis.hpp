@@ -79,6 +79,10 @@ std::vector<GainRange> stable_gain_ranges(const Tf& loop);
 /// Boundary gains of stable_gain_ranges (sorted, positive).
 std::vector<double> boundary_gains(const Tf& loop);
 
+/// The dense frequency grid margins() scans for `le`: logarithmic over le.range(), fine near
+/// lightly damped roots, linear steps of π/(4·delay) with a delay.
+std::vector<double> scan_frequencies(const LoopEval& le);
+
 /// Log-spaced grid of n >= 2 frequencies from lo to hi (rad/s).
 std::vector<double> log_grid(double lo, double hi, int n);
 

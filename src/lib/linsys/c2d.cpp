@@ -66,8 +66,10 @@ Tf make_z(Poly num, Poly den, double dt_s, long delay_samples) {
   Tf h;
   h.domain = Domain::z;
   h.dt_s = dt_s;
-  h.num = trim(num);
-  h.den = mul(trim(den), monomial(static_cast<int>(delay_samples)));
+  const Poly d = trim(den);
+  const double lead = d.front();
+  h.num = scale(trim(num), 1.0 / lead);
+  h.den = mul(scale(d, 1.0 / lead), monomial(static_cast<int>(delay_samples)));
   return cancel_origin(h);
 }
 

@@ -136,9 +136,11 @@ std::string poly_text(const Poly& p0, const char* var) {
 
 std::string tf_text(const Tf& g) {
   const char* var = var_name(g.domain);
-  std::string out = "(" + poly_text(g.num, var) + ")";
+  const Poly num = trim(g.num);
   const Poly den = trim(g.den);
-  if (!(den.size() == 1 && den[0] == 1.0)) out += "/(" + poly_text(g.den, var) + ")";
+  const bool unit_den = den.size() == 1 && den[0] == 1.0;
+  std::string out = num.size() <= 1 && unit_den ? poly_text(num, var) : "(" + poly_text(num, var) + ")";
+  if (!unit_den) out += "/(" + poly_text(den, var) + ")";
   if (g.delay_s != 0.0) {
     if (g.discrete()) {
       out += fmt::format("*z^-{}", static_cast<long>(std::lround(g.delay_s / g.dt_s)));

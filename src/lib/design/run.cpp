@@ -1,0 +1,691 @@
+// mcg-design subcommands: resolve the plant, the chain and the controller; design or analyse;
+// write INI or CSV.
+#include "design/run.hpp"
+
+#include "common/error.hpp"
+#include "config/ini.hpp"
+#include "linsys/parse.hpp"
+#include "linsys/response.hpp"
+#include "mcg/version.hpp"
+#include "table/table.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <optional>
+#include <ostream>
+#include <sstream>
+
+namespace mcg::design {
+
+using config::format_number;
+using config::Ini;
+using linsys::Domain;
+using linsys::Poly;
+
+namespace {
+
+constexpr double k_pi = std::numbers::pi;
+/// The report's identified plant, ω_internal/V_in in rad/s per V (Figure 16-1).
+constexpr const char* k_report_plant = "16.557/((s/65+1)*(s/950+1))";
+
+/// The chain of the report's Figure 17-1 around the plant G (V → rad/s):
+/// duty counts --PWM--> logic volts --H-bridge--> motor volts --G--> rad/s --encoder--> counts/rad
+/// --software conversion (counts over one period T)--> counts per sample.
+struct Chain {
+  double pwm_full_counts = 922.0;  ///< duty counts at 100 % duty
+  double pwm_logic_v = 5.0;        ///< PWM output at 100 % duty, V (the report's .00542 = 5/922)
+  double hbridge_gain = 4.0;       ///< V/V: 20 V supply switched by 5 V logic
+  double counts_per_rev = 512.0;   ///< encoder counts per revolution (the report's 81.5 = 512/2π)
+  double dt_s = 0.001;             ///< sample period: counts are summed over one period
+
+  double pwm_v_per_count() const { return pwm_logic_v / pwm_full_counts; }
+  double counts_per_rad() const { return counts_per_rev / (2.0 * k_pi); }
+  /// K = (V_logic/N_full)·K_hb·(N_rev/2π)·T: counts per sample per (rad/s) per duty count.
+  double gain() const { return pwm_v_per_count() * hbridge_gain * counts_per_rad() * dt_s; }
+};
+
+struct Resolved {
+  Ini ini;
+  Tf raw;              ///< the plant as given
+  std::string raw_where;
+  bool chain = false;
+  Chain chain_values;
+  bool hold = false;   ///< the continuous plant is sampled through a ZOH (the PWM)
+  double dt_s = 0.0;   ///< controller sample period, 0 = continuous
+  Setup setup;
+};
+
+std::optional<double> flag(double v) { return std::isnan(v) ? std::nullopt : std::optional<double>(v); }
+
+std::vector<double> parse_list(const std::string& text, const std::string& where) {
+  std::vector<double> out;
+  std::string token;
+  std::string normalised = text;
+  std::replace(normalised.begin(), normalised.end(), ',', ' ');
+  std::istringstream words(normalised);
+  while (words >> token) {
+    double v = 0.0;
+    if (!table::parse_number(token, v) || !std::isfinite(v)) fail("{}: invalid number '{}'", where, token);
+    out.push_back(v);
+  }
+  if (out.empty()) fail("{}: empty coefficient list", where);
+  return out;
+}
+
+Tf tf_from_lists(const std::vector<double>& num, const std::vector<double>& den, const std::string& where) {
+  Tf g;
+  g.num = linsys::trim(num);
+  g.den = linsys::trim(den);
+  if (g.den.empty()) fail("{}: the denominator is zero", where);
+  return g;
+}
+
+std::string origin_of(const Ini& ini, const char* section, const char* key) {
+  const auto* e = ini.find(section, key);
+  std::string where = e && !e->origin.empty() ? e->origin + ": " : std::string();
+  return where + "[" + section + "] " + key;
+}
+
+double positive(const Ini& ini, const char* section, const char* key, std::optional<double> from_flag, const char* flag_name,
+                double fallback) {
+  if (from_flag) {
+    if (!(*from_flag > 0.0) || !std::isfinite(*from_flag)) fail("{}: must be positive, got {}", flag_name, *from_flag);
+    return *from_flag;
+  }
+  if (auto v = ini.number(section, key)) {
+    if (!(*v > 0.0) || !std::isfinite(*v)) ini.reject(section, key, "must be positive");
+    return *v;
+  }
+  return fallback;
+}
+
+Resolved resolve(const Options& o) {
+  Resolved r;
+  r.ini = Ini::load_all(o.configs);
+  const Ini& ini = r.ini;
+  bool builtin = false;
+  std::optional<Domain> domain;
+  if (!o.plant.empty()) {
+    if (!o.num.empty() || !o.den.empty()) fail("--plant: give either --plant or --num/--den, not both");
+    const linsys::ParsedTf p = linsys::parse_tf(o.plant, "--plant");
+    r.raw = p.tf;
+    domain = p.domain;
+    r.raw_where = "--plant";
+  } else if (!o.num.empty() || !o.den.empty()) {
+    if (o.num.empty()) fail("--den: needs --num");
+    if (o.den.empty()) fail("--num: needs --den");
+    r.raw = tf_from_lists(parse_list(o.num, "--num"), parse_list(o.den, "--den"), "--den");
+    r.raw_where = "--num/--den";
+    if (o.domain == "z") domain = Domain::z;
+  } else if (auto text = ini.get("plant", "tf")) {
+    r.raw_where = origin_of(ini, "plant", "tf");
+    const linsys::ParsedTf p = linsys::parse_tf(*text, r.raw_where);
+    r.raw = p.tf;
+    domain = p.domain;
+  } else if (ini.has("plant", "num") || ini.has("plant", "den")) {
+    const auto num = ini.numbers("plant", "num");
+    const auto den = ini.numbers("plant", "den");
+    if (!num) ini.reject("plant", "den", "needs num in [plant] too");
+    if (!den) ini.reject("plant", "num", "needs den in [plant] too");
+    r.raw_where = origin_of(ini, "plant", "den");
+    r.raw = tf_from_lists(*num, *den, r.raw_where);
+  } else {
+    r.raw = linsys::parse_tf(k_report_plant, "built-in plant").tf;
+    r.raw_where = "built-in plant";
+    builtin = true;
+  }
+  if (o.plant.empty() && o.num.empty()) {
+    if (auto d = ini.get("plant", "domain")) {
+      if (*d != "s" && *d != "z") ini.reject("plant", "domain", "must be s or z");
+      if (domain && *domain != (*d == "s" ? Domain::s : Domain::z)) ini.reject("plant", "domain", "disagrees with the expression");
+      domain = *d == "s" ? Domain::s : Domain::z;
+    }
+  }
+  r.raw.domain = domain.value_or(Domain::s);
+
+  // Delay: the flag adds to the text's exp(); the INI's delay_s applies to INI plants.
+  if (auto d = flag(o.delay_s)) {
+    if (!(*d >= 0.0) || !std::isfinite(*d)) fail("--delay: must be >= 0, got {}", *d);
+    r.raw.delay_s += *d;
+  } else if (o.plant.empty() && o.num.empty() && !builtin) {
+    if (auto ini_delay = ini.number("plant", "delay_s")) {
+      if (!(*ini_delay >= 0.0) || !std::isfinite(*ini_delay)) ini.reject("plant", "delay_s", "must be >= 0");
+      r.raw.delay_s += *ini_delay;
+    }
+  }
+
+  r.chain = o.loop || ini.has_section("loop") || builtin;
+  const std::optional<double> dt_flag = flag(o.dt_s);
+  if (dt_flag && (!(*dt_flag > 0.0) || !std::isfinite(*dt_flag))) fail("--dt: must be positive, got {}", *dt_flag);
+  std::optional<double> dt = dt_flag;
+  for (const char* section : {"plant", "controller", "loop"}) {
+    if (dt) break;
+    if (auto v = ini.number(section, "dt_s")) {
+      if (!(*v > 0.0) || !std::isfinite(*v)) ini.reject(section, "dt_s", "must be positive");
+      dt = *v;
+    }
+  }
+  if (!dt && r.chain) dt = Chain{}.dt_s;
+  if (r.chain) {
+    Chain& c = r.chain_values;
+    c.pwm_full_counts = positive(ini, "loop", "pwm_full_counts", flag(o.pwm_full_counts), "--pwm-full-counts", c.pwm_full_counts);
+    c.pwm_logic_v = positive(ini, "loop", "pwm_logic_v", flag(o.pwm_logic_v), "--pwm-logic-v", c.pwm_logic_v);
+    c.hbridge_gain = positive(ini, "loop", "hbridge_gain", flag(o.hbridge_gain), "--hbridge-gain", c.hbridge_gain);
+    c.counts_per_rev = positive(ini, "loop", "counts_per_rev", flag(o.counts_per_rev), "--counts-per-rev", c.counts_per_rev);
+    c.dt_s = *dt;
+  }
+  if (r.raw.discrete()) {
+    if (!dt) fail("{}: a z-domain plant needs its sample period (--dt, or dt_s in [plant])", r.raw_where);
+    r.raw.dt_s = *dt;
+    if (r.raw.delay_s > 0.0) r.raw = linsys::fold_delay(r.raw, r.raw_where);
+  }
+  if (!r.raw.proper()) {
+    fail("{}: improper transfer function (numerator degree {} > denominator degree {})", r.raw_where,
+         linsys::degree(r.raw.num), linsys::degree(r.raw.den));
+  }
+  const auto hold_text = ini.get("plant", "hold");
+  if (hold_text && *hold_text != "zoh" && *hold_text != "none") ini.reject("plant", "hold", "must be zoh or none");
+  r.hold = !r.raw.discrete() && (o.zoh || r.chain || (hold_text && *hold_text == "zoh"));
+  if (r.hold && !dt) fail("--zoh: needs the sample period --dt");
+  r.dt_s = dt.value_or(0.0);
+
+  Tf g = r.raw;
+  if (r.chain) g = linsys::scaled(g, r.chain_values.gain());
+  if (r.hold) g = linsys::c2d(g, r.dt_s, linsys::C2dMethod::zoh, 0.0, r.raw_where);
+  r.setup.plant = g;
+  r.setup.dt_s = r.dt_s;
+  const std::string method = o.method.empty() ? ini.get("design", "method").value_or("tustin") : o.method;
+  r.setup.method = linsys::parse_method(method, o.method.empty() ? origin_of(ini, "design", "method") : "--method");
+  if (auto w = flag(o.prewarp_rad_s)) {
+    if (!(*w > 0.0) || *w * r.dt_s >= k_pi) fail("--prewarp: must be in (0, pi/dt) rad/s, got {}", *w);
+    r.setup.prewarp_rad_s = *w;
+  }
+  return r;
+}
+
+/// y[n] = −a1 y[n−1] − ... + b0 e[n] + b1 e[n−1] + ..., a normalised to a0 = 1.
+void difference_coefficients(const Tf& cz, std::vector<double>& b, std::vector<double>& a) {
+  const Poly den = linsys::trim(cz.den);
+  const Poly num0 = linsys::trim(cz.num);
+  Poly num(den.size(), 0.0);
+  for (std::size_t i = 0; i < num0.size(); ++i) num[num.size() - num0.size() + i] = num0[i];
+  b.clear();
+  a.clear();
+  for (std::size_t i = 0; i < den.size(); ++i) {
+    b.push_back(num[i] / den[0]);
+    a.push_back(den[i] / den[0]);
+  }
+  while (b.size() > 1 && b.back() == 0.0 && a.back() == 0.0) {
+    b.pop_back();
+    a.pop_back();
+  }
+}
+
+std::string difference_text(const std::vector<double>& b, const std::vector<double>& a) {
+  std::string out = "y[n] =";
+  bool first = true;
+  auto term = [&](double c, const std::string& sym) {
+    if (c == 0.0) return;
+    const double m = std::abs(c);
+    if (first) {
+      out += c < 0.0 ? " -" : " ";
+    } else {
+      out += c < 0.0 ? " - " : " + ";
+    }
+    out += (m == 1.0 ? std::string() : format_number(m) + "*") + sym;
+    first = false;
+  };
+  for (std::size_t k = 1; k < a.size(); ++k) term(-a[k], fmt::format("y[n-{}]", k));
+  for (std::size_t k = 0; k < b.size(); ++k) term(b[k], k == 0 ? "e[n]" : fmt::format("e[n-{}]", k));
+  if (first) out += " 0";
+  return out;
+}
+
+Tf controller_from_coefficients(const std::vector<double>& b, const std::vector<double>& a, double dt_s) {
+  const std::size_t n = std::max(a.size(), b.size());
+  Poly num(n, 0.0);
+  Poly den(n, 0.0);
+  for (std::size_t i = 0; i < b.size(); ++i) num[i] = b[i];
+  for (std::size_t i = 0; i < a.size(); ++i) den[i] = a[i];
+  Tf c;
+  c.domain = Domain::z;
+  c.dt_s = dt_s;
+  c.num = linsys::trim(num);
+  c.den = linsys::trim(den);
+  return linsys::cancel_origin(c);
+}
+
+std::string poles_text(const std::vector<Complex>& poles, bool imag) {
+  std::vector<double> v;
+  for (const Complex& p : poles) v.push_back(imag ? p.imag() : p.real());
+  return linsys::list_text(v);
+}
+
+/// One Tf for the loop's product; a mixed loop (z controller, s plant) samples the plant
+/// through a ZOH, which `note` records.
+Tf single_loop(const std::vector<Tf>& factors, std::string* note) {
+  Tf acc = factors.front();
+  for (std::size_t i = 1; i < factors.size(); ++i) {
+    Tf f = factors[i];
+    if (acc.discrete() != f.discrete()) {
+      if (f.discrete()) std::swap(acc, f);
+      f = linsys::c2d(f, acc.dt_s, linsys::C2dMethod::zoh, 0.0, "plant");
+      if (note) *note = "plant sampled through a zero-order hold for the closed loop";
+    }
+    acc = linsys::series(acc, f);
+  }
+  return acc;
+}
+
+void write_margins(Ini& ini, const std::string& section, const std::vector<Tf>& factors, double dt_s) {
+  const linsys::Margins m = linsys::margins(factors);
+  std::string note;
+  const Tf loop = single_loop(factors, &note);
+  bool padded = false;
+  const auto poles = linsys::closed_loop_poles(loop, &padded);
+  const bool stable = linsys::is_stable(poles, loop.domain);
+  ini.set(section, "stable", stable ? "yes" : "no",
+          padded ? "closed-loop poles with a [6/6] Pade delay" : (note.empty() ? "" : note));
+  ini.set(section, "pm_deg", m.pm_deg, "phase margin nearest 0");
+  ini.set(section, "wc_rad_s", m.pm_omega_rad_s, "gain crossover of that margin");
+  ini.set(section, "gm", m.gm, "gain margin nearest 1, absolute");
+  ini.set(section, "gm_db", 20.0 * std::log10(m.gm));
+  ini.set(section, "w_gm_rad_s", m.gm_omega_rad_s, "phase crossover of that margin");
+  ini.set(section, "dm_s", m.dm_s, "smallest delay margin");
+  if (dt_s > 0.0) {
+    ini.set(section, "dm_samples", m.dm_s / dt_s);
+    ini.set(section, "ws_over_wc", 2.0 * k_pi / dt_s / m.pm_omega_rad_s, "D/A cost: sampling over crossover frequency");
+  }
+  double w_ms = 0.0;
+  const double ms = peak_sensitivity(factors, &w_ms);
+  ini.set(section, "ms", ms, "peak sensitivity max |1/(1+L)|");
+  ini.set(section, "w_ms_rad_s", w_ms);
+  ini.set(section, "gain_crossovers_rad_s", linsys::list_text(m.gain_crossovers_rad_s));
+  ini.set(section, "phase_margins_deg", linsys::list_text(m.phase_margins_deg));
+  ini.set(section, "delay_margins_s", linsys::list_text(m.delay_margins_s));
+  ini.set(section, "phase_crossovers_rad_s", linsys::list_text(m.phase_crossovers_rad_s));
+  std::vector<double> gm_db;
+  for (double g : m.gain_margins) gm_db.push_back(20.0 * std::log10(g));
+  ini.set(section, "gain_margins", linsys::list_text(m.gain_margins));
+  ini.set(section, "gain_margins_db", linsys::list_text(gm_db));
+  ini.set(section, "closed_loop_poles_re", poles_text(poles, false));
+  ini.set(section, "closed_loop_poles_im", poles_text(poles, true));
+  const auto ranges = linsys::stable_gain_ranges(loop);
+  std::vector<double> lo;
+  std::vector<double> hi;
+  for (const auto& g : ranges) {
+    lo.push_back(g.k_low);
+    hi.push_back(g.k_high);
+  }
+  ini.set(section, "k_stable_low", linsys::list_text(lo), "a gain K on the loop is stable in (low, high)");
+  ini.set(section, "k_stable_high", linsys::list_text(hi));
+}
+
+void echo_plant(Ini& ini, const Resolved& r) {
+  ini.set("plant", "tf", linsys::tf_text(r.raw), r.raw_where);
+  ini.set("plant", "domain", linsys::var_name(r.raw.domain));
+  if (r.raw.discrete()) ini.set("plant", "dt_s", r.raw.dt_s);
+  ini.set("plant", "hold", r.hold ? "zoh" : "none", r.hold ? "the PWM holds the duty over each period" : "");
+  if (r.chain) {
+    const Chain& c = r.chain_values;
+    ini.set("loop", "pwm_full_counts", c.pwm_full_counts, "duty counts at 100 %");
+    ini.set("loop", "pwm_logic_v", c.pwm_logic_v, "V at 100 % duty");
+    ini.set("loop", "hbridge_gain", c.hbridge_gain, "V/V");
+    ini.set("loop", "counts_per_rev", c.counts_per_rev);
+    ini.set("loop", "dt_s", c.dt_s, "s, counts summed over one period");
+  }
+}
+
+Design run_design(const Options& o, const Setup& su) {
+  auto need = [](double v, const char* name) {
+    if (std::isnan(v)) fail("{}: required", name);
+    return v;
+  };
+  if (o.command == "p") return design_p(su, need(o.pm_deg, "--pm"));
+  if (o.command == "pi") {
+    const double pm = need(o.pm_deg, "--pm");
+    if (!std::isnan(o.zero_rad_s) && !std::isnan(o.wc_rad_s)) fail("--zero: give --zero or --wc, not both");
+    if (!std::isnan(o.zero_rad_s)) return design_pi_zero(su, pm, o.zero_rad_s);
+    if (!std::isnan(o.wc_rad_s)) return design_pi_crossover(su, pm, o.wc_rad_s);
+    fail("--zero or --wc: required");
+  }
+  if (o.command == "pid") return design_pid(su, need(o.pm_deg, "--pm"), need(o.wc_rad_s, "--wc"), o.ti_over_td, o.n);
+  if (o.command == "lead") return design_lead(su, need(o.pm_deg, "--pm"), need(o.wc_rad_s, "--wc"));
+  if (o.command == "lag") return design_lag(su, need(o.pm_deg, "--pm"), need(o.k_dc, "--k-dc"), o.ratio);
+  return tune(su, o.structure, o.limits);
+}
+
+void write_design(const Options& o, const Resolved& r, const Design& d, std::ostream& out,
+                  const std::optional<RlocusResult>& rl) {
+  Ini ini;
+  const Setup& su = r.setup;
+  ini.set("design", "kind", d.kind);
+  for (const auto& [k, v] : d.params) ini.set("design", k, v);
+  ini.set("design", "tf_s", linsys::tf_text(d.cont), "C(s)");
+  ini.set("design", "num_s", linsys::list_text(linsys::trim(d.cont.num)));
+  ini.set("design", "den_s", linsys::list_text(linsys::trim(d.cont.den)));
+  if (d.wc_rad_s > 0.0) ini.set("design", "wc_design_rad_s", d.wc_rad_s);
+  if (rl) {
+    ini.set("design", "omega_n_rad_s", rl->omega_n_rad_s);
+    ini.set("design", "poles_re", poles_text(rl->poles, false));
+    ini.set("design", "poles_im", poles_text(rl->poles, true));
+  }
+  if (o.command == "tune") {
+    ini.set("design", "pm_min_deg", o.limits.pm_min_deg);
+    ini.set("design", "gm_min_db", o.limits.gm_min_db);
+    ini.set("design", "ms_max", o.limits.ms_max);
+  }
+  std::optional<Tf> cz;
+  if (su.dt_s > 0.0) {
+    cz = running_form(su, d.cont);
+    ini.set("design", "dt_s", su.dt_s);
+    ini.set("design", "method", linsys::method_name(su.method));
+    if (su.prewarp_rad_s > 0.0) ini.set("design", "prewarp_rad_s", su.prewarp_rad_s);
+    ini.set("design", "tf_z", linsys::tf_text(*cz), "C(z)");
+  }
+  std::vector<double> b;
+  std::vector<double> a;
+  if (cz) {
+    difference_coefficients(*cz, b, a);
+    ini.set("design", "difference_equation", difference_text(b, a), "e in counts, y in duty counts");
+  }
+  write_margins(ini, "margins", loop_factors(su, d.cont), su.dt_s);
+  if (cz) {
+    const Chain& c = r.chain_values;
+    const double full = r.chain ? c.pwm_full_counts : Chain{}.pwm_full_counts;
+    const double cpr = r.chain ? c.counts_per_rev : Chain{}.counts_per_rev;
+    ini.set("controller", "type", d.kind);
+    ini.set("controller", "b", linsys::list_text(b), "numerator on e, b_0 first");
+    ini.set("controller", "a", linsys::list_text(a), "denominator on y, a_0 first");
+    ini.set("controller", "dt_s", su.dt_s, "s");
+    ini.set("controller", "input_scale", cpr / 60.0 * su.dt_s, "counts per sample per rpm");
+    ini.set("controller", "output", "duty_counts");
+    ini.set("controller", "duty_full_scale", full, "duty counts at 100 %");
+    ini.set("controller", "round_output", 1.0);
+
+    FixedPointSpec spec;
+    spec.coef_bits = o.coef_bits;
+    spec.acc_bits = o.acc_bits;
+    spec.e_max_counts = o.e_max_counts;
+    spec.out_min = std::isnan(o.out_min) ? -full : o.out_min;
+    spec.out_max = std::isnan(o.out_max) ? full : o.out_max;
+    const FixedPoint q = quantise(b, a, spec);
+    ini.set("fixed_point", "q_format", q.q_format(spec.coef_bits));
+    ini.set("fixed_point", "q_frac_bits", static_cast<double>(q.frac_bits), "c_q = round(c * 2^q_frac_bits)");
+    ini.set("fixed_point", "coef_bits", static_cast<double>(spec.coef_bits));
+    ini.set("fixed_point", "acc_bits", static_cast<double>(spec.acc_bits));
+    ini.set("fixed_point", "n_b", static_cast<double>(q.b_q.size()));
+    ini.set("fixed_point", "n_a", static_cast<double>(q.a_q.size() - 1));
+    for (std::size_t k = 0; k < q.b_q.size(); ++k) {
+      ini.set("fixed_point", fmt::format("b{}_q", k), static_cast<double>(q.b_q[k]), format_number(q.b[k]));
+    }
+    for (std::size_t k = 1; k < q.a_q.size(); ++k) {
+      ini.set("fixed_point", fmt::format("a{}_q", k), static_cast<double>(q.a_q[k]), format_number(q.a[k]));
+    }
+    ini.set("fixed_point", "e_max_counts", spec.e_max_counts);
+    ini.set("fixed_point", "out_min", spec.out_min);
+    ini.set("fixed_point", "out_max", spec.out_max);
+    ini.set("fixed_point", "acc_max", q.acc_max, "worst-case |acc| over the stated ranges");
+    const Tf cq = controller_from_coefficients(q.b, q.a, su.dt_s);
+    write_margins(ini, "margins_quantised", {cq, su.plant}, su.dt_s);
+  }
+  echo_plant(ini, r);
+  ini.write(out);
+}
+
+/// The controller for analysis commands, as it runs: --controller text or [controller] b/a.
+std::optional<Tf> analysis_controller(const Options& o, const Resolved& r) {
+  if (!o.controller.empty()) {
+    linsys::ParsedTf p = linsys::parse_tf(o.controller, "--controller");
+    Tf c = p.tf;
+    c.domain = p.domain.value_or(Domain::s);
+    if (!c.proper()) {
+      fail("--controller: improper transfer function (numerator degree {} > denominator degree {})",
+           linsys::degree(c.num), linsys::degree(c.den));
+    }
+    if (c.discrete()) {
+      if (!(r.dt_s > 0.0)) fail("--controller: a z-domain controller needs --dt");
+      c.dt_s = r.dt_s;
+      return linsys::fold_delay(c, "--controller");
+    }
+    if (r.dt_s > 0.0) return running_form(r.setup, c);
+    if (r.setup.plant.discrete()) fail("--controller: a continuous controller on a sampled plant needs --dt");
+    return c;
+  }
+  if (r.ini.has_section("controller")) {
+    const auto b = r.ini.numbers("controller", "b");
+    const auto a = r.ini.numbers("controller", "a");
+    if (!b || b->empty()) r.ini.reject("controller", "a", "needs b in [controller] too");
+    if (!a || a->empty() || (*a)[0] == 0.0) r.ini.reject("controller", "b", "needs a with a_0 != 0 in [controller]");
+    const double dt = r.ini.number("controller", "dt_s").value_or(r.dt_s);
+    if (!(dt > 0.0)) r.ini.reject("controller", "b", "needs dt_s");
+    return controller_from_coefficients(*b, *a, dt);
+  }
+  return std::nullopt;
+}
+
+std::vector<Tf> analysis_factors(const Options& o, const Resolved& r) {
+  const std::optional<Tf> c = analysis_controller(o, r);
+  if (!c) return {r.setup.plant};
+  return {*c, r.setup.plant};
+}
+
+void plot_range(const Options& o, const std::vector<Tf>& factors, double& lo, double& hi) {
+  lo = INFINITY;
+  hi = 0.0;
+  double dt = 0.0;
+  for (const Tf& f : factors) {
+    const linsys::FreqEval fe(f);
+    for (double c : fe.corner_frequencies()) {
+      lo = std::min(lo, c / 100.0);
+      hi = std::max(hi, c * 100.0);
+    }
+    if (f.discrete()) dt = dt == 0.0 ? f.dt_s : std::min(dt, f.dt_s);
+  }
+  if (!std::isfinite(lo)) {
+    lo = 0.01;
+    hi = 1e4;
+  }
+  if (dt > 0.0) hi = std::min(hi, k_pi / dt);
+  if (lo >= hi) lo = hi / 1e4;
+  if (!std::isnan(o.f_min_hz)) lo = 2.0 * k_pi * o.f_min_hz;
+  if (!std::isnan(o.f_max_hz)) hi = 2.0 * k_pi * o.f_max_hz;
+  if (!(lo > 0.0) || !(hi > lo)) fail("--f-min/--f-max: need 0 < f-min < f-max");
+}
+
+void write_frequency(const Options& o, const std::vector<Tf>& factors, std::ostream& out, bool nyquist) {
+  double lo = 0.0;
+  double hi = 0.0;
+  plot_range(o, factors, lo, hi);
+  const int points = o.points > 0 ? o.points : 500;
+  const linsys::LoopEval le(factors);
+  table::Writer w(out);
+  w.meta("source", std::string("mcg-design ") + k_version);
+  std::string loop;
+  for (const Tf& f : factors) loop += (loop.empty() ? "" : " * ") + linsys::tf_text(f);
+  w.meta("loop", loop);
+  if (nyquist) {
+    w.header({"f_hz", "re", "im"});
+  } else {
+    w.header({"f_hz", "mag_db", "phase_deg"});
+  }
+  for (double x : linsys::log_grid(lo, hi, std::max(points, 2))) {
+    if (nyquist) {
+      const Complex v = le.value(x);
+      w.row({x / (2.0 * k_pi), v.real(), v.imag()});
+    } else {
+      w.row({x / (2.0 * k_pi), le.log_mag(x) * 20.0 / std::log(10.0), le.phase_rad(x) * 180.0 / k_pi});
+    }
+  }
+  w.finish();
+}
+
+void write_rlocus(const Options& o, const std::vector<Tf>& factors, std::ostream& out) {
+  std::string note;
+  Tf loop = single_loop(factors, &note);
+  if (loop.discrete()) loop = linsys::fold_delay(loop, "loop");
+  if (!loop.discrete() && loop.delay_s > 0.0) {
+    loop.delay_s = 0.0;
+    loop = linsys::series(loop, linsys::pade(single_loop(factors, nullptr).delay_s, 6));
+    note = "delay as its [6/6] Pade approximant";
+  }
+  const auto ranges = linsys::stable_gain_ranges(loop);
+  const auto bounds = linsys::boundary_gains(loop);
+  double k_max = o.k_max;
+  if (std::isnan(k_max)) k_max = bounds.empty() ? 100.0 : 3.0 * bounds.back();
+  if (!(k_max > 0.0)) fail("--k-max: must be positive");
+  const int points = o.points > 0 ? o.points : 400;
+  std::vector<double> ks{0.0};
+  for (double k : linsys::log_grid(k_max * 1e-4, k_max, std::max(points, 2))) ks.push_back(k);
+  for (double k : bounds) {
+    if (k <= k_max) ks.push_back(k);
+  }
+  std::sort(ks.begin(), ks.end());
+  table::Writer w(out);
+  w.meta("source", std::string("mcg-design ") + k_version);
+  w.meta("loop", linsys::tf_text(loop));
+  if (!note.empty()) w.meta("note", note);
+  for (const auto& g : ranges) w.meta("k_stable", fmt::format("{} .. {}", format_number(g.k_low), format_number(g.k_high)));
+  w.header({"k", "branch", "re", "im"});
+  std::vector<Complex> prev;
+  for (double k : ks) {
+    std::vector<Complex> p = linsys::roots(linsys::add(loop.den, linsys::scale(loop.num, k)));
+    if (!prev.empty() && p.size() == prev.size()) {
+      // Keep branches continuous: each previous pole takes its nearest new one.
+      std::vector<Complex> ordered(prev.size());
+      std::vector<bool> used(p.size(), false);
+      for (std::size_t i = 0; i < prev.size(); ++i) {
+        std::size_t best = 0;
+        double best_d = INFINITY;
+        for (std::size_t j = 0; j < p.size(); ++j) {
+          if (!used[j] && std::abs(p[j] - prev[i]) < best_d) {
+            best_d = std::abs(p[j] - prev[i]);
+            best = j;
+          }
+        }
+        used[best] = true;
+        ordered[i] = p[best];
+      }
+      p = ordered;
+    }
+    for (std::size_t i = 0; i < p.size(); ++i) w.row({k, static_cast<double>(i + 1), p[i].real(), p[i].imag()});
+    prev = p;
+  }
+  w.finish();
+}
+
+void write_step(const Options& o, const Resolved& r, std::ostream& out) {
+  const std::optional<Tf> c = analysis_controller(o, r);
+  Tf plant = r.setup.plant;
+  std::string note;
+  if (c && c->discrete() && !plant.discrete()) {
+    plant = linsys::c2d(plant, c->dt_s, linsys::C2dMethod::zoh, 0.0, r.raw_where);
+    note = "plant sampled through a zero-order hold";
+  }
+  const double t_end = std::isnan(o.t_end_s) ? 0.0 : o.t_end_s;
+  if (!std::isnan(o.t_end_s) && !(o.t_end_s > 0.0)) fail("--t-end: must be positive");
+  const linsys::StepResponse s = linsys::step_response(plant, c, t_end, o.points > 0 ? o.points : 2000);
+  const linsys::StepMetrics m = linsys::step_metrics(s.t_s, s.y, s.final_value, 1.0);
+  const std::vector<std::pair<std::string, double>> metrics{
+      {"final_value", m.final_value},       {"rise_time_s", m.rise_time_s},
+      {"peak", m.peak},                     {"peak_time_s", m.peak_time_s},
+      {"overshoot_pct", m.overshoot_pct},   {"steady_state_error", m.steady_state_error},
+      {"settling_time_s", m.settling_time_s}, {"transient_time_s", m.transient_time_s}};
+  if (o.metrics) {
+    Ini ini;
+    for (const auto& [k, v] : metrics) ini.set("step", k, v);
+    if (!note.empty()) ini.set("step", "note", note);
+    if (!s.note.empty()) ini.set("step", "simulation", s.note);
+    ini.write(out);
+    return;
+  }
+  table::Writer w(out);
+  w.meta("source", std::string("mcg-design ") + k_version);
+  w.meta("loop", linsys::tf_text(c ? linsys::series(*c, plant) : plant));
+  if (!note.empty()) w.meta("note", note);
+  if (!s.note.empty()) w.meta("simulation", s.note);
+  for (const auto& [k, v] : metrics) w.meta(k, format_number(v));
+  w.header({"t", "r", "y", "e", "u"});
+  for (std::size_t k = 0; k < s.t_s.size(); ++k) w.row({s.t_s[k], 1.0, s.y[k], 1.0 - s.y[k], s.u[k]});
+  w.finish();
+}
+
+void write_c2d(const Options& o, const Resolved& r, std::ostream& out) {
+  if (r.raw.discrete()) fail("{}: the plant is already discrete", r.raw_where);
+  if (!(r.dt_s > 0.0)) fail("--dt: required");
+  const linsys::C2dMethod method =
+      o.method.empty() ? linsys::C2dMethod::zoh : linsys::parse_method(o.method, "--method");
+  const double prewarp = std::isnan(o.prewarp_rad_s) ? 0.0 : o.prewarp_rad_s;
+  Tf g = r.raw;
+  if (r.chain) g = linsys::scaled(g, r.chain_values.gain());
+  const Tf h = linsys::c2d(g, r.dt_s, method, prewarp, r.raw_where);
+  Ini ini;
+  ini.set("plant", "tf", linsys::tf_text(h), fmt::format("{} of {}", linsys::method_name(method), linsys::tf_text(g)));
+  ini.set("plant", "domain", "z");
+  ini.set("plant", "dt_s", r.dt_s);
+  ini.set("plant", "num", linsys::list_text(linsys::trim(h.num)));
+  ini.set("plant", "den", linsys::list_text(linsys::trim(h.den)));
+  ini.set("plant", "method", linsys::method_name(method));
+  if (prewarp > 0.0) ini.set("plant", "prewarp_rad_s", prewarp);
+  ini.write(out);
+}
+
+void write_loop(const Resolved& r, std::ostream& out) {
+  const Chain& c = r.chain_values;
+  Ini ini;
+  ini.set("loop", "pwm_full_counts", c.pwm_full_counts, "duty counts at 100 %");
+  ini.set("loop", "pwm_logic_v", c.pwm_logic_v, "V at 100 % duty");
+  ini.set("loop", "pwm_v_per_count", c.pwm_v_per_count(), "PWM gain, V per duty count (report: .00542)");
+  ini.set("loop", "hbridge_gain", c.hbridge_gain, "V/V (report: 4 = 20 V / 5 V)");
+  ini.set("loop", "counts_per_rev", c.counts_per_rev);
+  ini.set("loop", "encoder_counts_per_rad", c.counts_per_rad(), "report: 81.5");
+  ini.set("loop", "dt_s", c.dt_s, "software conversion: counts summed over one period");
+  ini.set("loop", "chain_gain", c.gain(), "counts per sample per (rad/s) per duty count, without the plant");
+  const double g0 = r.raw.dc_gain();
+  ini.set("loop", "plant_dc_gain", g0, "rad/s per V");
+  ini.set("loop", "forward_gain", c.pwm_v_per_count() * c.hbridge_gain * g0, "rad/s per duty count (report: 0.3589)");
+  ini.set("loop", "feedback_gain", c.counts_per_rad() * c.dt_s, "counts per sample per rad/s (report: 81.5*.001)");
+  ini.set("loop", "loop_dc_gain", c.gain() * g0, "report's third-order fit: 0.0146");
+  Tf cont = linsys::scaled(r.raw, c.gain());
+  ini.set("loop", "tf_s", linsys::tf_text(cont), "chain x plant, without the hold");
+  const Tf& z = r.setup.plant;
+  ini.set("loop", "tf_z", linsys::tf_text(z), "with the PWM as a zero-order hold");
+  ini.set("loop", "num_z", linsys::list_text(linsys::trim(z.num)));
+  ini.set("loop", "den_z", linsys::list_text(linsys::trim(z.den)));
+  write_margins(ini, "margins", {z}, r.dt_s);
+  ini.write(out);
+}
+
+}  // namespace
+
+void run(const Options& o, std::ostream& out) {
+  Options opts = o;
+  if (opts.command == "loop") opts.loop = true;
+  const Resolved r = resolve(opts);
+  const std::string& cmd = opts.command;
+  if (cmd == "margins") {
+    Ini ini;
+    const std::vector<Tf> f = analysis_factors(opts, r);
+    for (const Tf& x : f) {
+      if (!x.proper()) fail("margins need a proper loop");
+    }
+    write_margins(ini, "margins", f, r.dt_s);
+    ini.write(out);
+    return;
+  }
+  if (cmd == "bode" || cmd == "nyquist") return write_frequency(opts, analysis_factors(opts, r), out, cmd == "nyquist");
+  if (cmd == "rlocus") return write_rlocus(opts, analysis_factors(opts, r), out);
+  if (cmd == "step") return write_step(opts, r, out);
+  if (cmd == "c2d") return write_c2d(opts, r, out);
+  if (cmd == "loop") return write_loop(r, out);
+  if (cmd == "rlocus-design") {
+    if (std::isnan(opts.zeta)) fail("--zeta: required");
+    const RlocusResult rl = design_rlocus(r.setup, opts.zeta);
+    return write_design(opts, r, rl.design, out, rl);
+  }
+  const Design d = run_design(opts, r.setup);
+  write_design(opts, r, d, out, std::nullopt);
+}
+
+}  // namespace mcg::design
