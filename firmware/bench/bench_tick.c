@@ -5,7 +5,8 @@
  * PWM write through the c515 layer). Timer 1 in mode 1 counts machine cycles (f/12); its own
  * reading overhead is measured with an empty interval and subtracted. For P, PI and PID, 256
  * updates with varying encoder counts; min, max and sum of cycles go to external RAM at
- * BENCH_XADDR and the run ends at bench_done() (bench/bench-cycles.sh reads them). Every duty
+ * BENCH_XADDR and the run ends at bench_done(); a fourth set repeats the PID at F = 11, the
+ * general output shift (bench/bench-cycles.sh reads them). Every duty
  * computed goes to BENCH_OUT_XADDR, where the ucsim test compares them with the C core on the
  * host: the assembly parts of the 8051 build must give the same numbers. */
 #include <8051.h>   /* TMOD, TH0, TL0, TH1, TL1, TR0, TR1 */
@@ -17,18 +18,19 @@
 
 #define BENCH_XADDR 0x9F00u
 #define BENCH_RUNS 256u
-#define BENCH_OUT_XADDR 0xA000u /* 3 x 256 duties, i16 */
+#define BENCH_OUT_XADDR 0xA000u /* 4 x 256 duties, i16 */
+#define BENCH_SETS 4u            /* P, PI, PID at F = 8; PID at F = 11 */
 
-/* Per mode (P, PI, PID): min, max (u16), sum (u32); then the empty-interval overhead (u16). */
+/* Per set (P, PI, PID, PID at F = 11): min, max (u16), sum (u32); then the empty-interval overhead. */
 typedef struct {
   uint16_t min, max;
   uint32_t sum;
 } Figures;
-static Figures MCG_XDATA MCG_AT(BENCH_XADDR) s_fig[3];
-static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + 3u * sizeof(Figures)) s_overhead;
+static Figures MCG_XDATA MCG_AT(BENCH_XADDR) s_fig[BENCH_SETS];
+static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + BENCH_SETS * sizeof(Figures)) s_overhead;
 
-static int16_t MCG_XDATA MCG_AT(BENCH_OUT_XADDR) s_out[3][BENCH_RUNS];
-static uint16_t s_last_count;
+static int16_t MCG_XDATA MCG_AT(BENCH_OUT_XADDR) s_out[BENCH_SETS][BENCH_RUNS];
+static uint8_t s_last_hi, s_last_lo; /* encoder count at the last update */
 
 static uint16_t cycles_now(void)
 {
@@ -40,13 +42,17 @@ static uint16_t cycles_now(void)
   return (uint16_t)((uint16_t)hi << 8 | lo);
 }
 
-/* The measured update: encoder read, pulses since the last tick, control_tick. */
+/* The measured update: encoder read, pulses since the last tick (fewer than 256), control_tick. */
 static void update(void)
 {
-  uint16_t count;
-  C515_ENCODER_READ(count);
-  control_tick((uint8_t)(count - s_last_count));
-  s_last_count = count;
+  uint8_t hi;
+  uint8_t lo;
+  uint8_t pulses;
+  C515_ENCODER_READ(hi, lo);
+  pulses = (uint8_t)(lo - s_last_lo);
+  s_last_hi = hi;
+  s_last_lo = lo;
+  control_tick(pulses);
 }
 
 void bench_done(void)
@@ -73,8 +79,12 @@ void main(void)
   regs_write(MCG_REG_B1, -15000);
   regs_write(MCG_REG_B2, 6100);
   regs_write(MCG_REG_DUTY_BIAS, 300);
-  for (m = 0; m < 3; ++m) {
-    regs_write(MCG_REG_MODE, (int16_t)(MCG_MODE_P + m));
+  for (m = 0; m < BENCH_SETS; ++m) {
+    if (m == 3) {
+      regs_write(MCG_REG_COEF_FRAC, 11); /* the general output shift */
+    } else {
+      regs_write(MCG_REG_MODE, (int16_t)(MCG_MODE_P + m));
+    }
     s_fig[m].min = 0xFFFFu;
     s_fig[m].max = 0;
     s_fig[m].sum = 0;
@@ -82,7 +92,7 @@ void main(void)
       uint16_t t0;
       uint16_t dt;
       /* The encoder moved by 6..30 pulses since the last tick: errors of both signs. */
-      uint16_t next = (uint16_t)(s_last_count + 6u + (i * 7u) % 25u);
+      uint16_t next = (uint16_t)(((uint16_t)s_last_hi << 8 | s_last_lo) + 6u + (i * 7u) % 25u);
       TH0 = (uint8_t)(next >> 8);
       TL0 = (uint8_t)(next & 0xFFu);
       t0 = cycles_now();

@@ -69,6 +69,7 @@ static void stream_tick(uint8_t pulses)
 static void tick(uint8_t pulses)
 {
   control_tick(pulses);
+  speed_tick(pulses);
   logger_tick(pulses);
   stream_tick(pulses);
   seq_tick();

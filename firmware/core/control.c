@@ -30,47 +30,35 @@ uint8_t MCG_XDATA g_coef_frac;
 int16_t MCG_XDATA g_duty_min, g_duty_max, g_duty_bias;
 int16_t g_duty_out;
 uint8_t g_saturated;
-uint16_t g_counts_16ms;
+uint16_t MCG_XDATA g_counts_16ms;
 ArithPid g_pid;
 
 static uint8_t MCG_IDATA s_window[MCG_SPEED_WINDOW_MS]; /* pulses per tick, ring */
-static uint8_t s_window_pos;
+static uint8_t MCG_XDATA s_window_pos;
 static int16_t s_r_q8;                  /* command r[n], Q8 pulses per tick */
 static int16_t MCG_XDATA s_r1, s_r2;    /* r[n-1], r[n-2]: the commands of the last two ticks */
-static uint8_t s_p_hi;                  /* pulse limit keeping e >= -8191 */
-static int32_t MCG_IDATA s_big_r[3];    /* R for the next three ticks */
-static uint8_t s_big_r_k;               /* which of them is next (2 = settled) */
-static int32_t s_u;                     /* U, Q(F+8) duty */
-static int32_t s_u_min, s_u_max;        /* limits in Q(F+8) */
-static int32_t MCG_XDATA s_u_bias;      /* P-mode bias in Q(F+8) */
-static int32_t s_u_half;                /* 2^(F+7), rounding */
-static uint8_t s_shift;                 /* F + 8 */
+static int32_t MCG_XDATA s_u_bias;     /* P-mode bias in Q(F+8) */
+uint8_t g_ctl_p_hi;
+int32_t MCG_IDATA g_ctl_r[3];
+uint8_t g_ctl_r_k;
+int32_t g_ctl_u;
+int32_t g_ctl_u_min, g_ctl_u_max;
+uint8_t g_ctl_shift;
+uint8_t g_ctl_settle;
 
 /* x * 2^shift without shifting a negative value (undefined in C). */
 static int32_t scale_up(int16_t x)
 {
-  return (int32_t)x * ((int32_t)1 << s_shift);
-}
-
-/* (u + 2^(F+7)) >> (F+8), rounded half up. A constant shift by 16 is byte moves on the 8051, so
- * the variable part is only F - 8 bits of a 16-bit value (none at the default F = 8). */
-static int16_t output_of(int32_t u)
-{
-  int32_t v = u + s_u_half;
-  if (s_shift >= 16u) {
-    return (int16_t)((int16_t)(v >> 16) >> (uint8_t)(s_shift - 16u));
-  }
-  return (int16_t)(v >> s_shift);
+  return (int32_t)x * ((int32_t)1 << g_ctl_shift);
 }
 
 static void rescale(void)
 {
-  s_shift = (uint8_t)(g_coef_frac + MCG_ERR_FRAC_BITS);
-  s_u_half = (int32_t)1 << (s_shift - 1);
-  s_u_min = scale_up(g_duty_min);
-  s_u_max = scale_up(g_duty_max);
+  g_ctl_shift = (uint8_t)(g_coef_frac + MCG_ERR_FRAC_BITS);
+  g_ctl_u_min = scale_up(g_duty_min);
+  g_ctl_u_max = scale_up(g_duty_max);
   s_u_bias = scale_up(g_duty_bias);
-  s_u = scale_up(g_duty_out);
+  g_ctl_u = scale_up(g_duty_out);
 }
 
 int16_t control_rpm_to_q8(int16_t rpm)
@@ -110,10 +98,11 @@ void control_init(void)
   s_r_q8 = 0;
   s_r1 = 0;
   s_r2 = 0;
+  g_ctl_settle = 0;
   for (i = 0; i < 3; ++i) {
     g_pid.p[i] = 0;
   }
-  s_p_hi = 255;
+  g_ctl_p_hi = 85;
   rescale();
   control_refresh();
 }
@@ -123,7 +112,9 @@ void control_set_rpm_cmd(int16_t rpm)
   int16_t hi;
   s_r_q8 = control_rpm_to_q8(rpm);
   hi = (int16_t)((s_r_q8 + MCG_ERR_LIMIT) >> 8);
-  s_p_hi = hi > 255 ? 255u : (uint8_t)hi;
+  /* 56 at 720 rpm; never above 85, so that three pulse counts sum to at most 255 */
+  g_ctl_p_hi = hi > 85 ? 85u : (uint8_t)hi;
+  g_ctl_settle = 2; /* the tick shifts the command history until it holds the new one twice */
   control_refresh();
 }
 
@@ -153,21 +144,21 @@ void control_refresh(void)
   g_pid.bp[1] = (uint16_t)((uint16_t)c1 ^ 0x8000u);
   g_pid.bp[2] = (uint16_t)((uint16_t)c2 ^ 0x8000u);
   now0 = arith_mul16(c0, s_r_q8);
-  s_big_r[0] = now0 + arith_mul16(c1, s_r1) + arith_mul16(c2, s_r2);
-  s_big_r[1] = now0 + arith_mul16(c1, s_r_q8) + arith_mul16(c2, s_r1);
-  s_big_r[2] = now0 + arith_mul16(c1, s_r_q8) + arith_mul16(c2, s_r_q8);
+  g_ctl_r[0] = now0 + arith_mul16(c1, s_r1) + arith_mul16(c2, s_r2);
+  g_ctl_r[1] = now0 + arith_mul16(c1, s_r_q8) + arith_mul16(c2, s_r1);
+  g_ctl_r[2] = now0 + arith_mul16(c1, s_r_q8) + arith_mul16(c2, s_r_q8);
   if (g_mode == MCG_MODE_P) {
-    s_big_r[0] += s_u_bias;
-    s_big_r[1] += s_u_bias;
-    s_big_r[2] += s_u_bias;
+    g_ctl_r[0] += s_u_bias;
+    g_ctl_r[1] += s_u_bias;
+    g_ctl_r[2] += s_u_bias;
   }
-  s_big_r_k = 0;
+  g_ctl_r_k = 0;
 }
 
 void control_set_mode(uint8_t mode)
 {
   (void)mode;
-  s_u = scale_up(g_duty_out); /* bumpless: the integrator starts from the present output */
+  g_ctl_u = scale_up(g_duty_out); /* bumpless: the integrator starts from the present output */
   control_refresh();
 }
 
@@ -183,10 +174,10 @@ void control_set_limits(int16_t duty_min, int16_t duty_max)
   g_duty_min = duty_min;
   g_duty_max = duty_max;
   rescale();
-  if (s_u > s_u_max) {
-    s_u = s_u_max;
-  } else if (s_u < s_u_min) {
-    s_u = s_u_min;
+  if (g_ctl_u > g_ctl_u_max) {
+    g_ctl_u = g_ctl_u_max;
+  } else if (g_ctl_u < g_ctl_u_min) {
+    g_ctl_u = g_ctl_u_min;
   }
 }
 
@@ -197,54 +188,17 @@ void control_set_bias(int16_t duty_bias)
   control_refresh();
 }
 
-/* Limits U to [U_min, U_max], recording whether it had to (a macro: no call in the 1 ms path). */
-#define SATURATE(u)          \
-  do {                       \
-    g_saturated = 0;         \
-    if ((u) > s_u_max) {     \
-      (u) = s_u_max;         \
-      g_saturated = 1;       \
-    } else if ((u) < s_u_min) { \
-      (u) = s_u_min;         \
-      g_saturated = 1;       \
-    }                        \
-  } while (0)
-
-void control_tick(uint8_t pulses)
+/* Pulses of the last MCG_SPEED_WINDOW_MS ticks, for rpm (display, register, not the controller). */
+void speed_tick(uint8_t pulses)
 {
-  int16_t out;
-  int32_t u;
-
   g_counts_16ms = (uint16_t)(g_counts_16ms + pulses - s_window[s_window_pos]);
   s_window[s_window_pos] = pulses;
   s_window_pos = (uint8_t)((s_window_pos + 1u) & (MCG_SPEED_WINDOW_MS - 1u));
+}
 
-  g_pid.p[2] = g_pid.p[1];
-  g_pid.p[1] = g_pid.p[0];
-  g_pid.p[0] = pulses > s_p_hi ? s_p_hi : pulses;
-
-  if (g_mode == MCG_MODE_OPEN) {
-    g_saturated = 0;
-    out = g_duty_set;
-  } else {
-    /* U = (PI, PID: U[n-1]) + R[n] + sum; mod 2^32, the exact result is in range (see above). */
-    u = (int32_t)((uint32_t)s_big_r[s_big_r_k] + (uint32_t)arith_pid_sum());
-    if (g_mode != MCG_MODE_P) {
-      u = (int32_t)((uint32_t)u + (uint32_t)s_u);
-    }
-    if (s_big_r_k < 2u) {
-      ++s_big_r_k;
-    }
-    SATURATE(u);
-    if (g_mode != MCG_MODE_P) {
-      s_u = u;
-    }
-    out = output_of(u);
-  }
-  if (s_r1 != s_r_q8 || s_r2 != s_r_q8) {
-    s_r2 = s_r1;
-    s_r1 = s_r_q8;
-  }
-  g_duty_out = out;
-  hal_pwm_write(out);
+void control_settle(void)
+{
+  s_r2 = s_r1;
+  s_r1 = s_r_q8;
+  --g_ctl_settle;
 }

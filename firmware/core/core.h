@@ -60,8 +60,22 @@ extern uint8_t MCG_XDATA g_load_on;
 
 /* control.c: speed measurement and the 1 ms controller --------------------------------------- */
 void control_init(void);
-/* The 1 ms update: pulses counted in this tick -> speed window, controller, PWM write. */
+/* The 1 ms update: pulses counted in this tick -> controller -> PWM write (control_tick.c, or its
+ * assembly twin on the 8051). */
 void control_tick(uint8_t pulses);
+/* The speed window: pulses counted in this tick (after control_tick, off the critical path). */
+void speed_tick(uint8_t pulses);
+/* One step of the command history after a command change (called by control_tick while
+ * g_ctl_settle > 0). */
+void control_settle(void);
+/* Controller state shared by control.c and the tick (also the 8051 assembly: keep in data memory). */
+extern uint8_t g_ctl_p_hi;           /* pulse limit keeping e >= -8191 */
+extern int32_t MCG_IDATA g_ctl_r[3]; /* R for the next three ticks */
+extern uint8_t g_ctl_r_k;            /* which of them is next (2 = settled) */
+extern int32_t g_ctl_u;              /* U, Q(F+8) duty */
+extern int32_t g_ctl_u_min, g_ctl_u_max; /* limits of U */
+extern uint8_t g_ctl_shift;          /* F + 8 */
+extern uint8_t g_ctl_settle;         /* ticks until the command history is settled */
 /* Controller configuration; each setter keeps the output continuous (bumpless). */
 void control_set_mode(uint8_t mode);
 void control_set_rpm_cmd(int16_t rpm);
@@ -79,7 +93,7 @@ extern uint8_t MCG_XDATA g_coef_frac; /* F */
 extern int16_t MCG_XDATA g_duty_min, g_duty_max, g_duty_bias;
 extern int16_t g_duty_out;    /* the duty written to the PWM by the last update */
 extern uint8_t g_saturated;   /* last update hit duty_min or duty_max */
-extern uint16_t g_counts_16ms; /* pulses in the last 16 ticks */
+extern uint16_t MCG_XDATA g_counts_16ms; /* pulses in the last 16 ticks */
 
 /* logger.c: the RAM log (255 points at MCG_LOG_XADDR) ----------------------------------------- */
 void logger_init(void);

@@ -7,8 +7,9 @@
 // at 0x9500. Checks: version, register write and read-back (all eight bits), a refused write,
 // resynchronisation after garbage and a truncated frame, the 255 logged points (through the dump
 // frames and in memory), the LCD mirror. Prints one line per check and "N passed, M failed".
-// With BENCH.ihx (the cycle-benchmark image), also runs it and compares the 768 duties its P, PI and
-// PID updates computed, with MUL AB and assembly, to the C core on the host given the same pulses.
+// With BENCH.ihx (the cycle-benchmark image), also runs it and compares the 1024 duties its P, PI,
+// PID (F = 8) and PID (F = 11) updates computed in assembly to the C core on the host given the
+// same pulses.
 // s51 runs under `timeout`; a watchdog ends everything if the simulator stops answering.
 #include <arpa/inet.h>
 #include <fcntl.h>
@@ -361,7 +362,7 @@ std::optional<int> read_reg(Sim& sim, std::uint8_t reg)
   return fwtest::i16_at(f->payload, 2);
 }
 
-// Runs the benchmark image to its end and returns the duties it stored at 0xA000 (3 x 256, i16).
+// Runs the benchmark image to its end and returns the duties it stored at 0xA000 (4 x 256, i16).
 std::vector<int> bench_duties(const std::string& image, const std::string& dir)
 {
   const std::string map = image.substr(0, image.size() - 4) + ".map";
@@ -382,7 +383,7 @@ std::vector<int> bench_duties(const std::string& image, const std::string& dir)
   }
   const std::string cfg = dir + "/bench-check.cfg";
   std::FILE* c = std::fopen(cfg.c_str(), "w");
-  std::fprintf(c, "file \"%s\"\nbreak 0x%s\nrun\ndx 0xa000 0xa5ff 16\nquit\n", image.c_str(), done.c_str());
+  std::fprintf(c, "file \"%s\"\nbreak 0x%s\nrun\ndx 0xa000 0xa7ff 16\nquit\n", image.c_str(), done.c_str());
   std::fclose(c);
   const std::string cmd = "timeout 120 s51 -t C517 -X 12M -C '" + cfg + "' < /dev/null 2>&1";
   std::FILE* p = popen(cmd.c_str(), "r");
@@ -427,8 +428,12 @@ std::vector<int> host_duties()
   regs_write(MCG_REG_B2, 6100);
   regs_write(MCG_REG_DUTY_BIAS, 300);
   std::vector<int> duties;
-  for (int m = 0; m < 3; ++m) {
-    regs_write(MCG_REG_MODE, static_cast<std::int16_t>(static_cast<int>(MCG_MODE_P) + m));
+  for (int m = 0; m < 4; ++m) {
+    if (m == 3) {
+      regs_write(MCG_REG_COEF_FRAC, 11);
+    } else {
+      regs_write(MCG_REG_MODE, static_cast<std::int16_t>(static_cast<int>(MCG_MODE_P) + m));
+    }
     for (unsigned i = 0; i < 256; ++i) {
       control_tick(static_cast<std::uint8_t>(6u + (i * 7u) % 25u));
       duties.push_back(g_duty_out);
@@ -552,9 +557,15 @@ int main(int argc, char** argv)
     while (first_diff < host.size() && first_diff < sim.size() && sim[first_diff] == host[first_diff]) {
       ++first_diff;
     }
-    check(sim.size() == 768 && first_diff == host.size(),
-          "8051 P/PI/PID updates equal the host C core: " + std::to_string(first_diff) + " of " +
-              std::to_string(host.size()) + " duties identical");
+    std::string detail;
+    if (first_diff < host.size()) {
+      detail = first_diff < sim.size() ? "; update " + std::to_string(first_diff) + ": 8051 " +
+                                             std::to_string(sim[first_diff]) + ", C " + std::to_string(host[first_diff])
+                                       : "; got " + std::to_string(sim.size()) + " duties";
+    }
+    check(sim.size() == 1024 && first_diff == host.size(),
+          "8051 P, PI, PID updates (F = 8, 11) equal the host C core: " + std::to_string(first_diff) + " of " +
+              std::to_string(host.size()) + " duties identical" + detail);
   }
   std::printf("%d passed, %d failed\n", g_pass, g_fail);
   return g_fail == 0 ? 0 : 1;

@@ -28,10 +28,11 @@ uint8_t hal_board_id(void)
 /* Timer 2 overflow: latch the encoder count, count the tick. */
 void board_tick_isr(void) MCG_ISR(5)
 {
-  uint16_t count;
+  uint8_t hi;
+  uint8_t lo;
   TF2 = 0; /* the 80515 does not clear it in hardware */
-  C515_ENCODER_READ(count);
-  s_count_at_tick = count;
+  C515_ENCODER_READ(hi, lo);
+  s_count_at_tick = (uint16_t)((uint16_t)hi << 8 | lo);
   if (s_ticks != 255u) {
     ++s_ticks;
   }
@@ -94,22 +95,22 @@ uint8_t hal_ticks_take(uint16_t *pulses)
 
 void hal_pwm_write(int16_t duty_permille)
 {
-  uint16_t us = (uint16_t)(duty_permille < 0 ? -duty_permille : duty_permille);
-  uint16_t cc;
+  /* CC1 = 0x10000 - |duty|: that is -duty for duty > 0 and duty itself (as u16) for duty < 0. */
+  uint16_t cc = (uint16_t)duty_permille;
   if (duty_permille < 0) {
     P4 |= C515_P4_DIR;
   } else {
     P4 &= (uint8_t)~C515_P4_DIR;
+    cc = (uint16_t)(0u - cc);
   }
-  if (us == 0) {
+  if (cc == 0) {
     CCEN &= (uint8_t)~C515_CCEN_CC1_MASK;
     P1_1 = 0;
     return;
   }
-  cc = (uint16_t)(0u - us); /* 0x10000 - us: high from the match to the overflow */
   CCH1 = (uint8_t)(cc >> 8);
   CCL1 = (uint8_t)(cc & 0xFFu); /* the low byte write takes the new value */
-  CCEN = (uint8_t)((CCEN & (uint8_t)~C515_CCEN_CC1_MASK) | C515_CCEN_CC1);
+  CCEN |= C515_CCEN_CC1;
 }
 
 void hal_clutch_write(uint8_t on)

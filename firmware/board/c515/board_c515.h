@@ -19,7 +19,7 @@
 
 #define C515_T2CON 0x11u       /* T2I0 (f/12) | T2R1 (reload mode 0) */
 #define C515_T2_RELOAD 0xFC18u /* 65536 - 1000 */
-#define C515_CCEN_CC1 0x08u    /* COCAH1:COCAL1 = 10, compare enabled on CC1 */
+#define C515_CCEN_CC1 0x08u    /* COCAH1:COCAL1 = 10, compare enabled on CC1 (COCAL1 stays 0) */
 #define C515_CCEN_CC1_MASK 0x0Cu
 
 #define C515_P4_DIR 0x01u    /* P4.0: motor direction, 1 = reverse */
@@ -35,15 +35,11 @@
 
 /* Reads the 16-bit encoder count of Timer 0 while it runs: re-read until the high byte is stable.
  * A macro, not a function: it runs inside the tick interrupt (no calls there). */
-#define C515_ENCODER_READ(count)                          \
-  do {                                                    \
-    uint8_t hi_, lo_;                                     \
-    do {                                                  \
-      hi_ = TH0;                                          \
-      lo_ = TL0;                                          \
-    } while (hi_ != TH0);                                 \
-    (count) = (uint16_t)((uint16_t)hi_ << 8 | lo_);       \
-  } while (0)
+#define C515_ENCODER_READ(hi, lo) \
+  do {                            \
+    (hi) = TH0;                   \
+    (lo) = TL0;                   \
+  } while ((hi) != TH0)
 
 void board_tick_isr(void) MCG_ISR(5);
 
