@@ -187,10 +187,6 @@ void run(const Options& o) {
   const bool plot = !o.output.empty() || text || o.script.empty();
   if (!o.output.empty()) {
     spec.output.kind = kind_from_path(o.output);
-    // Fail here, not in gnuplot, which would carry on and write the image to stdout.
-    if (!std::ofstream(o.output, std::ios::binary | std::ios::app)) {
-      fail("-o {}: cannot open: {}", o.output, std::strerror(errno));
-    }
     // gnuplot reads an output name starting with '|' as a command to pipe into.
     spec.output.path = o.output.front() == '|' ? "./" + o.output : o.output;
   } else if (text) {
@@ -227,6 +223,10 @@ void run(const Options& o) {
     if (!file) fail("--script {}: write failed", o.script);
   }
   if (!plot) return;
+  // Fail here, not in gnuplot, which would carry on and write the image to stdout.
+  if (!o.output.empty() && !std::ofstream(o.output, std::ios::binary | std::ios::app)) {
+    fail("-o {}: cannot open: {}", o.output, std::strerror(errno));
+  }
   std::vector<std::string> argv{program, "-d"};
   if (spec.output.kind == Output::Kind::window) argv.emplace_back("-persist");
   Child gnuplot(argv, false);

@@ -93,28 +93,31 @@ Excitation excite(Generator g, const GeneratorOptions& o, const std::vector<doub
                   const std::vector<Change>& then, double duration_s) {
   Excitation e;
   const std::string unit = unit_of(o.column);
-  const std::string about = fmt::format("on {} about bias {}{}", o.column, format_number(o.bias), unit);
+  const std::string about = fmt::format("about bias {}{}", format_number(o.bias), unit);
+  const std::string kind = fmt::format("on {}:", o.column);
   switch (g) {
     case Generator::step: {
       e.x = step_signal(t, o.level, o.at_s, then);
-      std::string steps = fmt::format("{}@{}", format_number(o.level), format_number(o.at_s));
-      for (const Change& c : then) steps += fmt::format(",{}@{}", format_number(c.value), format_number(c.time_s));
-      e.meta.set("excitation", fmt::format("step {} (level@time){} {}", steps, unit, about));
+      std::string steps = fmt::format("{}{} at {} s", format_number(o.level), unit, format_number(o.at_s));
+      for (const Change& c : then) {
+        steps += fmt::format(", {}{} at {} s", format_number(c.value), unit, format_number(c.time_s));
+      }
+      e.meta.set("excitation", fmt::format("step {} {}, {}", kind, steps, about));
       break;
     }
     case Generator::staircase:
       e.x = staircase_signal(t, o.amp, o.steps, o.hold_s);
       e.meta.set("excitation",
-                 fmt::format("staircase 0 -> {1}{0} -> -{1}{0} -> 0 in steps of {2}{0}, {3} s each, {4}", unit,
+                 fmt::format("staircase {5} 0 -> {1}{0} -> -{1}{0} -> 0 in steps of {2}{0}, {3} s each, {4}", unit,
                              format_number(o.amp), format_number(o.amp / o.steps), format_number(o.hold_s),
-                             about));
+                             about, kind));
       break;
     case Generator::chirp: {
       check_band(o);
       const ChirpSpacing spacing = spacing_of_option(o.spacing, ChirpSpacing::linear);
       e.x = chirp_signal(t, o.amp, o.f0_hz, o.f1_hz, duration_s, spacing);
-      e.meta.set("excitation", fmt::format("chirp {} {}..{} Hz over {} s, amplitude {}{} {}", spacing_name(spacing),
-                                           format_number(o.f0_hz), format_number(o.f1_hz),
+      e.meta.set("excitation", fmt::format("chirp {} {} {}..{} Hz over {} s, amplitude {}{}, {}", kind,
+                                           spacing_name(spacing), format_number(o.f0_hz), format_number(o.f1_hz),
                                            format_number(duration_s), format_number(o.amp), unit, about));
       e.meta.set("excitation_band_hz", fmt::format("{} {}", format_number(o.f0_hz), format_number(o.f1_hz)));
       break;
@@ -126,9 +129,9 @@ Excitation excite(Generator g, const GeneratorOptions& o, const std::vector<doub
       const double wanted_period = o.period_s.value_or(1.0 / o.f0_hz);
       const std::size_t period_samples =
           o.period_s ? whole_samples(*o.period_s, o.dt_s, "--period")
-                     : static_cast<std::size_t>(std::max(1.0, std::round(wanted_period / o.dt_s)));
+                     : static_cast<std::size_t>(std::max(1.0, std::ceil(wanted_period / o.dt_s - 1e-9)));
       const double period = static_cast<double>(period_samples) * o.dt_s;
-      const auto harmonics = multisine_harmonics(o.f0_hz * (1 - 1e-9), o.f1_hz, o.lines, period, spacing);
+      const auto harmonics = multisine_harmonics(o.f0_hz, o.f1_hz, o.lines, period, spacing);
       std::vector<double> phases;
       if (o.phases == "schroeder") {
         phases = schroeder_phases(harmonics.size());
@@ -144,8 +147,8 @@ Excitation excite(Generator g, const GeneratorOptions& o, const std::vector<doub
       std::vector<double> lines;
       for (int h : harmonics) lines.push_back(static_cast<double>(h) / period);
       e.meta.set("excitation",
-                 fmt::format("multisine {} lines {} spaced {}..{} Hz, {} phases, period {} s, peak {}{} {}",
-                             harmonics.size(), spacing_name(spacing), format_number(lines.front()),
+                 fmt::format("multisine {} {} lines {} spaced {}..{} Hz, {} phases, period {} s, peak {}{}, {}",
+                             kind, harmonics.size(), spacing_name(spacing), format_number(lines.front()),
                              format_number(lines.back()), o.phases, format_number(period), format_number(o.amp),
                              unit, about));
       e.meta.set("excitation_band_hz", fmt::format("{} {}", format_number(lines.front()), format_number(lines.back())));
@@ -166,8 +169,8 @@ Excitation excite(Generator g, const GeneratorOptions& o, const std::vector<doub
         e.x = aprbs_signal(t.size(), o.amp, o.order, clock_samples, state, rng);
       }
       e.meta.set("excitation",
-                 fmt::format("{} order {} (period {} s), bit time {} s, {} {}{} {}",
-                             g == Generator::prbs ? "prbs" : "aprbs", o.order, format_number(period),
+                 fmt::format("{} {} order {} (period {} s), bit time {} s, {}{}{}, {}",
+                             g == Generator::prbs ? "prbs" : "aprbs", kind, o.order, format_number(period),
                              format_number(clock), g == Generator::prbs ? "levels +-" : "levels uniform in +-",
                              format_number(o.amp), unit, about));
       e.meta.set("seed", std::to_string(o.seed));
@@ -257,12 +260,12 @@ void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
   const std::vector<double>& t_in = tbl.col("t");
   const std::vector<double>& x_in = tbl.col(o.in_column);
   const std::vector<double>& y_in = tbl.col(o.out_column);
-  if (tbl.rows() < 32) {
-    fail("{}: {} rows, too short for a frequency response (at least 32)", tbl.source, tbl.rows());
-  }
   table::require_increasing(tbl, "t");
   table::require_finite(tbl, o.in_column);
   table::require_finite(tbl, o.out_column);
+  if (tbl.rows() < 32) {
+    fail("{}: {} rows, too short for a frequency response (at least 32)", tbl.source, tbl.rows());
+  }
 
   const Spacing spacing = spacing_of(t_in);
   double dt = (t_in.back() - t_in.front()) / static_cast<double>(tbl.rows() - 1);
@@ -281,10 +284,9 @@ void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
     y_even = resample_linear(t_in, y_in, dt);
     x = x_even;
     y = y_even;
-    warn << fmt::format("mcg-sweep: warning: {}: uneven sampling (steps {} to {} s); resampled to {} s by linear "
-                        "interpolation\n",
-                        tbl.source, format_number(spacing.min_dt_s), format_number(spacing.max_dt_s),
-                        format_number(dt));
+    warn << fmt::format("mcg-sweep: warning: {}: uneven sampling (steps {:.4g} to {:.4g} s); resampled to {:.6g} s "
+                        "by linear interpolation\n",
+                        tbl.source, spacing.min_dt_s, spacing.max_dt_s, dt);
   }
 
   // Lines come from --lines/--period, else from the multisine generator's metadata.
@@ -355,6 +357,9 @@ void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
     if (r.f_hz[k] >= f_min * (1 - 1e-9) && r.f_hz[k] <= f_max * (1 + 1e-9) && !std::isnan(r.h[k].real())) {
       keep.push_back(k);
     }
+  }
+  if (keep.empty() && f_min == 0.0 && std::isinf(f_max)) {
+    fail("{}: no excitation in column '{}'", tbl.source, o.in_column);
   }
   if (keep.empty()) {
     fail("{}: no excitation in column '{}' between {} and {} Hz", tbl.source, o.in_column, format_number(f_min),
