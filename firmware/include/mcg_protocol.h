@@ -73,7 +73,7 @@
 #define MCG_COUNTS_PER_REV 2048u   /* encoder counts per motor revolution */
 #define MCG_DUTY_FULL 1000         /* duty unit: 1/1000 of full scale (0.1 %); PWM has 1000 steps */
 #define MCG_ERR_FRAC_BITS 8u       /* controller error e: Q8 encoder counts per 1 ms */
-#define MCG_ERR_LIMIT 8191         /* |e| is saturated to this (31.996 counts/ms = 937 rpm) */
+#define MCG_ERR_LIMIT 8191         /* e >= -this: pulses limited to (r + 8191) / 256 (937 rpm) */
 #define MCG_COEF_FRAC_BITS_MAX 12u /* coefficient fractional bits F (register MCG_REG_COEF_FRAC) */
 #define MCG_SPEED_WINDOW_MS 16u    /* speed counting window: rpm = counts_16ms * 1875 / 1024 */
 #define MCG_RPM_PER_WINDOW_NUM 1875u /* 60000 / (2048 * 16) = 1875 / 1024 rpm per count */
