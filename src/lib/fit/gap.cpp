@@ -48,9 +48,11 @@ const std::vector<EffectPlan>& effect_plans() {
       {"supply_sag", {"R_s_ohm"}, {{0.3, 1.0, 3.0}}},
       {"hbridge", {"R_on_ohm", "deadband"}, {{0.1, 0.5}, {0.005, 0.02, 0.06}}},
       {"brush_drop", {"V_b_V"}, {{0.2, 0.5, 1.0, 2.0}}},
-      {"clutch_compliance", {"k_Nm_per_rad", "zeta"}, {{0.01, 0.03, 0.1, 0.3, 1.0}, {0.05, 0.3}}},
+      {"clutch_compliance", {"k_Nm_per_rad", "zeta"}, {{0.01, 0.03, 0.1, 0.3, 1.0}, {0.03, 0.1, 0.3}}},
       {"clutch_engage_lag", {"T_max_Nm", "tau_s"}, {{0.01, 0.05, 0.2}, {0.005, 0.03, 0.1}}},
-      {"cogging", {"T_c_Nm", "phase_rad"}, {{0.0005, 0.002}, {-2.5, -1.0, 0.5, 2.0}}},
+      {"cogging",
+       {"T_c_Nm", "phase_rad"},
+       {{0.0006, 0.001, 0.0016, 0.0025}, {-2.75, -1.96, -1.18, -0.39, 0.39, 1.18, 1.96, 2.75}}},
       {"thermal", {"R_th_K_W", "tau_th_s"}, {{5.0, 20.0, 60.0}, {5.0, 60.0}}},
   };
   return plans;
@@ -302,36 +304,6 @@ std::string not_excited(std::string_view effect, const std::vector<Run>& runs) {
   return {};
 }
 
-/// Cycles per revolution of the strongest position-periodic component of the training
-/// speed residual: |sum_n r_n exp(-i N theta_n)| over the moving samples, N = 2..100, with
-/// theta the simulated shaft angle. Returns the best few N, strongest first.
-std::vector<double> cogging_orders(const model::Model& model, const std::vector<Run>& runs, std::size_t keep) {
-  std::vector<double> power(101, 0.0);
-  for (const Run& run : runs) {
-    const auto it = std::find(run.outputs.begin(), run.outputs.end(), "rpm");
-    if (it == run.outputs.end()) continue;
-    const auto o = static_cast<std::size_t>(it - run.outputs.begin());
-    const model::Outputs out = model::simulate(model, run.inputs);
-    const auto sim = simulate_as_measured(model, run);
-    for (std::size_t order = 2; order <= 100; ++order) {
-      std::complex<double> acc{0.0, 0.0};
-      for (std::size_t n = 0; n < run.measured[o].size(); ++n) {
-        const double r = run.measured[o][n] - sim[o][n];
-        if (!std::isfinite(r) || std::abs(out.rpm[n]) < 1.0) continue;
-        acc += r * std::polar(1.0, -static_cast<double>(order) * out.theta_rad[n]);
-      }
-      power[order] += std::norm(acc);
-    }
-  }
-  std::vector<double> orders;
-  for (std::size_t order = 2; order <= 100; ++order) orders.push_back(static_cast<double>(order));
-  std::stable_sort(orders.begin(), orders.end(), [&](double a, double b) {
-    return power[static_cast<std::size_t>(a)] > power[static_cast<std::size_t>(b)];
-  });
-  orders.resize(std::min(keep, orders.size()));
-  return orders;
-}
-
 struct Job {
   std::string name;
   std::vector<std::string> effects;
@@ -339,6 +311,8 @@ struct Job {
   std::vector<std::string> free;
   std::vector<std::string> grid_effects;  ///< effects whose plan grid is searched before the fit
   int evaluations_per_parameter = 10;     ///< simulation budget per free parameter (and one)
+  std::vector<std::string> stage1_free;   ///< fitted alone first (the added effect's parameters)
+  std::vector<model::Model> other_starts; ///< further nominal models the grid is searched on
 };
 
 void add_effect(model::Model& m, std::string_view name) {
@@ -353,8 +327,10 @@ std::vector<std::string> mismatch_free() {
 
 /// Searches the effect's grid (the cartesian product of its starting values) on the
 /// training cost and leaves the best point in `m`.
-void grid_start(model::Model& m, const EffectPlan& plan, const std::vector<Run>& runs,
-                const std::vector<double>& cogging_n) {
+/// Searches the effect's grid (the cartesian product of its starting values, on each of the
+/// `bases`) on the training cost and returns the best point.
+model::Model grid_start(const std::vector<model::Model>& bases, const EffectPlan& plan, const std::vector<Run>& runs,
+                        const std::vector<double>& cogging_n) {
   std::vector<std::vector<double>> axes = plan.grid;
   std::vector<std::string> keys = plan.free;
   if (plan.name == "cogging" && !cogging_n.empty()) {
@@ -364,23 +340,23 @@ void grid_start(model::Model& m, const EffectPlan& plan, const std::vector<Run>&
   std::size_t points = 1;
   for (const auto& a : axes) points *= a.size();
   double best = std::numeric_limits<double>::infinity();
-  std::vector<double> best_point(keys.size());
-  for (std::size_t p = 0; p < points; ++p) {
-    model::Model trial = m;
-    std::vector<double> point(keys.size());
-    std::size_t rest = p;
-    for (std::size_t k = 0; k < keys.size(); ++k) {
-      point[k] = axes[k][rest % axes[k].size()];
-      rest /= axes[k].size();
-      model::set_parameter(trial, plan.name + "." + keys[k], point[k]);
-    }
-    const double cost = training_cost(trial, runs);
-    if (cost < best) {
-      best = cost;
-      best_point = point;
+  model::Model best_model = bases.front();
+  for (const model::Model& base : bases) {
+    for (std::size_t p = 0; p < points; ++p) {
+      model::Model trial = base;
+      std::size_t rest = p;
+      for (std::size_t k = 0; k < keys.size(); ++k) {
+        model::set_parameter(trial, plan.name + "." + keys[k], axes[k][rest % axes[k].size()]);
+        rest /= axes[k].size();
+      }
+      const double cost = training_cost(trial, runs);
+      if (cost < best) {
+        best = cost;
+        best_model = std::move(trial);
+      }
     }
   }
-  for (std::size_t k = 0; k < keys.size(); ++k) model::set_parameter(m, plan.name + "." + keys[k], best_point[k]);
+  return best_model;
 }
 
 GapCandidate run_job(const Job& job, const GapData& data, const std::vector<OutputFloor>& floors,
@@ -390,18 +366,35 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   c.effects = job.effects;
   model::Model start = job.start;
   for (const auto& e : job.grid_effects) {
-    if (const EffectPlan* plan = find_plan(e)) grid_start(start, *plan, data.train, cogging_n);
+    if (const EffectPlan* plan = find_plan(e)) {
+      std::vector<model::Model> bases{start};
+      for (model::Model other : job.other_starts) {
+        add_effect(other, e);
+        bases.push_back(std::move(other));
+      }
+      start = grid_start(bases, *plan, data.train, cogging_n);
+    }
   }
   FitProblem problem;
-  problem.model = start;
   problem.runs = data.train;
-  problem.free = job.free;
   problem.nls.threads = jacobian_threads;
-  problem.nls.max_evaluations =
-      settings.max_evaluations > 0 ? settings.max_evaluations
-                                  : job.evaluations_per_parameter * static_cast<int>(job.free.size() + 1);
   problem.nls.xtol = 1e-4;
   problem.nls.ftol = 1e-5;
+  auto budget = [&](std::size_t free) {
+    return settings.max_evaluations > 0 ? settings.max_evaluations
+                                        : job.evaluations_per_parameter * static_cast<int>(free + 1);
+  };
+  // Stage 1: the added effect alone on the refitted nominal model (cheap, and it brings the
+  // effect into its basin before the nominal parameters may move to absorb it).
+  if (!job.stage1_free.empty()) {
+    problem.model = start;
+    problem.free = job.stage1_free;
+    problem.nls.max_evaluations = budget(job.stage1_free.size());
+    start = fit_model(problem).model;
+  }
+  problem.model = start;
+  problem.free = job.free;
+  problem.nls.max_evaluations = budget(job.free.size());
   const FitResult fit = fit_model(problem);
   c.model = fit.model;
   c.free = job.free;
@@ -571,6 +564,37 @@ void analyse(const GapData& data, const std::vector<std::vector<std::vector<doub
 
 // ---------------------------------------------------------------------------------------
 
+std::vector<double> cogging_orders(const model::Model& model, const std::vector<Run>& runs, std::size_t keep) {
+  std::vector<double> power(k_max_cogging_order + 1, 0.0);
+  for (const Run& run : runs) {
+    const auto it = std::find(run.outputs.begin(), run.outputs.end(), "rpm");
+    if (it == run.outputs.end()) continue;
+    const auto o = static_cast<std::size_t>(it - run.outputs.begin());
+    const auto& y = run.measured[o];
+    const auto sim = simulate_as_measured(model, run);
+    // The measured angle: the trapezoidal integral of the measured speed.
+    std::vector<std::complex<double>> acc(k_max_cogging_order + 1, {0.0, 0.0});
+    double theta = 0.0;
+    for (std::size_t n = 1; n < y.size(); ++n) {
+      const double dt = run.inputs.t_s[n] - run.inputs.t_s[n - 1];
+      if (std::isfinite(y[n]) && std::isfinite(y[n - 1])) theta += 0.5 * (y[n] + y[n - 1]) * dt * std::numbers::pi / 30.0;
+      const double r = y[n] - sim[o][n];
+      if (!std::isfinite(r) || y[n] == 0.0) continue;
+      for (std::size_t order = 2; order <= k_max_cogging_order; ++order) {
+        acc[order] += r * std::polar(1.0, -static_cast<double>(order) * theta);
+      }
+    }
+    for (std::size_t order = 2; order <= k_max_cogging_order; ++order) power[order] += std::norm(acc[order]);
+  }
+  std::vector<double> orders;
+  for (std::size_t order = 2; order <= k_max_cogging_order; ++order) orders.push_back(static_cast<double>(order));
+  std::stable_sort(orders.begin(), orders.end(), [&](double a, double b) {
+    return power[static_cast<std::size_t>(a)] > power[static_cast<std::size_t>(b)];
+  });
+  orders.resize(std::min(keep, orders.size()));
+  return orders;
+}
+
 GapData prepare_gap_data(const std::vector<table::Table>& train, const std::vector<table::Table>& validate,
                          const model::Params& params, double split_fraction) {
   if (train.empty()) fail("--train: no training file");
@@ -683,7 +707,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   // The refit of the nominal parameters, warm start of every effect candidate.
   model::Model base = model;
   add_effect(base, "param_mismatch");
-  Job pm_job{"param_mismatch", {}, base, mismatch_free(), {}, 20};
+  Job pm_job{"param_mismatch", {}, base, mismatch_free(), {}, 20, {}, {}};
   if (settings.progress) settings.progress("fitting param_mismatch (nominal parameters)");
   std::vector<GapCandidate> pm_result = run_jobs({pm_job}, data, report.floors, settings, threads, {}, done, total);
   GapCandidate pm = std::move(pm_result.front());
@@ -692,7 +716,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   // Single effects.
   std::vector<Job> jobs;
   std::vector<GapCandidate> skipped;
-  const std::vector<double> cogging_n = cogging_orders(pm.model, data.train, 3);
+  const std::vector<double> cogging_n = cogging_orders(pm.model, data.train, 2);
   for (const EffectPlan& plan : effect_plans()) {
     if (model.effect(plan.name) != nullptr) continue;
     const std::string why = not_excited(plan.name, data.train);
@@ -709,9 +733,12 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
       ++done;
       continue;
     }
-    Job job{plan.name, {plan.name}, pm.model, mismatch_free(), {plan.name}};
+    Job job{plan.name, {plan.name}, pm.model, mismatch_free(), {plan.name}, 10, {}, {base}};
     add_effect(job.start, plan.name);
-    for (const auto& key : plan.free) job.free.push_back(plan.name + "." + key);
+    for (const auto& key : plan.free) {
+      job.free.push_back(plan.name + "." + key);
+      job.stage1_free.push_back(plan.name + "." + key);
+    }
     jobs.push_back(std::move(job));
   }
   std::vector<GapCandidate> singles = run_jobs(jobs, data, report.floors, settings, threads, cogging_n, done, total);
@@ -735,7 +762,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
     if (best < pm_cost) {
       if (settings.progress) settings.progress("refitting param_mismatch from a better start");
       ++total;
-      Job again{"param_mismatch", {}, start, mismatch_free(), {}, 10};
+      Job again{"param_mismatch", {}, start, mismatch_free(), {}, 10, {}, {}};
       GapCandidate refit = std::move(run_jobs({again}, data, report.floors, settings, threads, {}, done, total).front());
       refit.fpe = fpe(refit.score, refit.free.size());
       if (training_cost(refit.model, data.train) < pm_cost) pm = std::move(refit);
@@ -759,7 +786,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
     for (std::size_t b = a + 1; b < strong.size(); ++b) {
       const GapCandidate& first = *strong[a];
       const GapCandidate& second = *strong[b];
-      Job job{first.name + "+" + second.name, {first.name, second.name}, first.model, first.free, {}};
+      Job job{first.name + "+" + second.name, {first.name, second.name}, first.model, first.free, {}, 10, {}, {}};
       job.start.effects.push_back(*second.model.effect(second.name));
       for (const auto& key : find_plan(second.name)->free) job.free.push_back(second.name + "." + key);
       pair_jobs.push_back(std::move(job));
