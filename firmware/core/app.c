@@ -121,7 +121,7 @@ void core_poll(void)
   MCG_SLOW uint8_t byte;
   /* Late by several ticks (only if something overran a tick): share the pulses out evenly. */
   while (n > 0) {
-    MCG_SLOW uint16_t share = n == 1 ? pulses : pulses / n;
+    MCG_SLOW uint16_t share = (uint16_t)(n == 1 ? pulses : pulses / n);
     pulses = (uint16_t)(pulses - share);
     tick(share > 255u ? 255u : (uint8_t)share);
     --n;
