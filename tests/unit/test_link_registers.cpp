@@ -1,0 +1,74 @@
+// Unit tests of the register table: names, scales, ranges, text in and out.
+#include "link/registers.hpp"
+
+#include <gtest/gtest.h>
+
+#include "common/error.hpp"
+#include "mcg_protocol.h"
+
+namespace mcg::link {
+namespace {
+
+template <typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(LinkRegisters, EveryProtocolRegisterHasOneEntry) {
+  ASSERT_EQ(registers().size(), MCG_REG_COUNT - 1u);
+  for (unsigned id = 1; id < MCG_REG_COUNT; ++id) {
+    const RegisterInfo* reg = find_register(static_cast<std::uint8_t>(id));
+    ASSERT_NE(reg, nullptr) << id;
+    EXPECT_EQ(find_register(reg->name), reg);
+  }
+  EXPECT_EQ(find_register("RPM-CMD"), find_register(static_cast<std::uint8_t>(MCG_REG_RPM_CMD)));
+  EXPECT_EQ(find_register("speed"), nullptr);
+  EXPECT_EQ(error_of([] { require_register("speed"); }).substr(0, 48), "unknown register 'speed' (registers: mode, rpm_c");
+}
+
+TEST(LinkRegisters, ScalesOfTheProtocol) {
+  const auto& duty = require_register("duty");
+  EXPECT_EQ(to_raw(duty, 35.5, 0), 355);      // 1/1000 of full scale
+  EXPECT_EQ(to_raw(duty, -100.0, 0), -1000);
+  EXPECT_DOUBLE_EQ(to_engineering(duty, 355, 0), 35.5);
+  const auto& kp = require_register("kp");
+  EXPECT_EQ(to_raw(kp, 2.5, 8), 640);         // Q8
+  EXPECT_EQ(to_raw(kp, 2.5, 12), 10240);      // Q12
+  EXPECT_EQ(to_raw(kp, 3.1575, 12), 12933);   // 3.1575 * 4096 = 12933.1 -> 12933
+  EXPECT_DOUBLE_EQ(to_engineering(kp, 12933, 12), 12933.0 / 4096.0);
+  EXPECT_EQ(to_raw(require_register("rpm_cmd"), 420.4, 0), 420);
+  // Counters travel as i16 but count up to 65535.
+  EXPECT_DOUBLE_EQ(to_engineering(require_register("rx_errors"), -1, 0), 65535.0);
+}
+
+TEST(LinkRegisters, RangesAreCheckedBeforeSending) {
+  EXPECT_EQ(error_of([] { to_raw(require_register("rpm_cmd"), 800, 0); }), "rpm_cmd: 800 rpm is outside 120..720 rpm");
+  EXPECT_EQ(error_of([] { to_raw(require_register("duty"), 100.06, 0); }), "duty: 100.06 % is outside -100..100 %");
+  EXPECT_EQ(error_of([] { to_raw(require_register("kp"), 200.0, 8); }),
+            "kp: 200 /1000 per pulse/ms is outside -128..127.99609375 /1000 per pulse/ms");
+  EXPECT_EQ(to_raw(require_register("duty"), 100.04, 0), 1000);  // rounds into range
+}
+
+TEST(LinkRegisters, ParseAndFormat) {
+  const auto& mode = require_register("mode");
+  EXPECT_EQ(parse_value(mode, "PI", "set"), 2.0);
+  EXPECT_EQ(parse_value(mode, "3", "set"), 3.0);
+  EXPECT_EQ(format_value(mode, 3, 0), "pid");
+  EXPECT_EQ(error_of([&] { parse_value(mode, "fast", "set"); }), "set: mode: invalid value 'fast' (open, p, pi, pid)");
+  EXPECT_EQ(parse_value(require_register("clutch"), "on", "x"), 1.0);
+  EXPECT_EQ(error_of([] { parse_value(require_register("rpm_cmd"), "4e", "a.ini:3"); }),
+            "a.ini:3: rpm_cmd: invalid value '4e'");
+  EXPECT_EQ(format_value(require_register("flags"), MCG_FLAG_SATURATED | MCG_FLAG_SEQ, 0), "saturated,seq");
+  EXPECT_EQ(format_value(require_register("flags"), 0, 0), "none");
+  EXPECT_EQ(format_value(require_register("duty"), -355, 0), "-35.5");
+  EXPECT_EQ(format_value(require_register("b1"), -3, 2), "-0.75");
+  EXPECT_EQ(status_text(MCG_ST_RANGE), "value outside the register's range");
+}
+
+}  // namespace
+}  // namespace mcg::link
