@@ -1,7 +1,8 @@
 /* arith.h: the controller's widened multiplies: 16 x 16 -> 32 bits signed, and the PID sum.
  *
  * C's (int32_t)a * b is exact everywhere, but SDCC turns it into a 32 x 32 multiply (__mullong);
- * the 8051 build links a MUL AB version instead (board/mcs51/arith_mcs51.c). */
+ * the 8051 build links a MUL AB version instead (board/mcs51/arith_mcs51.c). arith_pid_sum is the
+ * pulse part of the controller's sum (control.c), used by the C update (control_tick.c). */
 #ifndef MCG_FIRMWARE_CORE_ARITH_H
 #define MCG_FIRMWARE_CORE_ARITH_H
 
@@ -19,7 +20,7 @@ extern ArithPid g_pid;
 
 #if MCG_MCS51
 int32_t arith_mul16(int16_t a, int16_t b);
-int32_t arith_pid_sum(void);
+/* arith_pid_sum has no 8051 version: the assembly control_tick does the same sum inline. */
 #else
 static inline int32_t arith_mul16(int16_t a, int16_t b)
 {
