@@ -51,6 +51,32 @@ TEST(FwLogger, RecordsPointsAtTheInterval)
   }
 }
 
+// A main loop held up for several ticks (an LCD refresh on the board) runs the missed ticks late:
+// the log keeps its time base and loses no pulse.
+TEST(FwLogger, LateTicksKeepTimeAndPulses)
+{
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_LOG_INTERVAL, 3), MCG_ST_OK);
+  ASSERT_EQ(b.request(MCG_CMD_LOG_START)->payload.at(0), MCG_ST_OK);
+  long total = 0;
+  for (int n = 1; n <= 765; ++n) {
+    const auto p = pattern(n);
+    total += p;
+    if (n % 7 != 0 && n != 765) {
+      host_board_stall(p);  // six ticks in seven come late
+    } else {
+      host_board_tick(p);
+    }
+  }
+  EXPECT_EQ(g_log_count, MCG_LOG_POINTS);
+  long logged = 0;
+  for (int k = 0; k < 255; ++k) {
+    logged += host_board_log()[k];
+  }
+  EXPECT_EQ(logged, total) << "every pulse counted once";
+  EXPECT_EQ(host_board_time_ms(), 765u + 2u);  // + the ticks of the two requests
+}
+
 TEST(FwLogger, IntervalLockedWhileRecording)
 {
   Board b;

@@ -175,13 +175,18 @@ static void drain_tx(void)
   }
 }
 
-void host_board_tick(uint16_t encoder_pulses)
+void host_board_stall(uint16_t encoder_pulses)
 {
   ++s_time_ms;
   if (s_ticks < 255u) {
     ++s_ticks;
   }
   s_pulses = (uint16_t)(s_pulses + encoder_pulses);
+}
+
+void host_board_tick(uint16_t encoder_pulses)
+{
+  host_board_stall(encoder_pulses);
   if (s_baud != 0) {
     /* carry at most one tick of unused line time, as the line cannot store it */
     s_in_credit = (s_in_credit % 10000u) + s_baud;

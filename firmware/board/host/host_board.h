@@ -37,6 +37,11 @@ void host_board_set_baud(uint32_t baud);
  * loop: serial bytes move at the line rate, the core runs its control update and services. */
 void host_board_tick(uint16_t encoder_pulses);
 
+/* Advances by one tick without running the main loop, as when the board's main loop is held up
+ * (an LCD refresh): the next host_board_tick runs every pending tick, sharing the pulses counted
+ * meanwhile evenly among them, as the board does. */
+void host_board_stall(uint16_t encoder_pulses);
+
 /* Bytes arriving from the PC; they reach the UART at the line rate during the next ticks.
  * Returns how many were accepted (the line buffer holds HOST_BOARD_LINE_BYTES). */
 size_t host_board_rx(const uint8_t *data, size_t n);
