@@ -19,7 +19,7 @@
 #define BENCH_XADDR 0x9F00u
 #define BENCH_RUNS 256u
 #define BENCH_OUT_XADDR 0xA000u /* 4 x 256 duties, i16 */
-#define BENCH_SETS 4u            /* P, PI, PID at F = 8; PID at F = 11 */
+#define BENCH_SETS 4u           /* P, PI, PID at F = 8; PID at F = 11 */
 
 /* Per set (P, PI, PID, PID at F = 11): min, max (u16), sum (u32); then the empty-interval overhead. */
 typedef struct {
@@ -32,8 +32,7 @@ static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + BENCH_SETS * sizeof(Figures)) s_o
 static int16_t MCG_XDATA MCG_AT(BENCH_OUT_XADDR) s_out[BENCH_SETS][BENCH_RUNS];
 static uint8_t s_last_hi, s_last_lo; /* encoder count at the last update */
 
-static uint16_t cycles_now(void)
-{
+static uint16_t cycles_now(void) {
   uint8_t hi, lo;
   do {
     hi = TH1;
@@ -43,8 +42,7 @@ static uint16_t cycles_now(void)
 }
 
 /* The measured update: encoder read, pulses since the last tick (fewer than 256), control_tick. */
-static void update(void)
-{
+static void update(void) {
   uint8_t hi;
   uint8_t lo;
   uint8_t pulses;
@@ -55,12 +53,9 @@ static void update(void)
   control_tick(pulses);
 }
 
-void bench_done(void)
-{
-}
+void bench_done(void) {}
 
-void main(void)
-{
+void main(void) {
   uint8_t m;
   uint16_t i;
   core_init();

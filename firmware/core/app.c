@@ -1,27 +1,24 @@
 /* app.c: the service loop, command dispatch, stream blocks and the RAM log dump. */
 #include "core.h"
-
 #include "hal.h" /* hal_ticks_take, hal_uart_rx, hal_uart_tx_free, hal_board_id */
 
 uint8_t MCG_XDATA g_stream_seq;
 uint8_t MCG_XDATA g_dump_next;
 
-static MCG_XDATA uint8_t s_service_ms;    /* ticks since the last keypad service */
-static MCG_XDATA uint16_t s_lcd_ms;       /* ticks since the last LCD refresh */
-static MCG_XDATA uint8_t s_stream_phase;  /* ticks into the present 2 ms sample */
-static MCG_XDATA uint8_t s_stream_count;  /* samples in the present block */
+static MCG_XDATA uint8_t s_service_ms;   /* ticks since the last keypad service */
+static MCG_XDATA uint16_t s_lcd_ms;      /* ticks since the last LCD refresh */
+static MCG_XDATA uint8_t s_stream_phase; /* ticks into the present 2 ms sample */
+static MCG_XDATA uint8_t s_stream_count; /* samples in the present block */
 static MCG_XDATA uint16_t s_stream_pulses;
 static uint8_t MCG_XDATA s_block[MCG_STREAM_HEADER + MCG_STREAM_SAMPLES];
 static uint8_t MCG_XDATA s_data[MCG_LOGDATA_HEADER + 2u * MCG_LOG_DUMP_CHUNK];
 
-static void put16(uint8_t MCG_XDATA *p, int16_t v)
-{
+static void put16(uint8_t MCG_XDATA* p, int16_t v) {
   p[0] = (uint8_t)((uint16_t)v & 0xFFu);
   p[1] = (uint8_t)((uint16_t)v >> 8);
 }
 
-void core_init(void)
-{
+void core_init(void) {
   frame_init();
   control_init();
   regs_init();
@@ -41,8 +38,7 @@ void core_init(void)
 
 /* One sample every MCG_STREAM_PERIOD_MS, one block every MCG_STREAM_SAMPLES samples. A block that
  * finds no transmit room is dropped, and its sequence number with it, so the host counts the loss. */
-static void stream_tick(uint8_t pulses)
-{
+static void stream_tick(uint8_t pulses) {
   if (!g_stream_on) {
     s_stream_phase = 0;
     s_stream_count = 0;
@@ -66,8 +62,7 @@ static void stream_tick(uint8_t pulses)
   frame_send(MCG_MSG_STREAM, s_block, (uint8_t)sizeof s_block);
 }
 
-static void tick(uint8_t pulses)
-{
+static void tick(uint8_t pulses) {
   control_tick(pulses);
   speed_tick(pulses);
   logger_tick(pulses);
@@ -84,8 +79,7 @@ static void tick(uint8_t pulses)
   }
 }
 
-uint8_t app_dump_start(void)
-{
+uint8_t app_dump_start(void) {
   if (g_log_running) {
     return MCG_ST_BUSY;
   }
@@ -94,10 +88,8 @@ uint8_t app_dump_start(void)
 }
 
 /* Sends the next chunks of the log while the transmit buffer has room for a whole one. */
-static void dump_pump(void)
-{
-  while (g_dump_next < MCG_LOG_DUMP_FRAMES &&
-         hal_uart_tx_free() >= MCG_FRAME_OVERHEAD + sizeof s_data) {
+static void dump_pump(void) {
+  while (g_dump_next < MCG_LOG_DUMP_FRAMES && hal_uart_tx_free() >= MCG_FRAME_OVERHEAD + sizeof s_data) {
     MCG_SLOW uint8_t first = (uint8_t)(g_dump_next * MCG_LOG_DUMP_CHUNK);
     MCG_SLOW uint8_t n = (uint8_t)(MCG_LOG_POINTS - first);
     MCG_SLOW uint8_t i;
@@ -114,8 +106,7 @@ static void dump_pump(void)
   }
 }
 
-void core_poll(void)
-{
+void core_poll(void) {
   MCG_SLOW uint16_t pulses;
   MCG_SLOW uint8_t n = hal_ticks_take(&pulses);
   MCG_SLOW uint8_t byte;
@@ -137,76 +128,75 @@ void core_poll(void)
 
 static uint8_t MCG_XDATA s_ans[6];
 
-void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len)
-{
+void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA* payload, uint8_t len) {
   MCG_SLOW uint8_t st;
   MCG_SLOW int16_t value = 0;
   switch (cmd) {
-  case MCG_CMD_VERSION:
-    if (len != 0) {
-      break;
-    }
-    s_ans[0] = MCG_PROTOCOL_VERSION;
-    s_ans[1] = MCG_FW_VERSION_MAJOR;
-    s_ans[2] = MCG_FW_VERSION_MINOR;
-    s_ans[3] = MCG_FW_VERSION_PATCH;
-    s_ans[4] = hal_board_id();
-    frame_reply(cmd, MCG_ST_OK, s_ans, 5);
-    return;
-  case MCG_CMD_READ:
-  case MCG_CMD_WRITE:
-    if (len != (cmd == MCG_CMD_READ ? 1u : 3u)) {
-      break;
-    }
-    st = MCG_ST_OK;
-    if (cmd == MCG_CMD_WRITE) {
-      st = regs_write(payload[0], (int16_t)(payload[1] | ((uint16_t)payload[2] << 8)));
-    }
-    if (st == MCG_ST_OK) {
-      st = regs_read(payload[0], &value);
-    }
-    if (st != MCG_ST_OK) {
-      frame_reply(cmd, st, s_ans, 0);
+    case MCG_CMD_VERSION:
+      if (len != 0) {
+        break;
+      }
+      s_ans[0] = MCG_PROTOCOL_VERSION;
+      s_ans[1] = MCG_FW_VERSION_MAJOR;
+      s_ans[2] = MCG_FW_VERSION_MINOR;
+      s_ans[3] = MCG_FW_VERSION_PATCH;
+      s_ans[4] = hal_board_id();
+      frame_reply(cmd, MCG_ST_OK, s_ans, 5);
       return;
-    }
-    s_ans[0] = payload[0];
-    put16(s_ans + 1, value);
-    frame_reply(cmd, MCG_ST_OK, s_ans, 3);
-    return;
-  case MCG_CMD_LOG_START:
-    if (len != 0) {
-      break;
-    }
-    frame_reply(cmd, logger_start(), s_ans, 0);
-    return;
-  case MCG_CMD_LOG_DUMP:
-    if (len != 0) {
-      break;
-    }
-    st = app_dump_start();
-    s_ans[0] = g_log_count;
-    s_ans[1] = g_log_interval;
-    frame_reply(cmd, st, s_ans, st == MCG_ST_OK ? 2u : 0u);
-    return;
-  case MCG_CMD_SEQ_WRITE:
-    if (len < 1u + MCG_SEQ_ENTRY_BYTES || (len - 1u) % MCG_SEQ_ENTRY_BYTES != 0 ||
-        (len - 1u) / MCG_SEQ_ENTRY_BYTES > MCG_SEQ_WRITE_MAX) {
-      break;
-    }
-    value = (int16_t)((len - 1u) / MCG_SEQ_ENTRY_BYTES);
-    st = seq_write(payload[0], payload + 1, (uint8_t)value);
-    s_ans[0] = (uint8_t)(payload[0] + value);
-    frame_reply(cmd, st, s_ans, st == MCG_ST_OK ? 1u : 0u);
-    return;
-  case MCG_CMD_SEQ_CLEAR:
-    if (len != 0) {
-      break;
-    }
-    frame_reply(cmd, seq_clear(), s_ans, 0);
-    return;
-  default:
-    frame_reply(cmd, MCG_ST_BAD_CMD, s_ans, 0);
-    return;
+    case MCG_CMD_READ:
+    case MCG_CMD_WRITE:
+      if (len != (cmd == MCG_CMD_READ ? 1u : 3u)) {
+        break;
+      }
+      st = MCG_ST_OK;
+      if (cmd == MCG_CMD_WRITE) {
+        st = regs_write(payload[0], (int16_t)(payload[1] | ((uint16_t)payload[2] << 8)));
+      }
+      if (st == MCG_ST_OK) {
+        st = regs_read(payload[0], &value);
+      }
+      if (st != MCG_ST_OK) {
+        frame_reply(cmd, st, s_ans, 0);
+        return;
+      }
+      s_ans[0] = payload[0];
+      put16(s_ans + 1, value);
+      frame_reply(cmd, MCG_ST_OK, s_ans, 3);
+      return;
+    case MCG_CMD_LOG_START:
+      if (len != 0) {
+        break;
+      }
+      frame_reply(cmd, logger_start(), s_ans, 0);
+      return;
+    case MCG_CMD_LOG_DUMP:
+      if (len != 0) {
+        break;
+      }
+      st = app_dump_start();
+      s_ans[0] = g_log_count;
+      s_ans[1] = g_log_interval;
+      frame_reply(cmd, st, s_ans, st == MCG_ST_OK ? 2u : 0u);
+      return;
+    case MCG_CMD_SEQ_WRITE:
+      if (len < 1u + MCG_SEQ_ENTRY_BYTES || (len - 1u) % MCG_SEQ_ENTRY_BYTES != 0 ||
+          (len - 1u) / MCG_SEQ_ENTRY_BYTES > MCG_SEQ_WRITE_MAX) {
+        break;
+      }
+      value = (int16_t)((len - 1u) / MCG_SEQ_ENTRY_BYTES);
+      st = seq_write(payload[0], payload + 1, (uint8_t)value);
+      s_ans[0] = (uint8_t)(payload[0] + value);
+      frame_reply(cmd, st, s_ans, st == MCG_ST_OK ? 1u : 0u);
+      return;
+    case MCG_CMD_SEQ_CLEAR:
+      if (len != 0) {
+        break;
+      }
+      frame_reply(cmd, seq_clear(), s_ans, 0);
+      return;
+    default:
+      frame_reply(cmd, MCG_ST_BAD_CMD, s_ans, 0);
+      return;
   }
   frame_reply(cmd, MCG_ST_BAD_LENGTH, s_ans, 0);
 }

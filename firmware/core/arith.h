@@ -22,15 +22,11 @@ extern ArithPid g_pid;
 int32_t arith_mul16(int16_t a, int16_t b);
 /* arith_pid_sum has no 8051 version: the assembly control_tick does the same sum inline. */
 #else
-static inline int32_t arith_mul16(int16_t a, int16_t b)
-{
-  return (int32_t)a * (int32_t)b;
-}
+static inline int32_t arith_mul16(int16_t a, int16_t b) { return (int32_t)a * (int32_t)b; }
 
 /* -256 sum_i b_i p[i] (mod 2^32), as 2^23 P - 256 T with T = sum_i bp[i] p[i] and P = sum_i p[i]:
  * b_i p = (bp[i] - 2^15) p, so only unsigned 16 x 8 products are needed. */
-static inline int32_t arith_pid_sum(void)
-{
+static inline int32_t arith_pid_sum(void) {
   uint32_t t = 0;
   uint32_t p = 0;
   int i;

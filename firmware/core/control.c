@@ -20,10 +20,9 @@
  * Speed: a 16 ms window gives rpm = c * 60000 / (2048 * 16) = c * 1875 / 1024 with c the pulses in
  * the window. One pulse more or less (window phase) is 1.83 rpm, rounding adds 0.5 rpm: +-2.4 rpm,
  * inside the required +-5 rpm (the report's +-10 rpm corresponds to a 3 ms window). */
-#include "core.h"
-
 #include "arith.h" /* arith_mul16 */
-#include "hal.h"   /* hal_pwm_write */
+#include "core.h"
+#include "hal.h" /* hal_pwm_write */
 
 int16_t MCG_XDATA g_kp, g_b0, g_b1, g_b2;
 uint8_t MCG_XDATA g_coef_frac;
@@ -35,9 +34,9 @@ ArithPid g_pid;
 
 static uint8_t MCG_IDATA s_window[MCG_SPEED_WINDOW_MS]; /* pulses per tick, ring */
 static uint8_t MCG_XDATA s_window_pos;
-static int16_t s_r_q8;                  /* command r[n], Q8 pulses per tick */
-static int16_t MCG_XDATA s_r1, s_r2;    /* r[n-1], r[n-2]: the commands of the last two ticks */
-static int32_t MCG_XDATA s_u_bias;     /* P-mode bias in Q(F+8) */
+static int16_t s_r_q8;               /* command r[n], Q8 pulses per tick */
+static int16_t MCG_XDATA s_r1, s_r2; /* r[n-1], r[n-2]: the commands of the last two ticks */
+static int32_t MCG_XDATA s_u_bias;   /* P-mode bias in Q(F+8) */
 uint8_t g_ctl_p_hi;
 int32_t MCG_IDATA g_ctl_r[3];
 uint8_t g_ctl_r_k;
@@ -47,13 +46,9 @@ uint8_t g_ctl_shift;
 uint8_t g_ctl_settle;
 
 /* x * 2^shift without shifting a negative value (undefined in C). */
-static int32_t scale_up(int16_t x)
-{
-  return (int32_t)x * ((int32_t)1 << g_ctl_shift);
-}
+static int32_t scale_up(int16_t x) { return (int32_t)x * ((int32_t)1 << g_ctl_shift); }
 
-static void rescale(void)
-{
+static void rescale(void) {
   g_ctl_shift = (uint8_t)(g_coef_frac + MCG_ERR_FRAC_BITS);
   g_ctl_u_min = scale_up(g_duty_min);
   g_ctl_u_max = scale_up(g_duty_max);
@@ -61,24 +56,21 @@ static void rescale(void)
   g_ctl_u = scale_up(g_duty_out);
 }
 
-int16_t control_rpm_to_q8(int16_t rpm)
-{
+int16_t control_rpm_to_q8(int16_t rpm) {
   /* 2048 * 256 = 524288 counts * 2^8 per revolution; 60000 ms per minute. */
   int32_t num = (int32_t)rpm * 524288L;
   if (num >= 0) {
     return (int16_t)((num + 30000L) / 60000L);
   }
-  return (int16_t)-((-num + 30000L) / 60000L);
+  return (int16_t) - ((-num + 30000L) / 60000L);
 }
 
-int16_t control_rpm(void)
-{
+int16_t control_rpm(void) {
   return (int16_t)(((uint32_t)g_counts_16ms * MCG_RPM_PER_WINDOW_NUM + MCG_RPM_PER_WINDOW_DEN / 2u) /
                    MCG_RPM_PER_WINDOW_DEN);
 }
 
-void control_init(void)
-{
+void control_init(void) {
   uint8_t i;
   for (i = 0; i < MCG_SPEED_WINDOW_MS; ++i) {
     s_window[i] = 0;
@@ -107,8 +99,7 @@ void control_init(void)
   control_refresh();
 }
 
-void control_set_rpm_cmd(int16_t rpm)
-{
+void control_set_rpm_cmd(int16_t rpm) {
   int16_t hi;
   s_r_q8 = control_rpm_to_q8(rpm);
   hi = (int16_t)((s_r_q8 + MCG_ERR_LIMIT) >> 8);
@@ -119,8 +110,7 @@ void control_set_rpm_cmd(int16_t rpm)
 }
 
 /* The coefficients of the active mode, as R and the operands of arith_pid_sum use them. */
-static void active_coefs(int16_t *c0, int16_t *c1, int16_t *c2)
-{
+static void active_coefs(int16_t* c0, int16_t* c1, int16_t* c2) {
   *c0 = 0;
   *c1 = 0;
   *c2 = 0;
@@ -133,8 +123,7 @@ static void active_coefs(int16_t *c0, int16_t *c1, int16_t *c2)
   }
 }
 
-void control_refresh(void)
-{
+void control_refresh(void) {
   MCG_SLOW int16_t c0;
   MCG_SLOW int16_t c1;
   MCG_SLOW int16_t c2;
@@ -155,22 +144,19 @@ void control_refresh(void)
   g_ctl_r_k = 0;
 }
 
-void control_set_mode(uint8_t mode)
-{
+void control_set_mode(uint8_t mode) {
   (void)mode;
   g_ctl_u = scale_up(g_duty_out); /* bumpless: the integrator starts from the present output */
   control_refresh();
 }
 
-void control_set_coef_frac(uint8_t frac_bits)
-{
+void control_set_coef_frac(uint8_t frac_bits) {
   g_coef_frac = frac_bits;
   rescale();
   control_refresh();
 }
 
-void control_set_limits(int16_t duty_min, int16_t duty_max)
-{
+void control_set_limits(int16_t duty_min, int16_t duty_max) {
   g_duty_min = duty_min;
   g_duty_max = duty_max;
   rescale();
@@ -181,23 +167,20 @@ void control_set_limits(int16_t duty_min, int16_t duty_max)
   }
 }
 
-void control_set_bias(int16_t duty_bias)
-{
+void control_set_bias(int16_t duty_bias) {
   g_duty_bias = duty_bias;
   s_u_bias = scale_up(duty_bias);
   control_refresh();
 }
 
 /* Pulses of the last MCG_SPEED_WINDOW_MS ticks, for rpm (display, register, not the controller). */
-void speed_tick(uint8_t pulses)
-{
+void speed_tick(uint8_t pulses) {
   g_counts_16ms = (uint16_t)(g_counts_16ms + pulses - s_window[s_window_pos]);
   s_window[s_window_pos] = pulses;
   s_window_pos = (uint8_t)((s_window_pos + 1u) & (MCG_SPEED_WINDOW_MS - 1u));
 }
 
-void control_settle(void)
-{
+void control_settle(void) {
   s_r2 = s_r1;
   s_r1 = s_r_q8;
   --g_ctl_settle;

@@ -3,19 +3,16 @@
  * The 8051 build links board/mcs51/control_tick_mcs51.c instead, the same steps in assembly; the
  * ucsim test checks that both give the same duty, update by update. The equations are in
  * control.c; the state lives there too (g_ctl_*). */
-#include "core.h"
-
 #include "arith.h" /* arith_pid_sum */
-#include "hal.h"   /* hal_pwm_write */
+#include "core.h"
+#include "hal.h" /* hal_pwm_write */
 
 /* (U + 2^(s-1)) >> s with s = F + 8, rounded half up. */
-static int16_t output_of(int32_t u)
-{
+static int16_t output_of(int32_t u) {
   return (int16_t)((u + ((int32_t)1 << (g_ctl_shift - 1u))) >> g_ctl_shift);
 }
 
-void control_tick(uint8_t pulses)
-{
+void control_tick(uint8_t pulses) {
   int16_t out;
   int32_t u;
 

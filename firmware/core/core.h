@@ -22,7 +22,7 @@ void core_init(void);
  * the log dump and the service tasks (keypad, LCD). Never blocks. */
 void core_poll(void);
 /* Frame dispatch (called by the parser with a CRC-checked frame). */
-void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len);
+void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA* payload, uint8_t len);
 
 /* frame.c: framing, CRC, resynchronising parser ----------------------------------------------- */
 void frame_init(void);
@@ -34,26 +34,26 @@ void frame_rx_tick(void);
 void frame_rx_overrun(void);
 /* Sends a whole frame, or none (counting g_tx_drops) if the transmit buffer lacks room.
  * Returns 1 if queued. */
-uint8_t frame_send(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len) MCG_REENTRANT;
+uint8_t frame_send(uint8_t cmd, const uint8_t MCG_XDATA* payload, uint8_t len) MCG_REENTRANT;
 /* Sends an answer: CMD | MCG_REPLY_BIT, the status, then len bytes of data. */
-uint8_t frame_reply(uint8_t cmd, uint8_t status, const uint8_t MCG_XDATA *data, uint8_t len) MCG_REENTRANT;
+uint8_t frame_reply(uint8_t cmd, uint8_t status, const uint8_t MCG_XDATA* data, uint8_t len) MCG_REENTRANT;
 extern uint16_t MCG_XDATA g_rx_errors; /* frames dropped by the parser */
 extern uint16_t MCG_XDATA g_tx_drops;  /* frames not sent for lack of room */
 
 /* regs.c: the register map ------------------------------------------------------------------- */
 /* MCG_ST_OK and the value in *value, or MCG_ST_BAD_REG. */
-uint8_t regs_read(uint8_t reg, int16_t *value) MCG_REENTRANT;
+uint8_t regs_read(uint8_t reg, int16_t* value) MCG_REENTRANT;
 /* Range-checked write with its side effects (mode switch, log interval, outputs, ...);
  * MCG_ST_OK or the reason it was refused, the register then unchanged. */
 uint8_t regs_write(uint8_t reg, int16_t value);
 /* 1 if the register exists and is writable. */
 uint8_t regs_writable(uint8_t reg);
 void regs_init(void);
-extern uint8_t g_mode;           /* MCG_MODE_* */
-extern int16_t MCG_XDATA g_rpm_cmd;        /* rpm */
-extern int16_t g_duty_set;       /* open-loop duty, 1/1000 */
-extern int16_t MCG_XDATA g_duty_step;      /* keypad step, 1/1000 */
-extern uint8_t MCG_XDATA g_service_ms;     /* keypad/duty service period */
+extern uint8_t g_mode;                 /* MCG_MODE_* */
+extern int16_t MCG_XDATA g_rpm_cmd;    /* rpm */
+extern int16_t g_duty_set;             /* open-loop duty, 1/1000 */
+extern int16_t MCG_XDATA g_duty_step;  /* keypad step, 1/1000 */
+extern uint8_t MCG_XDATA g_service_ms; /* keypad/duty service period */
 extern uint8_t MCG_XDATA g_stream_on;
 extern uint8_t MCG_XDATA g_clutch_on;
 extern uint8_t MCG_XDATA g_load_on;
@@ -69,13 +69,13 @@ void speed_tick(uint8_t pulses);
  * g_ctl_settle > 0). */
 void control_settle(void);
 /* Controller state shared by control.c and the tick (also the 8051 assembly: keep in data memory). */
-extern uint8_t g_ctl_p_hi;           /* pulse limit keeping e >= -8191 */
-extern int32_t MCG_IDATA g_ctl_r[3]; /* R for the next three ticks */
-extern uint8_t g_ctl_r_k;            /* which of them is next (2 = settled) */
-extern int32_t g_ctl_u;              /* U, Q(F+8) duty */
+extern uint8_t g_ctl_p_hi;               /* pulse limit keeping e >= -8191 */
+extern int32_t MCG_IDATA g_ctl_r[3];     /* R for the next three ticks */
+extern uint8_t g_ctl_r_k;                /* which of them is next (2 = settled) */
+extern int32_t g_ctl_u;                  /* U, Q(F+8) duty */
 extern int32_t g_ctl_u_min, g_ctl_u_max; /* limits of U */
-extern uint8_t g_ctl_shift;          /* F + 8 */
-extern uint8_t g_ctl_settle;         /* ticks until the command history is settled */
+extern uint8_t g_ctl_shift;              /* F + 8 */
+extern uint8_t g_ctl_settle;             /* ticks until the command history is settled */
 /* Controller configuration; each setter keeps the output continuous (bumpless). */
 void control_set_mode(uint8_t mode);
 void control_set_rpm_cmd(int16_t rpm);
@@ -89,10 +89,10 @@ int16_t control_rpm(void);
 /* rpm -> Q8 pulses per tick: r = rpm * 2048 * 256 / 60000, rounded. */
 int16_t control_rpm_to_q8(int16_t rpm);
 extern int16_t MCG_XDATA g_kp, g_b0, g_b1, g_b2; /* Q(F) coefficients, 1/1000 duty per pulse/ms */
-extern uint8_t MCG_XDATA g_coef_frac; /* F */
+extern uint8_t MCG_XDATA g_coef_frac;            /* F */
 extern int16_t MCG_XDATA g_duty_min, g_duty_max, g_duty_bias;
-extern int16_t g_duty_out;    /* the duty written to the PWM by the last update */
-extern uint8_t g_saturated;   /* last update hit duty_min or duty_max */
+extern int16_t g_duty_out;               /* the duty written to the PWM by the last update */
+extern uint8_t g_saturated;              /* last update hit duty_min or duty_max */
 extern uint16_t MCG_XDATA g_counts_16ms; /* pulses in the last 16 ticks */
 
 /* logger.c: the RAM log (255 points at MCG_LOG_XADDR) ----------------------------------------- */
@@ -110,7 +110,7 @@ extern uint8_t MCG_XDATA g_log_running;
 void seq_init(void);
 void seq_tick(void);
 /* Stores n entries (5 bytes each) at index; MCG_ST_OK, BUSY, RANGE, BAD_REG or READ_ONLY. */
-uint8_t seq_write(uint8_t index, const uint8_t MCG_XDATA *entries, uint8_t n);
+uint8_t seq_write(uint8_t index, const uint8_t MCG_XDATA* entries, uint8_t n);
 uint8_t seq_clear(void);
 uint8_t seq_set_state(uint8_t state);
 extern uint8_t MCG_XDATA g_seq_len;

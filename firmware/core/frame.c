@@ -1,6 +1,5 @@
 /* frame.c: framing with CRC-16 and a parser that resynchronises after garbage or truncation. */
 #include "core.h"
-
 #include "hal.h" /* hal_uart_tx, hal_uart_tx_free */
 
 #define FRAME_BUF_SIZE (MCG_MAX_PAYLOAD + MCG_FRAME_OVERHEAD)
@@ -13,16 +12,14 @@ static uint8_t MCG_XDATA s_err_payload[1];
 uint16_t MCG_XDATA g_rx_errors;
 uint16_t MCG_XDATA g_tx_drops;
 
-void frame_init(void)
-{
+void frame_init(void) {
   s_fill = 0;
   s_idle_ms = 0;
   g_rx_errors = 0;
   g_tx_drops = 0;
 }
 
-static void report_error(uint8_t status)
-{
+static void report_error(uint8_t status) {
   ++g_rx_errors;
   s_err_payload[0] = status;
   frame_send(MCG_MSG_ERROR, s_err_payload, 1);
@@ -30,8 +27,7 @@ static void report_error(uint8_t status)
 
 /* Drops the first n bytes and then everything up to the next SYNC, keeping the rest: the bytes
  * already received are scanned again, so a real frame that began inside a damaged one is not lost. */
-static void drop(uint8_t n)
-{
+static void drop(uint8_t n) {
   MCG_SLOW uint8_t i;
   while (n < s_fill && s_buf[n] != MCG_SYNC) {
     ++n;
@@ -43,8 +39,7 @@ static void drop(uint8_t n)
 }
 
 /* Checks the buffer for a complete good frame, a framing error, or the need for more bytes. */
-static void scan(void)
-{
+static void scan(void) {
   while (s_fill > 0) {
     MCG_SLOW uint8_t len;
     MCG_SLOW uint8_t total;
@@ -77,8 +72,7 @@ static void scan(void)
   }
 }
 
-void frame_rx_byte(uint8_t byte)
-{
+void frame_rx_byte(uint8_t byte) {
   s_idle_ms = 0;
   if (s_fill == 0 && byte != MCG_SYNC) {
     return; /* line noise between frames */
@@ -87,8 +81,7 @@ void frame_rx_byte(uint8_t byte)
   scan();
 }
 
-void frame_rx_tick(void)
-{
+void frame_rx_tick(void) {
   if (s_fill == 0) {
     return;
   }
@@ -100,14 +93,12 @@ void frame_rx_tick(void)
   }
 }
 
-void frame_rx_overrun(void)
-{
+void frame_rx_overrun(void) {
   s_fill = 0;
   report_error(MCG_ST_OVERRUN);
 }
 
-uint8_t frame_send(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len) MCG_REENTRANT
-{
+uint8_t frame_send(uint8_t cmd, const uint8_t MCG_XDATA* payload, uint8_t len) MCG_REENTRANT {
   uint16_t crc = MCG_CRC_INIT;
   uint8_t i;
   if (hal_uart_tx_free() < (uint8_t)(len + MCG_FRAME_OVERHEAD)) {
@@ -130,8 +121,7 @@ uint8_t frame_send(uint8_t cmd, const uint8_t MCG_XDATA *payload, uint8_t len) M
 
 static uint8_t MCG_XDATA s_reply[MCG_MAX_PAYLOAD];
 
-uint8_t frame_reply(uint8_t cmd, uint8_t status, const uint8_t MCG_XDATA *data, uint8_t len) MCG_REENTRANT
-{
+uint8_t frame_reply(uint8_t cmd, uint8_t status, const uint8_t MCG_XDATA* data, uint8_t len) MCG_REENTRANT {
   uint8_t i;
   s_reply[0] = status;
   for (i = 0; i < len; ++i) {

@@ -13,8 +13,7 @@ uint8_t MCG_XDATA g_log_running;
 static MCG_XDATA uint8_t s_elapsed_ms;
 static MCG_XDATA uint16_t s_pulses;
 
-void logger_init(void)
-{
+void logger_init(void) {
   g_log_count = 0;
   g_log_interval = 4;
   g_log_running = 0;
@@ -22,8 +21,7 @@ void logger_init(void)
   s_pulses = 0;
 }
 
-uint8_t logger_start(void)
-{
+uint8_t logger_start(void) {
   if (g_dump_next < MCG_LOG_DUMP_FRAMES) {
     return MCG_ST_BUSY;
   }
@@ -34,8 +32,7 @@ uint8_t logger_start(void)
   return MCG_ST_OK;
 }
 
-uint8_t logger_set_interval(uint8_t interval_ms)
-{
+uint8_t logger_set_interval(uint8_t interval_ms) {
   if (g_log_running) {
     return MCG_ST_BUSY;
   }
@@ -43,8 +40,7 @@ uint8_t logger_set_interval(uint8_t interval_ms)
   return MCG_ST_OK;
 }
 
-void logger_tick(uint8_t pulses)
-{
+void logger_tick(uint8_t pulses) {
   if (!g_log_running) {
     return;
   }

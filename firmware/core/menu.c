@@ -12,7 +12,6 @@
  *               value goes through regs_write, so the keypad obeys the same ranges as the link.
  * The report's board could not take Kp from the keypad; here Kp is an item like any other. */
 #include "core.h"
-
 #include "hal.h" /* hal_key_read, hal_lcd_write */
 
 char MCG_XDATA g_lcd[2][17];
@@ -70,8 +69,7 @@ static MCG_XDATA uint8_t s_status; /* status of the last store, shown until the 
 static char MCG_XDATA s_entry[ENTRY_MAX + 1];
 static MCG_XDATA uint8_t s_entry_len;
 
-void menu_init(void)
-{
+void menu_init(void) {
   s_screen = SCREEN_MAIN;
   s_item = 0;
   s_last_key = MCG_KEY_NONE;
@@ -81,8 +79,7 @@ void menu_init(void)
 }
 
 /* Writes v right-aligned into width characters at dst (no terminator). */
-static void put_int(char MCG_XDATA *dst, int32_t v, uint8_t width) MCG_REENTRANT
-{
+static void put_int(char MCG_XDATA* dst, int32_t v, uint8_t width) MCG_REENTRANT {
   uint8_t neg = v < 0;
   uint32_t m = neg ? (uint32_t)-v : (uint32_t)v;
   uint8_t i = width;
@@ -99,8 +96,7 @@ static void put_int(char MCG_XDATA *dst, int32_t v, uint8_t width) MCG_REENTRANT
 }
 
 /* Writes v / 10^decimals with that many decimals, right-aligned in width characters. */
-static void put_fixed(char MCG_XDATA *dst, int32_t v, uint8_t decimals, uint8_t width) MCG_REENTRANT
-{
+static void put_fixed(char MCG_XDATA* dst, int32_t v, uint8_t decimals, uint8_t width) MCG_REENTRANT {
   uint32_t m = v < 0 ? (uint32_t)-v : (uint32_t)v;
   uint8_t i = width;
   uint8_t d;
@@ -121,8 +117,7 @@ static void put_fixed(char MCG_XDATA *dst, int32_t v, uint8_t decimals, uint8_t 
   }
 }
 
-static void clear_line(uint8_t row)
-{
+static void clear_line(uint8_t row) {
   MCG_SLOW uint8_t i;
   for (i = 0; i < 16; ++i) {
     g_lcd[row][i] = ' ';
@@ -130,16 +125,14 @@ static void clear_line(uint8_t row)
   g_lcd[row][16] = 0;
 }
 
-static void put_text(uint8_t row, uint8_t col, const char *text)
-{
+static void put_text(uint8_t row, uint8_t col, const char* text) {
   while (*text && col < 16) {
     g_lcd[row][col++] = *text++;
   }
 }
 
 /* A gain in Q(F) to thousandths, rounded half away from zero. */
-static int32_t coef_to_milli(int16_t raw) MCG_REENTRANT
-{
+static int32_t coef_to_milli(int16_t raw) MCG_REENTRANT {
   int32_t m = (int32_t)raw * 1000;
   int32_t half = g_coef_frac > 0 ? ((int32_t)1 << (g_coef_frac - 1)) : 0;
   if (m >= 0) {
@@ -148,10 +141,9 @@ static int32_t coef_to_milli(int16_t raw) MCG_REENTRANT
   return -((-m + half) >> g_coef_frac);
 }
 
-static void show_value(uint8_t row)
-{
+static void show_value(uint8_t row) {
   MCG_SLOW int16_t v = 0;
-  MCG_CODE MenuItem *it = &s_items[s_item];
+  MCG_CODE MenuItem* it = &s_items[s_item];
   regs_read(it->reg, &v);
   if (it->kind == KIND_COEF) {
     put_fixed(g_lcd[row], coef_to_milli(v), 3, 12);
@@ -163,8 +155,7 @@ static void show_value(uint8_t row)
   }
 }
 
-void menu_refresh(void)
-{
+void menu_refresh(void) {
   clear_line(0);
   clear_line(1);
   if (s_screen == SCREEN_MAIN) {
@@ -200,8 +191,7 @@ void menu_refresh(void)
 
 /* Parses the entry: [-]digits[.digits]. Gains: round(value * 2^F), at most 3 decimals.
  * Returns MCG_ST_OK and *out, or MCG_ST_RANGE. */
-static uint8_t parse_entry(uint8_t kind, int16_t *out) MCG_REENTRANT
-{
+static uint8_t parse_entry(uint8_t kind, int16_t* out) MCG_REENTRANT {
   uint8_t i = 0;
   uint8_t neg = 0;
   uint8_t decimals = 0;
@@ -246,8 +236,7 @@ static uint8_t parse_entry(uint8_t kind, int16_t *out) MCG_REENTRANT
   return MCG_ST_OK;
 }
 
-static void entry_key(uint8_t key)
-{
+static void entry_key(uint8_t key) {
   MCG_SLOW uint8_t kind = s_items[s_item].kind;
   MCG_SLOW uint8_t i;
   MCG_SLOW int16_t v;
@@ -307,8 +296,7 @@ static void entry_key(uint8_t key)
   s_entry[s_entry_len] = 0;
 }
 
-static void nudge(int8_t dir)
-{
+static void nudge(int8_t dir) {
   if (g_mode == MCG_MODE_OPEN) {
     MCG_SLOW int16_t d = (int16_t)(g_duty_set + dir * g_duty_step);
     if (d > g_duty_max) {
@@ -322,8 +310,7 @@ static void nudge(int8_t dir)
   }
 }
 
-static void main_key(uint8_t key, uint8_t repeat)
-{
+static void main_key(uint8_t key, uint8_t repeat) {
   if (key == KEY_A || key == KEY_B) {
     nudge(key == KEY_A ? 1 : -1);
     return;
@@ -332,22 +319,35 @@ static void main_key(uint8_t key, uint8_t repeat)
     return;
   }
   switch (key) {
-  case KEY_C: s_screen = SCREEN_BROWSE; s_status = MCG_ST_OK; break;
-  case KEY_D: app_dump_start(); break;
-  case KEY_E: regs_write(MCG_REG_STREAM, (int16_t)!g_stream_on); break;
-  case KEY_F: logger_start(); break;
-  case 0:
-    regs_write(MCG_REG_MODE, MCG_MODE_OPEN);
-    regs_write(MCG_REG_DUTY, g_duty_min > 0 ? g_duty_min : (g_duty_max < 0 ? g_duty_max : 0));
-    break;
-  case 1: regs_write(MCG_REG_CLUTCH, (int16_t)!g_clutch_on); break;
-  case 2: regs_write(MCG_REG_LOAD, (int16_t)!g_load_on); break;
-  default: break;
+    case KEY_C:
+      s_screen = SCREEN_BROWSE;
+      s_status = MCG_ST_OK;
+      break;
+    case KEY_D:
+      app_dump_start();
+      break;
+    case KEY_E:
+      regs_write(MCG_REG_STREAM, (int16_t)!g_stream_on);
+      break;
+    case KEY_F:
+      logger_start();
+      break;
+    case 0:
+      regs_write(MCG_REG_MODE, MCG_MODE_OPEN);
+      regs_write(MCG_REG_DUTY, g_duty_min > 0 ? g_duty_min : (g_duty_max < 0 ? g_duty_max : 0));
+      break;
+    case 1:
+      regs_write(MCG_REG_CLUTCH, (int16_t)!g_clutch_on);
+      break;
+    case 2:
+      regs_write(MCG_REG_LOAD, (int16_t)!g_load_on);
+      break;
+    default:
+      break;
   }
 }
 
-void menu_service(void)
-{
+void menu_service(void) {
   MCG_SLOW uint8_t key = hal_key_read();
   MCG_SLOW uint8_t repeat = key == s_last_key;
   s_last_key = key;

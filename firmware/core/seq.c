@@ -13,22 +13,19 @@ uint8_t MCG_XDATA g_seq_state;
 static MCG_XDATA uint8_t s_index;
 static MCG_XDATA uint16_t s_wait_ms;
 
-static uint16_t entry_delay(uint8_t k)
-{
-  const uint8_t MCG_XDATA *e = s_table + (uint16_t)k * MCG_SEQ_ENTRY_BYTES;
+static uint16_t entry_delay(uint8_t k) {
+  const uint8_t MCG_XDATA* e = s_table + (uint16_t)k * MCG_SEQ_ENTRY_BYTES;
   return (uint16_t)(e[0] | ((uint16_t)e[1] << 8));
 }
 
-void seq_init(void)
-{
+void seq_init(void) {
   g_seq_len = 0;
   g_seq_state = MCG_SEQ_STOP;
   s_index = 0;
   s_wait_ms = 0;
 }
 
-uint8_t seq_write(uint8_t index, const uint8_t MCG_XDATA *entries, uint8_t n)
-{
+uint8_t seq_write(uint8_t index, const uint8_t MCG_XDATA* entries, uint8_t n) {
   MCG_SLOW uint16_t i;
   MCG_SLOW uint8_t k;
   if (g_seq_state != MCG_SEQ_STOP) {
@@ -56,8 +53,7 @@ uint8_t seq_write(uint8_t index, const uint8_t MCG_XDATA *entries, uint8_t n)
   return MCG_ST_OK;
 }
 
-uint8_t seq_clear(void)
-{
+uint8_t seq_clear(void) {
   if (g_seq_state != MCG_SEQ_STOP) {
     return MCG_ST_BUSY;
   }
@@ -65,8 +61,7 @@ uint8_t seq_clear(void)
   return MCG_ST_OK;
 }
 
-uint8_t seq_set_state(uint8_t state)
-{
+uint8_t seq_set_state(uint8_t state) {
   if (state != MCG_SEQ_STOP && g_seq_len == 0) {
     return MCG_ST_RANGE;
   }
@@ -76,13 +71,12 @@ uint8_t seq_set_state(uint8_t state)
   return MCG_ST_OK;
 }
 
-void seq_tick(void)
-{
+void seq_tick(void) {
   if (g_seq_state == MCG_SEQ_STOP) {
     return;
   }
   while (s_wait_ms == 0) {
-    const uint8_t MCG_XDATA *e = s_table + (uint16_t)s_index * MCG_SEQ_ENTRY_BYTES;
+    const uint8_t MCG_XDATA* e = s_table + (uint16_t)s_index * MCG_SEQ_ENTRY_BYTES;
     regs_write(e[2], (int16_t)(e[3] | ((uint16_t)e[4] << 8)));
     if (++s_index == g_seq_len) {
       s_index = 0;

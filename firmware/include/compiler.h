@@ -7,13 +7,13 @@
 
 #if defined(__SDCC_mcs51)
 #define MCG_MCS51 1
-#define MCG_XDATA __xdata           /* external RAM (MOVX) */
-#define MCG_CODE __code             /* program memory (MOVC), read-only tables */
-#define MCG_IDATA __idata           /* upper internal RAM (indirect) */
-#define MCG_AT(addr) __at(addr)     /* absolute address */
+#define MCG_XDATA __xdata       /* external RAM (MOVX) */
+#define MCG_CODE __code         /* program memory (MOVC), read-only tables */
+#define MCG_IDATA __idata       /* upper internal RAM (indirect) */
+#define MCG_AT(addr) __at(addr) /* absolute address */
 #define MCG_ISR(vec) __interrupt(vec)
 #define MCG_USING(bank) __using(bank)
-#define MCG_REENTRANT __reentrant   /* parameters and locals on the stack (upper internal RAM) */
+#define MCG_REENTRANT __reentrant /* parameters and locals on the stack (upper internal RAM) */
 #else
 #define MCG_MCS51 0
 #define MCG_XDATA

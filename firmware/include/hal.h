@@ -19,7 +19,7 @@ void hal_init(void);
 
 /* Number of 1 ms ticks elapsed since the last call (0 if none), and in *pulses the encoder pulses
  * counted over those ticks (latched at the tick, not at the call). */
-uint8_t hal_ticks_take(uint16_t *pulses);
+uint8_t hal_ticks_take(uint16_t* pulses);
 
 /* Motor drive, duty in 1/1000 of full scale, -1000..1000 (sign = direction). */
 void hal_pwm_write(int16_t duty_permille);
@@ -29,7 +29,7 @@ void hal_clutch_write(uint8_t on);
 void hal_load_write(uint8_t on);
 
 /* UART receive: 1 and the next byte in *byte, or 0 if none waiting. */
-uint8_t hal_uart_rx(uint8_t *byte);
+uint8_t hal_uart_rx(uint8_t* byte);
 /* 1 if received bytes were lost (receive buffer full) since the last call. */
 uint8_t hal_uart_rx_overrun(void);
 /* Free room in the transmit buffer, in bytes. */
@@ -41,6 +41,6 @@ void hal_uart_tx(uint8_t byte);
 uint8_t hal_key_read(void);
 
 /* Writes one 16-character line (row 0 or 1) of the LCD. */
-void hal_lcd_write(uint8_t row, const char *text16);
+void hal_lcd_write(uint8_t row, const char* text16);
 
 #endif

@@ -33,9 +33,9 @@
 
 /* ---- Framing ---------------------------------------------------------------------------------- */
 #define MCG_SYNC 0xA5u
-#define MCG_MAX_PAYLOAD 64u       /* LEN above this is a framing error: the parser resynchronises */
-#define MCG_FRAME_OVERHEAD 5u     /* SYNC, LEN, CMD, CRC_LO, CRC_HI */
-#define MCG_FRAME_TIMEOUT_MS 20u  /* a gap longer than this inside a frame drops the partial frame */
+#define MCG_MAX_PAYLOAD 64u      /* LEN above this is a framing error: the parser resynchronises */
+#define MCG_FRAME_OVERHEAD 5u    /* SYNC, LEN, CMD, CRC_LO, CRC_HI */
+#define MCG_FRAME_TIMEOUT_MS 20u /* a gap longer than this inside a frame drops the partial frame */
 #define MCG_CRC_INIT 0xFFFFu
 #define MCG_REPLY_BIT 0x80u
 
@@ -44,8 +44,8 @@
 #define MCG_CMD_READ 0x02u      /* (reg u8)                 -> st, reg u8, value i16 */
 #define MCG_CMD_WRITE 0x03u     /* (reg u8, value i16)      -> st, reg u8, value i16 (as now held) */
 #define MCG_CMD_LOG_START 0x04u /* ()                       -> st; records MCG_LOG_POINTS points */
-#define MCG_CMD_LOG_DUMP 0x05u  /* ()                       -> st, points u8, interval_ms u8;
-                                   then MCG_LOG_DUMP_FRAMES frames MCG_MSG_LOG_DATA */
+/* MCG_CMD_LOG_DUMP is followed by MCG_LOG_DUMP_FRAMES frames MCG_MSG_LOG_DATA */
+#define MCG_CMD_LOG_DUMP 0x05u  /* ()                       -> st, points u8, interval_ms u8 */
 #define MCG_CMD_SEQ_WRITE 0x06u /* (index u8, n x entry)    -> st, next index u8 */
 #define MCG_CMD_SEQ_CLEAR 0x07u /* ()                       -> st */
 
@@ -56,26 +56,26 @@
 
 /* ---- Status codes (first payload byte of every answer, and of MCG_MSG_ERROR) ------------------ */
 #define MCG_ST_OK 0u
-#define MCG_ST_BAD_CRC 1u     /* CRC mismatch (MCG_MSG_ERROR) */
-#define MCG_ST_TOO_LONG 2u    /* LEN > MCG_MAX_PAYLOAD (MCG_MSG_ERROR) */
-#define MCG_ST_TIMEOUT 3u     /* frame truncated: gap > MCG_FRAME_TIMEOUT_MS (MCG_MSG_ERROR) */
-#define MCG_ST_OVERRUN 4u     /* receive buffer overflowed, bytes were lost (MCG_MSG_ERROR) */
-#define MCG_ST_BAD_CMD 5u     /* unknown command */
-#define MCG_ST_BAD_LENGTH 6u  /* payload length wrong for the command */
-#define MCG_ST_BAD_REG 7u     /* unknown register */
-#define MCG_ST_READ_ONLY 8u   /* register cannot be written */
-#define MCG_ST_RANGE 9u       /* value outside the register's range; register unchanged */
-#define MCG_ST_BUSY 10u       /* not now: log recording, or sequence playing */
+#define MCG_ST_BAD_CRC 1u    /* CRC mismatch (MCG_MSG_ERROR) */
+#define MCG_ST_TOO_LONG 2u   /* LEN > MCG_MAX_PAYLOAD (MCG_MSG_ERROR) */
+#define MCG_ST_TIMEOUT 3u    /* frame truncated: gap > MCG_FRAME_TIMEOUT_MS (MCG_MSG_ERROR) */
+#define MCG_ST_OVERRUN 4u    /* receive buffer overflowed, bytes were lost (MCG_MSG_ERROR) */
+#define MCG_ST_BAD_CMD 5u    /* unknown command */
+#define MCG_ST_BAD_LENGTH 6u /* payload length wrong for the command */
+#define MCG_ST_BAD_REG 7u    /* unknown register */
+#define MCG_ST_READ_ONLY 8u  /* register cannot be written */
+#define MCG_ST_RANGE 9u      /* value outside the register's range; register unchanged */
+#define MCG_ST_BUSY 10u      /* not now: log recording, or sequence playing */
 #define MCG_ST_COUNT 11u
 
 /* ---- Units and fixed-point formats ------------------------------------------------------------ */
-#define MCG_TICK_US 1000u          /* control sample period: 1 ms */
-#define MCG_COUNTS_PER_REV 2048u   /* encoder counts per motor revolution */
-#define MCG_DUTY_FULL 1000         /* duty unit: 1/1000 of full scale (0.1 %); PWM has 1000 steps */
-#define MCG_ERR_FRAC_BITS 8u       /* controller error e: Q8 encoder counts per 1 ms */
-#define MCG_ERR_LIMIT 8191         /* e >= -this: pulses limited to (r + 8191) / 256 (937 rpm) */
-#define MCG_COEF_FRAC_BITS_MAX 12u /* coefficient fractional bits F (register MCG_REG_COEF_FRAC) */
-#define MCG_SPEED_WINDOW_MS 16u    /* speed counting window: rpm = counts_16ms * 1875 / 1024 */
+#define MCG_TICK_US 1000u            /* control sample period: 1 ms */
+#define MCG_COUNTS_PER_REV 2048u     /* encoder counts per motor revolution */
+#define MCG_DUTY_FULL 1000           /* duty unit: 1/1000 of full scale (0.1 %); PWM has 1000 steps */
+#define MCG_ERR_FRAC_BITS 8u         /* controller error e: Q8 encoder counts per 1 ms */
+#define MCG_ERR_LIMIT 8191           /* e >= -this: pulses limited to (r + 8191) / 256 (937 rpm) */
+#define MCG_COEF_FRAC_BITS_MAX 12u   /* coefficient fractional bits F (register MCG_REG_COEF_FRAC) */
+#define MCG_SPEED_WINDOW_MS 16u      /* speed counting window: rpm = counts_16ms * 1875 / 1024 */
 #define MCG_RPM_PER_WINDOW_NUM 1875u /* 60000 / (2048 * 16) = 1875 / 1024 rpm per count */
 #define MCG_RPM_PER_WINDOW_DEN 1024u
 
@@ -152,8 +152,7 @@
 
 /* CRC-16/CCITT-FALSE, one byte: crc = mcg_crc16_update(crc, byte), starting at MCG_CRC_INIT.
  * Table-free form (x = (crc >> 8) ^ byte; x ^= x >> 4; crc = crc << 8 ^ x << 12 ^ x << 5 ^ x). */
-static inline unsigned mcg_crc16_update(unsigned crc, unsigned byte)
-{
+static inline unsigned mcg_crc16_update(unsigned crc, unsigned byte) {
   unsigned x = ((crc >> 8) ^ byte) & 0xFFu;
   x ^= x >> 4;
   return ((crc << 8) ^ (x << 12) ^ (x << 5) ^ x) & 0xFFFFu;

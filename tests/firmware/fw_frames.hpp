@@ -16,8 +16,7 @@ struct Frame {
   Bytes payload;
 };
 
-inline std::uint16_t crc16(const Bytes& bytes, std::size_t from, std::size_t to)
-{
+inline std::uint16_t crc16(const Bytes& bytes, std::size_t from, std::size_t to) {
   unsigned crc = MCG_CRC_INIT;
   for (std::size_t i = from; i < to; ++i) {
     crc = mcg_crc16_update(crc, bytes[i]);
@@ -26,8 +25,7 @@ inline std::uint16_t crc16(const Bytes& bytes, std::size_t from, std::size_t to)
 }
 
 // SYNC LEN CMD PAYLOAD CRC_LO CRC_HI
-inline Bytes encode(std::uint8_t cmd, const Bytes& payload = {})
-{
+inline Bytes encode(std::uint8_t cmd, const Bytes& payload = {}) {
   Bytes f{static_cast<std::uint8_t>(MCG_SYNC), static_cast<std::uint8_t>(payload.size()), cmd};
   f.insert(f.end(), payload.begin(), payload.end());
   const std::uint16_t crc = crc16(f, 1, f.size());
@@ -36,22 +34,19 @@ inline Bytes encode(std::uint8_t cmd, const Bytes& payload = {})
   return f;
 }
 
-inline Bytes le16(int v)
-{
+inline Bytes le16(int v) {
   const auto u = static_cast<std::uint16_t>(v);
   return {static_cast<std::uint8_t>(u & 0xFFu), static_cast<std::uint8_t>(u >> 8)};
 }
 
-inline int i16_at(const Bytes& b, std::size_t at)
-{
+inline int i16_at(const Bytes& b, std::size_t at) {
   return static_cast<std::int16_t>(static_cast<std::uint16_t>(b[at] | (b[at + 1] << 8)));
 }
 
 // Splits what the board sent into frames; the board's output must be clean framing (checked).
 class Decoder {
  public:
-  std::vector<Frame> feed(const Bytes& bytes)
-  {
+  std::vector<Frame> feed(const Bytes& bytes) {
     m_buf.insert(m_buf.end(), bytes.begin(), bytes.end());
     std::vector<Frame> out;
     for (;;) {

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "core.h"
-#include "host_board.h"
 #include "fw_frames.hpp"
+#include "host_board.h"
 #include "mcg_protocol.h"
 
 namespace fwtest {
@@ -22,8 +22,7 @@ class Board {
   void send(const Bytes& bytes) { host_board_rx(bytes.data(), bytes.size()); }
 
   // Runs ms ticks with the given encoder pulses per tick; returns the frames the board sent.
-  std::vector<Frame> run(int ms, std::uint16_t pulses_per_ms = 0)
-  {
+  std::vector<Frame> run(int ms, std::uint16_t pulses_per_ms = 0) {
     std::vector<Frame> frames;
     for (int i = 0; i < ms; ++i) {
       host_board_tick(pulses_per_ms);
@@ -33,8 +32,7 @@ class Board {
   }
 
   // Sends one request and waits (up to 200 ms of board time) for its answer.
-  std::optional<Frame> request(std::uint8_t cmd, const Bytes& payload = {})
-  {
+  std::optional<Frame> request(std::uint8_t cmd, const Bytes& payload = {}) {
     send(encode(cmd, payload));
     for (int i = 0; i < 200; ++i) {
       std::vector<Frame> frames;
@@ -51,8 +49,7 @@ class Board {
   }
 
   // Status of a register write (MCG_ST_*).
-  std::uint8_t write(std::uint8_t reg, int value)
-  {
+  std::uint8_t write(std::uint8_t reg, int value) {
     Bytes p{reg};
     const Bytes v = le16(value);
     p.insert(p.end(), v.begin(), v.end());
@@ -60,8 +57,7 @@ class Board {
     return f ? f->payload.at(0) : 0xFF;
   }
 
-  int read(std::uint8_t reg)
-  {
+  int read(std::uint8_t reg) {
     const auto f = request(MCG_CMD_READ, {reg});
     if (!f || f->payload.at(0) != MCG_ST_OK) {
       return -100000;
@@ -72,8 +68,7 @@ class Board {
   void key(std::uint8_t k) { host_board_key(k); }
 
   // Holds a key for one service period, then releases it for one.
-  void press(std::uint8_t k, int service_ms = 40)
-  {
+  void press(std::uint8_t k, int service_ms = 40) {
     key(k);
     run(service_ms);
     key(MCG_KEY_NONE);
@@ -82,8 +77,7 @@ class Board {
 
   void set_pulses(std::uint16_t p) { m_pulses = p; }
   // Frames that arrived while request() waited for its answer; taking them empties the list.
-  std::vector<Frame> take_other()
-  {
+  std::vector<Frame> take_other() {
     std::vector<Frame> o;
     o.swap(m_other);
     return o;
@@ -91,8 +85,7 @@ class Board {
   std::size_t garbage() const { return m_decoder.garbage(); }
 
  private:
-  void collect(std::vector<Frame>& frames)
-  {
+  void collect(std::vector<Frame>& frames) {
     std::uint8_t buf[512];
     const std::size_t n = host_board_tx(buf, sizeof buf);
     const auto got = m_decoder.feed(Bytes(buf, buf + n));

@@ -20,19 +20,12 @@ namespace {
 constexpr double k_counts_per_rev = 2048.0;
 
 // Exact command in pulses per 1 ms tick.
-double rpm_to_counts_per_ms(double rpm)
-{
-  return rpm * k_counts_per_rev / 60000.0;
-}
+double rpm_to_counts_per_ms(double rpm) { return rpm * k_counts_per_rev / 60000.0; }
 
-double q8_command(int rpm)
-{
-  return static_cast<double>(std::lround(rpm * 524288.0 / 60000.0)) / 256.0;
-}
+double q8_command(int rpm) { return static_cast<double>(std::lround(rpm * 524288.0 / 60000.0)) / 256.0; }
 
 // e = r - p with p limited to floor((256 r + 8191) / 256), so that e >= -8191/256 (pulses/ms).
-double error_of(int rpm, int pulses)
-{
+double error_of(int rpm, int pulses) {
   const long r_q8 = std::lround(rpm * 524288.0 / 60000.0);
   const long p_hi = (r_q8 + MCG_ERR_LIMIT) / 256;
   return static_cast<double>(r_q8 - 256 * std::min<long>(pulses, p_hi)) / 256.0;
@@ -44,8 +37,7 @@ struct Coefs {
   int duty_min = 0, duty_max = 1000, bias = 0;
 };
 
-void configure(Board& b, const Coefs& c, int rpm_cmd)
-{
+void configure(Board& b, const Coefs& c, int rpm_cmd) {
   ASSERT_EQ(b.write(MCG_REG_COEF_FRAC, c.frac), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_KP, c.kp), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_B0, c.b0), MCG_ST_OK);
@@ -61,9 +53,9 @@ void configure(Board& b, const Coefs& c, int rpm_cmd)
 // starting from open loop at duty0 (the previous ticks counted no pulses), and returns the largest
 // |duty - u|; every step is also checked to be floor(u + 0.5).
 // command_steps: (tick, rpm) pairs, the command written just before that tick.
-double compare(std::uint8_t mode, const Coefs& c, int rpm_cmd, int duty0, const std::vector<std::uint16_t>& pulses,
-               const std::vector<std::pair<std::size_t, int>>& command_steps = {})
-{
+double compare(std::uint8_t mode, const Coefs& c, int rpm_cmd, int duty0,
+               const std::vector<std::uint16_t>& pulses,
+               const std::vector<std::pair<std::size_t, int>>& command_steps = {}) {
   Board b;
   configure(b, c, rpm_cmd);
   EXPECT_EQ(b.write(MCG_REG_DUTY, duty0), MCG_ST_OK);
@@ -101,8 +93,7 @@ double compare(std::uint8_t mode, const Coefs& c, int rpm_cmd, int duty0, const 
   return worst;
 }
 
-std::vector<std::uint16_t> random_pulses(std::size_t n, int lo, int hi, std::uint64_t seed)
-{
+std::vector<std::uint16_t> random_pulses(std::size_t n, int lo, int hi, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_int_distribution<int> d(lo, hi);
   std::vector<std::uint16_t> p(n);
@@ -114,8 +105,7 @@ std::vector<std::uint16_t> random_pulses(std::size_t n, int lo, int hi, std::uin
 
 }  // namespace
 
-TEST(FwControl, CommandConversionIsExactlyRounded)
-{
+TEST(FwControl, CommandConversionIsExactlyRounded) {
   for (int rpm = 120; rpm <= 720; ++rpm) {
     const int q8 = control_rpm_to_q8(static_cast<std::int16_t>(rpm));
     EXPECT_EQ(q8, std::lround(rpm * 524288.0 / 60000.0));
@@ -124,8 +114,7 @@ TEST(FwControl, CommandConversionIsExactlyRounded)
   }
 }
 
-TEST(FwControl, ProportionalMatchesDoublePrecision)
-{
+TEST(FwControl, ProportionalMatchesDoublePrecision) {
   Coefs c;
   c.kp = 3000;  // 11.72 per count/ms at F = 8
   c.bias = 150;
@@ -133,8 +122,7 @@ TEST(FwControl, ProportionalMatchesDoublePrecision)
   EXPECT_LE(compare(MCG_MODE_P, c, 420, 0, p), 0.5);
 }
 
-TEST(FwControl, ProportionalNegativeGainAndLimitsBelowZero)
-{
+TEST(FwControl, ProportionalNegativeGainAndLimitsBelowZero) {
   Coefs c;
   c.kp = -1234;
   c.duty_min = -600;
@@ -144,8 +132,7 @@ TEST(FwControl, ProportionalNegativeGainAndLimitsBelowZero)
   EXPECT_LE(compare(MCG_MODE_P, c, 333, 0, p), 0.5);
 }
 
-TEST(FwControl, PiMatchesDoublePrecisionAtEveryFormat)
-{
+TEST(FwControl, PiMatchesDoublePrecisionAtEveryFormat) {
   for (int frac : {0, 4, 8, 11}) {  // 11.645 * 2^12 would not fit 16 bits
     SCOPED_TRACE(frac);
     Coefs c;
@@ -158,8 +145,7 @@ TEST(FwControl, PiMatchesDoublePrecisionAtEveryFormat)
   }
 }
 
-TEST(FwControl, PidMatchesDoublePrecisionThroughSaturation)
-{
+TEST(FwControl, PidMatchesDoublePrecisionThroughSaturation) {
   Coefs c;
   c.b0 = 9000;
   c.b1 = -15000;
@@ -172,8 +158,7 @@ TEST(FwControl, PidMatchesDoublePrecisionThroughSaturation)
 }
 
 // Command steps, also two in consecutive ticks: the stored errors keep the commands of their ticks.
-TEST(FwControl, CommandStepsFollowTheDifferenceEquation)
-{
+TEST(FwControl, CommandStepsFollowTheDifferenceEquation) {
   Coefs c;
   c.b0 = 7000;
   c.b1 = -12000;
@@ -190,8 +175,7 @@ TEST(FwControl, CommandStepsFollowTheDifferenceEquation)
   EXPECT_LE(compare(MCG_MODE_P, prop, 420, 0, p, {{50, 700}, {51, 720}}), 0.5);
 }
 
-TEST(FwControl, ErrorSaturatesAtItsStatedRange)
-{
+TEST(FwControl, ErrorSaturatesAtItsStatedRange) {
   // A runaway count (200 pulses/ms) and a stalled motor at the top of the range: the pulses are
   // limited so that e >= -MCG_ERR_LIMIT, and Kp e stays within 16 x 14 bits whatever the encoder does.
   Coefs c;
@@ -206,8 +190,7 @@ TEST(FwControl, ErrorSaturatesAtItsStatedRange)
 // Design coefficients not representable in Q8 (the report's 11.645 and -6.987) cost at most
 // |b - B/2^F| <= 2^-(F+1) each: over N steps of |e| <= E the output differs from the unquantised
 // equation by at most N (2 * 2^-(F+1)) E + 0.5.
-TEST(FwControl, QuantisationErrorWithinItsBound)
-{
+TEST(FwControl, QuantisationErrorWithinItsBound) {
   Board b;
   Coefs c;
   c.b0 = static_cast<int>(std::lround(11.645 * 256));
@@ -237,10 +220,9 @@ namespace {
 // the encoder delivers whole pulses, the fraction carried over.
 struct Motor {
   double w = 0, frac = 0;
-  double k = 0.04;        // counts/ms per 1/1000 duty: full duty = 40 counts/ms = 1172 rpm
+  double k = 0.04;                   // counts/ms per 1/1000 duty: full duty = 40 counts/ms = 1172 rpm
   double a = std::exp(-1.0 / 50.0);  // tau = 50 ms
-  std::uint16_t step(int duty)
-  {
+  std::uint16_t step(int duty) {
     w = a * w + (1 - a) * k * duty;
     frac += w;
     const double whole = std::floor(frac);
@@ -253,8 +235,7 @@ struct Motor {
 
 // Closed loop over the range 420 +- 300 rpm: the integral action makes the mean speed equal the
 // command (the command itself is exact to 0.057 rpm).
-TEST(FwControl, PiHoldsTheCommandAcrossTheRange)
-{
+TEST(FwControl, PiHoldsTheCommandAcrossTheRange) {
   for (int rpm : {120, 420, 720}) {
     SCOPED_TRACE(rpm);
     Board b;
@@ -282,8 +263,7 @@ TEST(FwControl, PiHoldsTheCommandAcrossTheRange)
 
 // Anti-windup: held at the limit for two seconds, the output leaves it on the first tick the error
 // changes sign, where an unclamped integrator would stay pinned for as long again.
-TEST(FwControl, AntiWindupLeavesTheLimitAtOnce)
-{
+TEST(FwControl, AntiWindupLeavesTheLimitAtOnce) {
   Board b;
   Coefs c;
   c.b0 = 512;
@@ -298,14 +278,14 @@ TEST(FwControl, AntiWindupLeavesTheLimitAtOnce)
     p = m.step(host_board_duty());
   }
   EXPECT_EQ(host_board_duty(), 300);
-  EXPECT_EQ(b.read(MCG_REG_FLAGS) & static_cast<int>(MCG_FLAG_SATURATED), static_cast<int>(MCG_FLAG_SATURATED));
+  EXPECT_EQ(b.read(MCG_REG_FLAGS) & static_cast<int>(MCG_FLAG_SATURATED),
+            static_cast<int>(MCG_FLAG_SATURATED));
   ASSERT_EQ(b.write(MCG_REG_RPM_CMD, 120), MCG_ST_OK);
   host_board_tick(p);
   EXPECT_LT(host_board_duty(), 300);
 }
 
-TEST(FwControl, ModeSwitchIsBumpless)
-{
+TEST(FwControl, ModeSwitchIsBumpless) {
   Board b;
   b.set_pulses(14);  // requests tick too: keep the motor turning through them
   Coefs c;
@@ -329,8 +309,7 @@ TEST(FwControl, ModeSwitchIsBumpless)
 
 // Speed display: a 16 ms window, rpm = c * 1875 / 1024. For any speed in the operating range and
 // any encoder phase, the reading is within +-(1875/1024 + 0.5) = +-2.33 rpm: better than +-5.
-TEST(FwControl, SpeedReadingWithinFiveRpm)
-{
+TEST(FwControl, SpeedReadingWithinFiveRpm) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> phase(0.0, 1.0);
   double worst = 0;
@@ -349,8 +328,7 @@ TEST(FwControl, SpeedReadingWithinFiveRpm)
   EXPECT_GT(worst, 1.0) << "the bound is tight, not vacuous";
 }
 
-TEST(FwControl, SpeedRegisterUsesTheWindow)
-{
+TEST(FwControl, SpeedRegisterUsesTheWindow) {
   Board b;
   b.run(16, 14);
   EXPECT_EQ(control_rpm(), 410);  // 16 * 14 * 1875 / 1024 = 410.16

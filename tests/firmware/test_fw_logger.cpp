@@ -12,15 +12,11 @@ using fwtest::Frame;
 namespace {
 
 // Pulses of tick n: varied, so that each point's sum shows which ticks it covered.
-std::uint16_t pattern(long n)
-{
-  return static_cast<std::uint16_t>(5 + (n * 7) % 11);
-}
+std::uint16_t pattern(long n) { return static_cast<std::uint16_t>(5 + (n * 7) % 11); }
 
 }  // namespace
 
-TEST(FwLogger, RecordsPointsAtTheInterval)
-{
+TEST(FwLogger, RecordsPointsAtTheInterval) {
   for (int interval : {1, 4, 37, 255}) {
     SCOPED_TRACE(interval);
     Board b;
@@ -47,14 +43,14 @@ TEST(FwLogger, RecordsPointsAtTheInterval)
     }
     host_board_tick(9);
     EXPECT_EQ(g_log_count, MCG_LOG_POINTS) << "stops after 255 points";
-    EXPECT_EQ(b.read(MCG_REG_FLAGS) & static_cast<int>(MCG_FLAG_LOG_FULL), static_cast<int>(MCG_FLAG_LOG_FULL));
+    EXPECT_EQ(b.read(MCG_REG_FLAGS) & static_cast<int>(MCG_FLAG_LOG_FULL),
+              static_cast<int>(MCG_FLAG_LOG_FULL));
   }
 }
 
 // A main loop held up for several ticks (an LCD refresh on the board) runs the missed ticks late:
 // the log keeps its time base and loses no pulse.
-TEST(FwLogger, LateTicksKeepTimeAndPulses)
-{
+TEST(FwLogger, LateTicksKeepTimeAndPulses) {
   Board b;
   ASSERT_EQ(b.write(MCG_REG_LOG_INTERVAL, 3), MCG_ST_OK);
   ASSERT_EQ(b.request(MCG_CMD_LOG_START)->payload.at(0), MCG_ST_OK);
@@ -77,8 +73,7 @@ TEST(FwLogger, LateTicksKeepTimeAndPulses)
   EXPECT_EQ(host_board_time_ms(), 765u + 2u);  // + the ticks of the two requests
 }
 
-TEST(FwLogger, IntervalLockedWhileRecording)
-{
+TEST(FwLogger, IntervalLockedWhileRecording) {
   Board b;
   ASSERT_EQ(b.request(MCG_CMD_LOG_START)->payload.at(0), MCG_ST_OK);
   EXPECT_EQ(b.write(MCG_REG_LOG_INTERVAL, 9), MCG_ST_BUSY);
@@ -86,8 +81,7 @@ TEST(FwLogger, IntervalLockedWhileRecording)
   EXPECT_EQ(b.request(MCG_CMD_LOG_DUMP)->payload, Bytes{MCG_ST_BUSY});
 }
 
-TEST(FwLogger, DumpSendsEveryPointInChunks)
-{
+TEST(FwLogger, DumpSendsEveryPointInChunks) {
   Board b;
   ASSERT_EQ(b.write(MCG_REG_LOG_INTERVAL, 2), MCG_ST_OK);
   ASSERT_EQ(b.request(MCG_CMD_LOG_START)->payload.at(0), MCG_ST_OK);
@@ -125,8 +119,7 @@ TEST(FwLogger, DumpSendsEveryPointInChunks)
 // Report bug: "trying to record data into ram will crash the system ... the closed loop flag set
 // when recording into ram". Recording changes neither the mode nor the control: the duty sequence
 // of a PI run is the same with and without a recording.
-TEST(FwLogger, RegressionRecordingLeavesControlAlone)
-{
+TEST(FwLogger, RegressionRecordingLeavesControlAlone) {
   auto run = [](bool record) {
     Board b;
     b.set_pulses(13);
@@ -160,8 +153,7 @@ TEST(FwLogger, RegressionRecordingLeavesControlAlone)
   EXPECT_EQ(host_board_log()[100], 48);
 }
 
-TEST(FwStream, BlocksEveryThirtyTwoMillisecondsWithinTheBudget)
-{
+TEST(FwStream, BlocksEveryThirtyTwoMillisecondsWithinTheBudget) {
   Board b;
   b.set_baud(9600);
   b.set_pulses(7);
@@ -205,8 +197,7 @@ TEST(FwStream, BlocksEveryThirtyTwoMillisecondsWithinTheBudget)
   EXPECT_EQ(reads, seconds * 10);
 }
 
-TEST(FwStream, LostBlocksShowAsSequenceGaps)
-{
+TEST(FwStream, LostBlocksShowAsSequenceGaps) {
   Board b;
   ASSERT_EQ(b.write(MCG_REG_STREAM, 1), MCG_ST_OK);
   b.run(64);
@@ -223,8 +214,7 @@ TEST(FwStream, LostBlocksShowAsSequenceGaps)
       << "the sequence advances for dropped blocks too";
 }
 
-TEST(FwSequence, PlaysEntriesAtTheirTimes)
-{
+TEST(FwSequence, PlaysEntriesAtTheirTimes) {
   Board b;
   Bytes entries{0};  // index 0
   auto entry = [&](int delay, std::uint8_t reg, int value) {
@@ -252,18 +242,17 @@ TEST(FwSequence, PlaysEntriesAtTheirTimes)
   // Entry k is written on tick 1 + delay_0 + ... + delay_k (index = tick - 1); outputs switch at
   // once, a duty reaches the PWM with the next control update (the update runs first in a tick).
   EXPECT_EQ(duty[5], 0);
-  EXPECT_EQ(duty[6], 100);   // written on tick 6
+  EXPECT_EQ(duty[6], 100);  // written on tick 6
   EXPECT_EQ(duty[15], 100);
   EXPECT_EQ(duty[16], 200);  // written on tick 16
   EXPECT_EQ(clutch[14], 0);
   EXPECT_EQ(clutch[15], 1);  // tick 16
   EXPECT_EQ(load[17], 0);
-  EXPECT_EQ(load[18], 1);    // tick 19
+  EXPECT_EQ(load[18], 1);  // tick 19
   EXPECT_EQ(b.read(MCG_REG_SEQ_STATE), static_cast<int>(MCG_SEQ_STOP));
 }
 
-TEST(FwSequence, LoopsAndRefusesChangesWhilePlaying)
-{
+TEST(FwSequence, LoopsAndRefusesChangesWhilePlaying) {
   Board b;
   Bytes entries{0};
   for (int v : {100, 300}) {
@@ -290,12 +279,9 @@ TEST(FwSequence, LoopsAndRefusesChangesWhilePlaying)
   EXPECT_EQ(b.write(MCG_REG_SEQ_STATE, MCG_SEQ_PLAY), MCG_ST_RANGE) << "nothing to play";
 }
 
-TEST(FwSequence, ChecksEntriesWhenStored)
-{
+TEST(FwSequence, ChecksEntriesWhenStored) {
   Board b;
-  auto one = [](std::uint8_t index, std::uint8_t reg) {
-    return Bytes{index, 1, 0, reg, 0, 0};
-  };
+  auto one = [](std::uint8_t index, std::uint8_t reg) { return Bytes{index, 1, 0, reg, 0, 0}; };
   EXPECT_EQ(b.request(MCG_CMD_SEQ_WRITE, one(0, MCG_REG_RPM))->payload, Bytes{MCG_ST_READ_ONLY});
   EXPECT_EQ(b.request(MCG_CMD_SEQ_WRITE, one(0, MCG_REG_SEQ_STATE))->payload, Bytes{MCG_ST_READ_ONLY});
   EXPECT_EQ(b.request(MCG_CMD_SEQ_WRITE, one(0, 0x7E))->payload, Bytes{MCG_ST_BAD_REG});

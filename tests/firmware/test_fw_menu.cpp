@@ -12,21 +12,16 @@ namespace {
 
 constexpr std::uint8_t k_a = 0x0A, k_b = 0x0B, k_c = 0x0C, k_d = 0x0D, k_e = 0x0E, k_f = 0x0F;
 
-std::string lcd(int row)
-{
-  return host_board_lcd(static_cast<std::uint8_t>(row));
-}
+std::string lcd(int row) { return host_board_lcd(static_cast<std::uint8_t>(row)); }
 
-void keys(Board& b, std::initializer_list<std::uint8_t> ks)
-{
+void keys(Board& b, std::initializer_list<std::uint8_t> ks) {
   for (std::uint8_t k : ks) {
     b.press(k);
   }
 }
 
 // From the main screen to the Kp item, into its editor.
-void edit_kp(Board& b)
-{
+void edit_kp(Board& b) {
   keys(b, {k_c, k_a, k_a, k_d});
   ASSERT_EQ(lcd(0), "Kp              ");
 }
@@ -34,8 +29,7 @@ void edit_kp(Board& b)
 }  // namespace
 
 // Report bug: "The interface on the EMAC will not receive any Kp input value from the keypad."
-TEST(FwMenu, RegressionKpEnteredOnTheKeypad)
-{
+TEST(FwMenu, RegressionKpEnteredOnTheKeypad) {
   Board b;
   edit_kp(b);
   keys(b, {1, k_f, 5});
@@ -46,8 +40,7 @@ TEST(FwMenu, RegressionKpEnteredOnTheKeypad)
   EXPECT_EQ(lcd(1), "       1.500    ");
 }
 
-TEST(FwMenu, KpNegativeRoundedAndAtOtherFormats)
-{
+TEST(FwMenu, KpNegativeRoundedAndAtOtherFormats) {
   Board b;
   edit_kp(b);
   keys(b, {k_e, 0, k_f, 2, 5, k_d});
@@ -67,13 +60,12 @@ TEST(FwMenu, KpNegativeRoundedAndAtOtherFormats)
   EXPECT_EQ(lcd(1), "refused   9     ");
 }
 
-TEST(FwMenu, EditingKeys)
-{
+TEST(FwMenu, EditingKeys) {
   Board b;
   edit_kp(b);
   keys(b, {2, 7, k_c});  // C deletes the last character
   EXPECT_EQ(lcd(1), "2_              ");
-  keys(b, {k_c, k_c});   // on an empty entry, C cancels
+  keys(b, {k_c, k_c});  // on an empty entry, C cancels
   EXPECT_EQ(lcd(1), "       0.000    ");
   EXPECT_EQ(b.read(MCG_REG_KP), 0);
   keys(b, {k_b, k_d, 5, 0, 0, k_d});  // back to the speed command: 500 rpm
@@ -86,8 +78,7 @@ TEST(FwMenu, EditingKeys)
   EXPECT_EQ(lcd(1), "refused   9     ");
 }
 
-TEST(FwMenu, ModeChosenFromTheMenu)
-{
+TEST(FwMenu, ModeChosenFromTheMenu) {
   Board b;
   keys(b, {k_c, k_d, 3, k_d});
   EXPECT_EQ(b.read(MCG_REG_MODE), static_cast<int>(MCG_MODE_PID));
@@ -97,8 +88,7 @@ TEST(FwMenu, ModeChosenFromTheMenu)
   EXPECT_EQ(lcd(1).substr(0, 5), "c 420");
 }
 
-TEST(FwMenu, MainScreenLines)
-{
+TEST(FwMenu, MainScreenLines) {
   Board b;
   b.set_pulses(14);
   ASSERT_EQ(b.write(MCG_REG_DUTY, 375), MCG_ST_OK);
@@ -114,8 +104,7 @@ TEST(FwMenu, MainScreenLines)
   EXPECT_EQ(lcd(1), "c 555  d  37.5% ");
 }
 
-TEST(FwMenu, DisplayRefreshesEveryHalfSecond)
-{
+TEST(FwMenu, DisplayRefreshesEveryHalfSecond) {
   Board b;
   b.run(500, 0);
   const std::string before = lcd(0);
@@ -127,8 +116,7 @@ TEST(FwMenu, DisplayRefreshesEveryHalfSecond)
 
 // A and B ramp the duty by the duty step once per service period while held: the service period is
 // the keypad's ramp rate.
-TEST(FwMenu, ServicePeriodSetsTheRampRate)
-{
+TEST(FwMenu, ServicePeriodSetsTheRampRate) {
   for (int period : {40, 5}) {
     SCOPED_TRACE(period);
     Board b;
@@ -146,8 +134,7 @@ TEST(FwMenu, ServicePeriodSetsTheRampRate)
   }
 }
 
-TEST(FwMenu, SingleKeyActions)
-{
+TEST(FwMenu, SingleKeyActions) {
   Board b;
   keys(b, {1});
   EXPECT_EQ(host_board_clutch(), 1);

@@ -15,8 +15,7 @@ using fwtest::Frame;
 
 namespace {
 
-std::vector<std::uint8_t> error_statuses(const std::vector<Frame>& frames)
-{
+std::vector<std::uint8_t> error_statuses(const std::vector<Frame>& frames) {
   std::vector<std::uint8_t> st;
   for (const Frame& f : frames) {
     if (f.cmd == MCG_MSG_ERROR) {
@@ -28,15 +27,13 @@ std::vector<std::uint8_t> error_statuses(const std::vector<Frame>& frames)
 
 }  // namespace
 
-TEST(FwProtocol, CrcIsCcittFalse)
-{
+TEST(FwProtocol, CrcIsCcittFalse) {
   // The catalogued check value of CRC-16/CCITT-FALSE over "123456789".
   const Bytes digits{'1', '2', '3', '4', '5', '6', '7', '8', '9'};
   EXPECT_EQ(fwtest::crc16(digits, 0, digits.size()), 0x29B1);
 }
 
-TEST(FwProtocol, VersionAnswer)
-{
+TEST(FwProtocol, VersionAnswer) {
   Board b;
   const auto f = b.request(MCG_CMD_VERSION);
   ASSERT_TRUE(f);
@@ -44,8 +41,7 @@ TEST(FwProtocol, VersionAnswer)
                                MCG_FW_VERSION_PATCH, MCG_BOARD_HOST}));
 }
 
-TEST(FwProtocol, WriteThenReadBack)
-{
+TEST(FwProtocol, WriteThenReadBack) {
   Board b;
   EXPECT_EQ(b.write(MCG_REG_RPM_CMD, 515), MCG_ST_OK);
   EXPECT_EQ(b.read(MCG_REG_RPM_CMD), 515);
@@ -55,8 +51,7 @@ TEST(FwProtocol, WriteThenReadBack)
   EXPECT_EQ(f->payload, (Bytes{MCG_ST_OK, MCG_REG_SERVICE_MS, 0x7B, 0x00}));
 }
 
-TEST(FwProtocol, DefaultsAfterReset)
-{
+TEST(FwProtocol, DefaultsAfterReset) {
   Board b;
   EXPECT_EQ(b.read(MCG_REG_MODE), static_cast<int>(MCG_MODE_OPEN));
   EXPECT_EQ(b.read(MCG_REG_RPM_CMD), 420);
@@ -71,8 +66,7 @@ TEST(FwProtocol, DefaultsAfterReset)
 }
 
 // Every status code of mcg_protocol.h is produced by the situation the man page gives for it.
-TEST(FwProtocol, EveryStatusCode)
-{
+TEST(FwProtocol, EveryStatusCode) {
   Board b;
   std::set<std::uint8_t> seen;
   auto answer = [&](std::uint8_t cmd, const Bytes& p) {
@@ -129,17 +123,17 @@ TEST(FwProtocol, EveryStatusCode)
   EXPECT_EQ(b.read(MCG_REG_RX_ERRORS), 4);  // CRC, too long, timeout, overrun
 }
 
-TEST(FwProtocol, RangesOfEveryWritableRegister)
-{
+TEST(FwProtocol, RangesOfEveryWritableRegister) {
   struct Case {
     std::uint8_t reg;
     int lo, hi;
   };
   const Case cases[] = {
-      {MCG_REG_MODE, 0, 3},         {MCG_REG_RPM_CMD, 120, 720},     {MCG_REG_DUTY_STEP, 1, 1000},
-      {MCG_REG_DUTY_BIAS, -1000, 1000}, {MCG_REG_COEF_FRAC, 0, 12}, {MCG_REG_SERVICE_MS, 5, 250},
-      {MCG_REG_LOG_INTERVAL, 1, 255}, {MCG_REG_STREAM, 0, 1},       {MCG_REG_CLUTCH, 0, 1},
-      {MCG_REG_LOAD, 0, 1},
+      {MCG_REG_MODE, 0, 3},           {MCG_REG_RPM_CMD, 120, 720},
+      {MCG_REG_DUTY_STEP, 1, 1000},   {MCG_REG_DUTY_BIAS, -1000, 1000},
+      {MCG_REG_COEF_FRAC, 0, 12},     {MCG_REG_SERVICE_MS, 5, 250},
+      {MCG_REG_LOG_INTERVAL, 1, 255}, {MCG_REG_STREAM, 0, 1},
+      {MCG_REG_CLUTCH, 0, 1},         {MCG_REG_LOAD, 0, 1},
   };
   for (const Case& c : cases) {
     Board b;
@@ -153,8 +147,7 @@ TEST(FwProtocol, RangesOfEveryWritableRegister)
   }
 }
 
-TEST(FwProtocol, DutyLimitsBoundEachOther)
-{
+TEST(FwProtocol, DutyLimitsBoundEachOther) {
   Board b;
   EXPECT_EQ(b.write(MCG_REG_DUTY_MAX, 600), MCG_ST_OK);
   EXPECT_EQ(b.write(MCG_REG_DUTY_MIN, 601), MCG_ST_RANGE);
@@ -165,8 +158,7 @@ TEST(FwProtocol, DutyLimitsBoundEachOther)
   EXPECT_EQ(host_board_duty(), 500) << "the open-loop duty follows a lowered limit";
 }
 
-TEST(FwProtocol, ErrorCountersClearOnlyToZero)
-{
+TEST(FwProtocol, ErrorCountersClearOnlyToZero) {
   Board b;
   b.send(Bytes{MCG_SYNC, 0xF0});
   b.run(2);
@@ -177,8 +169,7 @@ TEST(FwProtocol, ErrorCountersClearOnlyToZero)
 }
 
 // Report bug: "the highest bit was never able to be sent or received". Every byte value travels.
-TEST(FwProtocol, RegressionEighthBitEveryByteValue)
-{
+TEST(FwProtocol, RegressionEighthBitEveryByteValue) {
   Board b;
   for (int hi = 0; hi < 256; hi += 15) {
     for (int lo = 0; lo < 256; ++lo) {
@@ -195,8 +186,7 @@ TEST(FwProtocol, RegressionEighthBitEveryByteValue)
 
 // Garbage of every kind between frames, including bytes equal to SYNC: every real frame after it
 // is answered.
-TEST(FwProtocol, ResynchronisesAfterRandomGarbage)
-{
+TEST(FwProtocol, ResynchronisesAfterRandomGarbage) {
   Board b;
   std::mt19937_64 rng(20240515);
   std::uniform_int_distribution<int> byte(0, 255);
@@ -221,8 +211,7 @@ TEST(FwProtocol, ResynchronisesAfterRandomGarbage)
 
 // A frame that starts inside a damaged one is found without waiting for the timeout: the parser
 // rescans the bytes it already holds from the next SYNC on.
-TEST(FwProtocol, FindsFrameHiddenInsideDamagedFrame)
-{
+TEST(FwProtocol, FindsFrameHiddenInsideDamagedFrame) {
   Board b;
   Bytes bytes{MCG_SYNC, 6, MCG_CMD_WRITE};  // claims 6 payload bytes: ends inside the second frame
   const Bytes v1 = encode(MCG_CMD_VERSION);
@@ -239,8 +228,7 @@ TEST(FwProtocol, FindsFrameHiddenInsideDamagedFrame)
                                              MCG_CMD_READ | MCG_REPLY_BIT}));
 }
 
-TEST(FwProtocol, BackToBackFramesInOneBurst)
-{
+TEST(FwProtocol, BackToBackFramesInOneBurst) {
   Board b;
   Bytes burst;
   for (int i = 0; i < 20; ++i) {
@@ -256,8 +244,7 @@ TEST(FwProtocol, BackToBackFramesInOneBurst)
 
 // Report bug: the link "will freeze ... a complete system restart is necessary". Whatever arrives,
 // the next good request is answered: a truncated frame, an overrun, a full transmit buffer.
-TEST(FwProtocol, RegressionLinkNeverLocksUp)
-{
+TEST(FwProtocol, RegressionLinkNeverLocksUp) {
   Board b;
   b.set_baud(9600);
   ASSERT_EQ(b.write(MCG_REG_STREAM, 1), MCG_ST_OK);

@@ -47,14 +47,14 @@ using fwtest::Bytes;
 using fwtest::Frame;
 using Clock = std::chrono::steady_clock;
 
-pid_t g_child = -1; // the `timeout` process
-pid_t g_s51 = -1;   // its child, s51
+pid_t g_child = -1;  // the `timeout` process
+pid_t g_s51 = -1;    // its child, s51
 
 // s51's pid: the only child of `timeout`.
-pid_t child_of(pid_t parent)
-{
+pid_t child_of(pid_t parent) {
   char path[64];
-  std::snprintf(path, sizeof path, "/proc/%d/task/%d/children", static_cast<int>(parent), static_cast<int>(parent));
+  std::snprintf(path, sizeof path, "/proc/%d/task/%d/children", static_cast<int>(parent),
+                static_cast<int>(parent));
   std::FILE* f = std::fopen(path, "r");
   int pid = -1;
   if (f) {
@@ -67,8 +67,7 @@ pid_t child_of(pid_t parent)
 }
 
 // Ends s51 by its pid (timeout does not always pass a signal on), then reaps timeout.
-void stop_simulator()
-{
+void stop_simulator() {
   if (g_s51 > 0) {
     kill(g_s51, SIGTERM);
   }
@@ -77,16 +76,14 @@ void stop_simulator()
   }
 }
 
-void on_watchdog(int)
-{
+void on_watchdog(int) {
   const char msg[] = "ucsim_check: watchdog: the simulator stopped answering\n";
   (void)!write(2, msg, sizeof msg - 1);
   stop_simulator();
   _exit(1);
 }
 
-int free_tcp_port()
-{
+int free_tcp_port() {
   const int s = socket(AF_INET, SOCK_STREAM, 0);
   sockaddr_in a{};
   a.sin_family = AF_INET;
@@ -104,8 +101,7 @@ int free_tcp_port()
 
 class Sim {
  public:
-  Sim(const std::string& image, const std::string& dir)
-  {
+  Sim(const std::string& image, const std::string& dir) {
     const std::string to = dir + "/to_sim", from = dir + "/from_sim";
     unlink(to.c_str());
     unlink(from.c_str());
@@ -118,8 +114,8 @@ class Sim {
     const std::string port = std::to_string(m_port);
     const std::string serial = "in=" + to + ",out=" + from;
     const std::string log = dir + "/s51.log";
-    std::vector<std::string> args{"timeout", "-k", "5", "300", "s51", "-t", "C517", "-X", "12M", "-P",
-                                  "-Z", port, "-S", serial, image};
+    std::vector<std::string> args{"timeout", "-k", "5",  "300", "s51", "-t",   "C517", "-X",
+                                  "12M",     "-P", "-Z", port,  "-S",  serial, image};
     std::vector<char*> argv;
     for (auto& a : args) {
       argv.push_back(a.data());
@@ -159,8 +155,7 @@ class Sim {
     console("expr sim_start=1");
   }
 
-  ~Sim()
-  {
+  ~Sim() {
     if (m_console >= 0) {
       close(m_console);
     }
@@ -179,8 +174,7 @@ class Sim {
 
   // One console command; returns its output without colour codes. The console echoes the command
   // and ends each answer with a NUL (its prompt); answers to earlier commands are skipped.
-  std::string console(const std::string& cmd)
-  {
+  std::string console(const std::string& cmd) {
     const std::string line = cmd + "\n";
     if (send(m_console, line.data(), line.size(), MSG_NOSIGNAL) < 0) {
       return {};
@@ -200,8 +194,7 @@ class Sim {
   }
 
   // Discards console output still in flight (some commands answer twice).
-  void console_drain()
-  {
+  void console_drain() {
     for (;;) {
       pollfd p{m_console, POLLIN, 0};
       if (poll(&p, 1, 300) <= 0) {
@@ -219,8 +212,7 @@ class Sim {
   // Frames received within timeout_ms of wall time, returning early once `until` is seen or `done`
   // says the frames so far are enough.
   std::vector<Frame> receive(int timeout_ms, std::optional<std::uint8_t> until = std::nullopt,
-                             const std::function<bool(const std::vector<Frame>&)>& done = {})
-  {
+                             const std::function<bool(const std::vector<Frame>&)>& done = {}) {
     std::vector<Frame> out;
     const auto end = Clock::now() + std::chrono::milliseconds(timeout_ms);
     while (Clock::now() < end) {
@@ -244,8 +236,7 @@ class Sim {
     return out;
   }
 
-  std::optional<Frame> request(std::uint8_t cmd, const Bytes& payload = {})
-  {
+  std::optional<Frame> request(std::uint8_t cmd, const Bytes& payload = {}) {
     send_bytes(fwtest::encode(cmd, payload));
     const std::uint8_t want = static_cast<std::uint8_t>(cmd | MCG_REPLY_BIT);
     for (const Frame& f : receive(5000, want)) {
@@ -260,8 +251,7 @@ class Sim {
   std::vector<Frame> m_other;
 
  private:
-  void connect_console()
-  {
+  void connect_console() {
     const auto end = Clock::now() + std::chrono::seconds(20);
     while (Clock::now() < end) {
       m_console = socket(AF_INET, SOCK_STREAM, 0);
@@ -282,8 +272,7 @@ class Sim {
   }
 
   // Console text up to the next NUL byte; empty if nothing comes for 5 s.
-  std::string read_to_prompt()
-  {
+  std::string read_to_prompt() {
     std::string text;
     for (;;) {
       pollfd p{m_console, POLLIN, 0};
@@ -295,23 +284,21 @@ class Sim {
     }
   }
 
-  static std::string strip(const std::string& s)
-  {
+  static std::string strip(const std::string& s) {
     static const std::regex ansi("\x1b\\[[0-9;]*[A-Za-z]");
     std::string t = std::regex_replace(s, ansi, "");
     t.erase(std::remove(t.begin(), t.end(), '\r'), t.end());
     return t;
   }
 
-  std::FILE* m_transcript = nullptr; // the console dialogue, kept in WORKDIR for a failed run
+  std::FILE* m_transcript = nullptr;  // the console dialogue, kept in WORKDIR for a failed run
   int m_port = 0;
   int m_to = -1, m_from = -1, m_stdin = -1, m_console = -1;
   fwtest::Decoder m_decoder;
 };
 
 // Bytes [from, to] of external RAM through the console's dx command (16 per line).
-Bytes read_xram(Sim& sim, unsigned from, unsigned to)
-{
+Bytes read_xram(Sim& sim, unsigned from, unsigned to) {
   char cmd[64];
   std::snprintf(cmd, sizeof cmd, "dx 0x%04x 0x%04x 16", from, to);
   std::istringstream lines(sim.console(cmd));
@@ -339,22 +326,19 @@ Bytes read_xram(Sim& sim, unsigned from, unsigned to)
 
 int g_pass = 0, g_fail = 0;
 
-void check(bool ok, const std::string& what)
-{
+void check(bool ok, const std::string& what) {
   std::printf("%s: %s\n", ok ? "PASS" : "FAIL", what.c_str());
   (ok ? g_pass : g_fail) += 1;
 }
 
-Bytes write_payload(std::uint8_t reg, int value)
-{
+Bytes write_payload(std::uint8_t reg, int value) {
   Bytes p{reg};
   const Bytes v = fwtest::le16(value);
   p.insert(p.end(), v.begin(), v.end());
   return p;
 }
 
-std::optional<int> read_reg(Sim& sim, std::uint8_t reg)
-{
+std::optional<int> read_reg(Sim& sim, std::uint8_t reg) {
   const auto f = sim.request(MCG_CMD_READ, {reg});
   if (!f || f->payload.size() != 4 || f->payload[0] != MCG_ST_OK) {
     return std::nullopt;
@@ -363,8 +347,7 @@ std::optional<int> read_reg(Sim& sim, std::uint8_t reg)
 }
 
 // Runs the benchmark image to its end and returns the duties it stored at 0xA000 (4 x 256, i16).
-std::vector<int> bench_duties(const std::string& image, const std::string& dir)
-{
+std::vector<int> bench_duties(const std::string& image, const std::string& dir) {
   const std::string map = image.substr(0, image.size() - 4) + ".map";
   std::FILE* m = std::fopen(map.c_str(), "r");
   std::string done;
@@ -418,8 +401,7 @@ std::vector<int> bench_duties(const std::string& image, const std::string& dir)
 }
 
 // The same updates on the host: the C core with the benchmark's registers and pulses.
-std::vector<int> host_duties()
-{
+std::vector<int> host_duties() {
   host_board_reset();
   regs_write(MCG_REG_RPM_CMD, 420);
   regs_write(MCG_REG_KP, 3000);
@@ -444,8 +426,7 @@ std::vector<int> host_duties()
 
 }  // namespace
 
-int main(int argc, char** argv)
-{
+int main(int argc, char** argv) {
   if (argc != 3 && argc != 4) {
     std::fprintf(stderr, "usage: ucsim_check IMAGE.ihx WORKDIR [BENCH.ihx]\n");
     return 2;
@@ -457,8 +438,8 @@ int main(int argc, char** argv)
     Sim sim(argv[1], argv[2]);
 
     const auto v = sim.request(MCG_CMD_VERSION);
-    check(v && v->payload == Bytes{MCG_ST_OK, MCG_PROTOCOL_VERSION, MCG_FW_VERSION_MAJOR, MCG_FW_VERSION_MINOR,
-                                   MCG_FW_VERSION_PATCH, MCG_BOARD_UCSIM},
+    check(v && v->payload == Bytes{MCG_ST_OK, MCG_PROTOCOL_VERSION, MCG_FW_VERSION_MAJOR,
+                                   MCG_FW_VERSION_MINOR, MCG_FW_VERSION_PATCH, MCG_BOARD_UCSIM},
           "version: protocol 1, firmware 0.1.0, board ucsim");
 
     const auto w = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_RPM_CMD, 515));
@@ -522,8 +503,8 @@ int main(int argc, char** argv)
     check(dump && dump->payload == Bytes{MCG_ST_OK, 255, 4}, "dump announced: 255 points, 4 ms apart");
     std::vector<Frame> frames = sim.m_other;
     const auto rest = sim.receive(8000, std::nullopt, [](const std::vector<Frame>& got) {
-      return std::count_if(got.begin(), got.end(), [](const Frame& f) { return f.cmd == MCG_MSG_LOG_DATA; }) ==
-             MCG_LOG_DUMP_FRAMES;
+      return std::count_if(got.begin(), got.end(),
+                           [](const Frame& f) { return f.cmd == MCG_MSG_LOG_DATA; }) == MCG_LOG_DUMP_FRAMES;
     });
     frames.insert(frames.end(), rest.begin(), rest.end());
     std::vector<int> points;
@@ -544,7 +525,8 @@ int main(int argc, char** argv)
     for (std::size_t k = 0; same && k < MCG_LOG_POINTS; ++k) {
       same = (ram[2 * k] | ram[2 * k + 1] << 8) == points[k];
     }
-    check(same, "external RAM at 0x9500 holds the same 255 points (" + std::to_string(ram.size()) + " bytes read)");
+    check(same,
+          "external RAM at 0x9500 holds the same 255 points (" + std::to_string(ram.size()) + " bytes read)");
 
     const Bytes lcd = read_xram(sim, 0x9F20, 0x9F2F);
     const std::string row(lcd.begin(), lcd.end());
@@ -559,13 +541,14 @@ int main(int argc, char** argv)
     }
     std::string detail;
     if (first_diff < host.size()) {
-      detail = first_diff < sim.size() ? "; update " + std::to_string(first_diff) + ": 8051 " +
-                                             std::to_string(sim[first_diff]) + ", C " + std::to_string(host[first_diff])
-                                       : "; got " + std::to_string(sim.size()) + " duties";
+      detail = first_diff < sim.size()
+                   ? "; update " + std::to_string(first_diff) + ": 8051 " + std::to_string(sim[first_diff]) +
+                         ", C " + std::to_string(host[first_diff])
+                   : "; got " + std::to_string(sim.size()) + " duties";
     }
     check(sim.size() == 1024 && first_diff == host.size(),
-          "8051 P, PI, PID updates (F = 8, 11) equal the host C core: " + std::to_string(first_diff) + " of " +
-              std::to_string(host.size()) + " duties identical" + detail);
+          "8051 P, PI, PID updates (F = 8, 11) equal the host C core: " + std::to_string(first_diff) +
+              " of " + std::to_string(host.size()) + " duties identical" + detail);
   }
   std::printf("%d passed, %d failed\n", g_pass, g_fail);
   return g_fail == 0 ? 0 : 1;

@@ -14,20 +14,16 @@ static volatile uint8_t MCG_XDATA MCG_AT(C515_KEY_XADDR) s_key_port;
 
 /* Keypad encoder code -> key (0..9, 0x0A..0x0F = A..F), row by row as the 4 x 4 pad is wired. */
 static MCG_CODE uint8_t s_key_map[16] = {0x01, 0x02, 0x03, 0x0A, 0x04, 0x05, 0x06, 0x0B,
-                                          0x07, 0x08, 0x09, 0x0C, 0x0E, 0x00, 0x0F, 0x0D};
+                                         0x07, 0x08, 0x09, 0x0C, 0x0E, 0x00, 0x0F, 0x0D};
 
 static volatile uint8_t s_ticks;
 static volatile uint16_t s_count_at_tick; /* Timer 0 pulse count latched at the last tick */
 static uint16_t s_count_taken;            /* the latch value at the last hal_ticks_take */
 
-uint8_t hal_board_id(void)
-{
-  return MCG_BOARD_C515;
-}
+uint8_t hal_board_id(void) { return MCG_BOARD_C515; }
 
 /* Timer 2 overflow: latch the encoder count, count the tick. */
-void board_tick_isr(void) MCG_ISR(5)
-{
+void board_tick_isr(void) MCG_ISR(5) {
   uint8_t hi;
   uint8_t lo;
   TF2 = 0; /* the 80515 does not clear it in hardware */
@@ -38,25 +34,22 @@ void board_tick_isr(void) MCG_ISR(5)
   }
 }
 
-static void lcd_wait(void)
-{
+static void lcd_wait(void) {
   uint8_t n = C515_LCD_BUSY_POLLS;
   while ((s_lcd_cmd & C515_LCD_BUSY) && --n) {
   }
 }
 
-static void lcd_command(uint8_t c)
-{
+static void lcd_command(uint8_t c) {
   lcd_wait();
   s_lcd_cmd = c;
 }
 
-void hal_init(void)
-{
+void hal_init(void) {
   s_ticks = 0;
   s_count_at_tick = 0;
   s_count_taken = 0;
-  P4 &= (uint8_t)~(C515_P4_DIR | C515_P4_CLUTCH | C515_P4_LOAD);
+  P4 &= (uint8_t) ~(C515_P4_DIR | C515_P4_CLUTCH | C515_P4_LOAD);
   P1_1 = 0;
   TMOD = 0x05; /* Timer 0: 16-bit counter on T0 */
   TH0 = 0;
@@ -79,8 +72,7 @@ void hal_init(void)
   EA = 1;
 }
 
-uint8_t hal_ticks_take(uint16_t *pulses)
-{
+uint8_t hal_ticks_take(uint16_t* pulses) {
   uint8_t n;
   uint16_t count;
   EA = 0;
@@ -93,8 +85,7 @@ uint8_t hal_ticks_take(uint16_t *pulses)
   return n;
 }
 
-void hal_pwm_write(int16_t duty_permille)
-{
+void hal_pwm_write(int16_t duty_permille) {
   /* CC1 = 0x10000 - |duty|: that is -duty for duty > 0 and duty itself (as u16) for duty < 0. */
   uint16_t cc = (uint16_t)duty_permille;
   if (duty_permille < 0) {
@@ -113,8 +104,7 @@ void hal_pwm_write(int16_t duty_permille)
   CCEN |= C515_CCEN_CC1;
 }
 
-void hal_clutch_write(uint8_t on)
-{
+void hal_clutch_write(uint8_t on) {
   if (on) {
     P4 |= C515_P4_CLUTCH;
   } else {
@@ -122,8 +112,7 @@ void hal_clutch_write(uint8_t on)
   }
 }
 
-void hal_load_write(uint8_t on)
-{
+void hal_load_write(uint8_t on) {
   if (on) {
     P4 |= C515_P4_LOAD;
   } else {
@@ -131,8 +120,7 @@ void hal_load_write(uint8_t on)
   }
 }
 
-uint8_t hal_key_read(void)
-{
+uint8_t hal_key_read(void) {
   uint8_t k = s_key_port;
   if (!(k & C515_KEY_AVAILABLE)) {
     return MCG_KEY_NONE;
@@ -140,8 +128,7 @@ uint8_t hal_key_read(void)
   return s_key_map[k & 0x0Fu];
 }
 
-void hal_lcd_write(uint8_t row, const char *text16)
-{
+void hal_lcd_write(uint8_t row, const char* text16) {
   uint8_t i;
   lcd_command(row ? 0xC0 : 0x80); /* DDRAM address of the row */
   for (i = 0; i < 16u && text16[i]; ++i) {

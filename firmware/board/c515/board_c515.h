@@ -29,8 +29,8 @@
 #define C515_LCD_CMD_XADDR 0xFF80u  /* HD44780 instruction register (write), busy flag (read) */
 #define C515_LCD_DATA_XADDR 0xFF81u /* HD44780 data register */
 #define C515_LCD_BUSY 0x80u
-#define C515_LCD_BUSY_POLLS 200u    /* give up waiting after this many polls: never hang */
-#define C515_KEY_XADDR 0xFFC0u      /* key encoder: bits 0..3 key code, bit 7 data available */
+#define C515_LCD_BUSY_POLLS 200u /* give up waiting after this many polls: never hang */
+#define C515_KEY_XADDR 0xFFC0u   /* key encoder: bits 0..3 key code, bit 7 data available */
 #define C515_KEY_AVAILABLE 0x80u
 
 /* Reads the 16-bit encoder count of Timer 0 while it runs: re-read until the high byte is stable.

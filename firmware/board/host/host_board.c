@@ -9,7 +9,7 @@
 
 /* A byte queue: the UART rings and the two line buffers. */
 typedef struct {
-  uint8_t *buf;
+  uint8_t* buf;
   size_t cap, head, count;
 } Queue;
 
@@ -31,20 +31,17 @@ static uint8_t s_key;
 static char s_lcd[2][17];
 static uint32_t s_time_ms;
 
-static void q_clear(Queue *q)
-{
+static void q_clear(Queue* q) {
   q->head = 0;
   q->count = 0;
 }
 
-static void q_push(Queue *q, uint8_t b)
-{
+static void q_push(Queue* q, uint8_t b) {
   q->buf[(q->head + q->count) % q->cap] = b;
   ++q->count;
 }
 
-static uint8_t q_pop(Queue *q)
-{
+static uint8_t q_pop(Queue* q) {
   uint8_t b = q->buf[q->head];
   q->head = (q->head + 1) % q->cap;
   --q->count;
@@ -52,15 +49,11 @@ static uint8_t q_pop(Queue *q)
 }
 
 /* hal.h ------------------------------------------------------------------------------------------ */
-uint8_t hal_board_id(void)
-{
-  return MCG_BOARD_HOST;
-}
+uint8_t hal_board_id(void) { return MCG_BOARD_HOST; }
 
 void hal_init(void) {}
 
-uint8_t hal_ticks_take(uint16_t *pulses)
-{
+uint8_t hal_ticks_take(uint16_t* pulses) {
   uint8_t n = s_ticks;
   *pulses = s_pulses;
   s_ticks = 0;
@@ -68,23 +61,13 @@ uint8_t hal_ticks_take(uint16_t *pulses)
   return n;
 }
 
-void hal_pwm_write(int16_t duty_permille)
-{
-  s_duty = duty_permille;
-}
+void hal_pwm_write(int16_t duty_permille) { s_duty = duty_permille; }
 
-void hal_clutch_write(uint8_t on)
-{
-  s_clutch = on;
-}
+void hal_clutch_write(uint8_t on) { s_clutch = on; }
 
-void hal_load_write(uint8_t on)
-{
-  s_load = on;
-}
+void hal_load_write(uint8_t on) { s_load = on; }
 
-uint8_t hal_uart_rx(uint8_t *byte)
-{
+uint8_t hal_uart_rx(uint8_t* byte) {
   if (s_rx.count == 0) {
     return 0;
   }
@@ -92,30 +75,19 @@ uint8_t hal_uart_rx(uint8_t *byte)
   return 1;
 }
 
-uint8_t hal_uart_rx_overrun(void)
-{
+uint8_t hal_uart_rx_overrun(void) {
   uint8_t o = s_overrun;
   s_overrun = 0;
   return o;
 }
 
-uint8_t hal_uart_tx_free(void)
-{
-  return (uint8_t)(s_tx.cap - s_tx.count);
-}
+uint8_t hal_uart_tx_free(void) { return (uint8_t)(s_tx.cap - s_tx.count); }
 
-void hal_uart_tx(uint8_t byte)
-{
-  q_push(&s_tx, byte);
-}
+void hal_uart_tx(uint8_t byte) { q_push(&s_tx, byte); }
 
-uint8_t hal_key_read(void)
-{
-  return s_key;
-}
+uint8_t hal_key_read(void) { return s_key; }
 
-void hal_lcd_write(uint8_t row, const char *text16)
-{
+void hal_lcd_write(uint8_t row, const char* text16) {
   uint8_t i;
   for (i = 0; i < 16 && text16[i]; ++i) {
     s_lcd[row][i] = text16[i];
@@ -124,8 +96,7 @@ void hal_lcd_write(uint8_t row, const char *text16)
 }
 
 /* host_board.h ----------------------------------------------------------------------------------- */
-void host_board_reset(void)
-{
+void host_board_reset(void) {
   q_clear(&s_rx);
   q_clear(&s_tx);
   q_clear(&s_line_in);
@@ -147,16 +118,14 @@ void host_board_reset(void)
   core_init();
 }
 
-void host_board_set_baud(uint32_t baud)
-{
+void host_board_set_baud(uint32_t baud) {
   s_baud = baud;
   s_in_credit = 0;
   s_out_credit = 0;
 }
 
 /* Whether one more byte fits in the line's budget this tick (10 bit times per byte). */
-static int line_allows(uint32_t *credit)
-{
+static int line_allows(uint32_t* credit) {
   if (s_baud == 0) {
     return 1;
   }
@@ -168,15 +137,13 @@ static int line_allows(uint32_t *credit)
 }
 
 /* Moves transmitted bytes from the UART ring onto the line, within the line's budget. */
-static void drain_tx(void)
-{
+static void drain_tx(void) {
   while (s_tx.count > 0 && s_line_out.count < s_line_out.cap && line_allows(&s_out_credit)) {
     q_push(&s_line_out, q_pop(&s_tx));
   }
 }
 
-void host_board_stall(uint16_t encoder_pulses)
-{
+void host_board_stall(uint16_t encoder_pulses) {
   ++s_time_ms;
   if (s_ticks < 255u) {
     ++s_ticks;
@@ -184,8 +151,7 @@ void host_board_stall(uint16_t encoder_pulses)
   s_pulses = (uint16_t)(s_pulses + encoder_pulses);
 }
 
-void host_board_tick(uint16_t encoder_pulses)
-{
+void host_board_tick(uint16_t encoder_pulses) {
   host_board_stall(encoder_pulses);
   if (s_baud != 0) {
     /* carry at most one tick of unused line time, as the line cannot store it */
@@ -207,8 +173,7 @@ void host_board_tick(uint16_t encoder_pulses)
   drain_tx();
 }
 
-size_t host_board_rx(const uint8_t *data, size_t n)
-{
+size_t host_board_rx(const uint8_t* data, size_t n) {
   size_t i;
   for (i = 0; i < n && s_line_in.count < s_line_in.cap; ++i) {
     q_push(&s_line_in, data[i]);
@@ -216,8 +181,7 @@ size_t host_board_rx(const uint8_t *data, size_t n)
   return i;
 }
 
-size_t host_board_tx(uint8_t *out, size_t cap)
-{
+size_t host_board_tx(uint8_t* out, size_t cap) {
   size_t i;
   for (i = 0; i < cap && s_line_out.count > 0; ++i) {
     out[i] = q_pop(&s_line_out);
@@ -225,42 +189,18 @@ size_t host_board_tx(uint8_t *out, size_t cap)
   return i;
 }
 
-void host_board_uart_overrun(void)
-{
-  s_overrun = 1;
-}
+void host_board_uart_overrun(void) { s_overrun = 1; }
 
-int16_t host_board_duty(void)
-{
-  return s_duty;
-}
+int16_t host_board_duty(void) { return s_duty; }
 
-uint8_t host_board_clutch(void)
-{
-  return s_clutch;
-}
+uint8_t host_board_clutch(void) { return s_clutch; }
 
-uint8_t host_board_load(void)
-{
-  return s_load;
-}
+uint8_t host_board_load(void) { return s_load; }
 
-void host_board_key(uint8_t key)
-{
-  s_key = key;
-}
+void host_board_key(uint8_t key) { s_key = key; }
 
-const char *host_board_lcd(uint8_t row)
-{
-  return s_lcd[row & 1u];
-}
+const char* host_board_lcd(uint8_t row) { return s_lcd[row & 1u]; }
 
-const uint16_t *host_board_log(void)
-{
-  return g_log;
-}
+const uint16_t* host_board_log(void) { return g_log; }
 
-uint32_t host_board_time_ms(void)
-{
-  return s_time_ms;
-}
+uint32_t host_board_time_ms(void) { return s_time_ms; }

@@ -44,11 +44,11 @@ void host_board_stall(uint16_t encoder_pulses);
 
 /* Bytes arriving from the PC; they reach the UART at the line rate during the next ticks.
  * Returns how many were accepted (the line buffer holds HOST_BOARD_LINE_BYTES). */
-size_t host_board_rx(const uint8_t *data, size_t n);
+size_t host_board_rx(const uint8_t* data, size_t n);
 #define HOST_BOARD_LINE_BYTES 4096u
 
 /* Copies up to cap bytes the board has transmitted since the last call; returns the count. */
-size_t host_board_tx(uint8_t *out, size_t cap);
+size_t host_board_tx(uint8_t* out, size_t cap);
 
 /* Makes the UART report an overrun (a received byte lost), as a stalled board would. */
 void host_board_uart_overrun(void);
@@ -62,10 +62,10 @@ uint8_t host_board_load(void);
 void host_board_key(uint8_t key);
 
 /* The LCD's rows 0 and 1 as last written: 16 characters, NUL-terminated. */
-const char *host_board_lcd(uint8_t row);
+const char* host_board_lcd(uint8_t row);
 
 /* The RAM log (MCG_LOG_POINTS points, as at external address MCG_LOG_XADDR on the board). */
-const uint16_t *host_board_log(void);
+const uint16_t* host_board_log(void);
 
 /* Milliseconds (ticks) since reset. */
 uint32_t host_board_time_ms(void);

@@ -11,8 +11,7 @@ static volatile uint8_t MCG_XDATA s_tx_buf[UART_TX_RING];
 static volatile uint8_t s_rx_head, s_rx_tail, s_rx_overrun;
 static volatile uint8_t s_tx_head, s_tx_tail, s_tx_busy;
 
-void uart_init(void)
-{
+void uart_init(void) {
   s_rx_head = 0;
   s_rx_tail = 0;
   s_rx_overrun = 0;
@@ -23,8 +22,7 @@ void uart_init(void)
   ES = 1;
 }
 
-void uart_isr(void) MCG_ISR(4)
-{
+void uart_isr(void) MCG_ISR(4) {
   if (RI) {
     uint8_t next = (uint8_t)((s_rx_head + 1u) & (UART_RX_RING - 1u));
     RI = 0;
@@ -46,8 +44,7 @@ void uart_isr(void) MCG_ISR(4)
   }
 }
 
-uint8_t hal_uart_rx(uint8_t *byte)
-{
+uint8_t hal_uart_rx(uint8_t* byte) {
   if (s_rx_tail == s_rx_head) {
     return 0;
   }
@@ -56,8 +53,7 @@ uint8_t hal_uart_rx(uint8_t *byte)
   return 1;
 }
 
-uint8_t hal_uart_rx_overrun(void)
-{
+uint8_t hal_uart_rx_overrun(void) {
   uint8_t o;
   ES = 0;
   o = s_rx_overrun;
@@ -66,13 +62,11 @@ uint8_t hal_uart_rx_overrun(void)
   return o;
 }
 
-uint8_t hal_uart_tx_free(void)
-{
+uint8_t hal_uart_tx_free(void) {
   return (uint8_t)(UART_TX_RING - 1u - ((uint8_t)(s_tx_head - s_tx_tail) & (UART_TX_RING - 1u)));
 }
 
-void hal_uart_tx(uint8_t byte)
-{
+void hal_uart_tx(uint8_t byte) {
   s_tx_buf[s_tx_head] = byte;
   s_tx_head = (uint8_t)((s_tx_head + 1u) & (UART_TX_RING - 1u));
   ES = 0;

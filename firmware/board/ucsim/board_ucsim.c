@@ -13,13 +13,9 @@ static volatile uint8_t s_ticks;
 static int16_t s_duty;
 static int16_t s_pulse_acc; /* test encoder: duty-ticks not yet turned into pulses */
 
-uint8_t hal_board_id(void)
-{
-  return MCG_BOARD_UCSIM;
-}
+uint8_t hal_board_id(void) { return MCG_BOARD_UCSIM; }
 
-void board_tick_isr(void) MCG_ISR(1)
-{
+void board_tick_isr(void) MCG_ISR(1) {
   TH0 = SIM_T0_RELOAD_H;
   TL0 = SIM_T0_RELOAD_L;
   if (s_ticks != 255u) {
@@ -27,8 +23,7 @@ void board_tick_isr(void) MCG_ISR(1)
   }
 }
 
-void hal_init(void)
-{
+void hal_init(void) {
   uint8_t i;
   for (i = 0; i < sizeof s_io; ++i) {
     s_io[i] = ' ';
@@ -41,7 +36,7 @@ void hal_init(void)
   s_duty = 0;
   s_pulse_acc = 0;
   s_ticks = 0;
-  TMOD = 0x21; /* Timer 1 mode 2 (baud), Timer 0 mode 1 (tick) */
+  TMOD = 0x21;  /* Timer 1 mode 2 (baud), Timer 0 mode 1 (tick) */
   PCON |= 0x80; /* SMOD */
   TH1 = 0xF9;
   TL1 = 0xF9;
@@ -54,8 +49,7 @@ void hal_init(void)
   EA = 1;
 }
 
-uint8_t hal_ticks_take(uint16_t *pulses)
-{
+uint8_t hal_ticks_take(uint16_t* pulses) {
   uint8_t n;
   uint16_t p = 0;
   uint8_t i;
@@ -74,30 +68,19 @@ uint8_t hal_ticks_take(uint16_t *pulses)
   return n;
 }
 
-void hal_pwm_write(int16_t duty_permille)
-{
+void hal_pwm_write(int16_t duty_permille) {
   s_duty = duty_permille;
   s_io[0] = (uint8_t)((uint16_t)duty_permille & 0xFFu);
   s_io[1] = (uint8_t)((uint16_t)duty_permille >> 8);
 }
 
-void hal_clutch_write(uint8_t on)
-{
-  s_io[2] = on;
-}
+void hal_clutch_write(uint8_t on) { s_io[2] = on; }
 
-void hal_load_write(uint8_t on)
-{
-  s_io[3] = on;
-}
+void hal_load_write(uint8_t on) { s_io[3] = on; }
 
-uint8_t hal_key_read(void)
-{
-  return s_io[4];
-}
+uint8_t hal_key_read(void) { return s_io[4]; }
 
-void hal_lcd_write(uint8_t row, const char *text16)
-{
+void hal_lcd_write(uint8_t row, const char* text16) {
   uint8_t base = row ? 0x20u : 0x10u;
   uint8_t i;
   for (i = 0; i < 16u && text16[i]; ++i) {

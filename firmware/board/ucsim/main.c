@@ -4,8 +4,7 @@
 #include "hal.h"         /* hal_init */
 #include "uart_mcs51.h"  /* uart_isr */
 
-void main(void)
-{
+void main(void) {
   hal_init();
   core_init();
   for (;;) {
