@@ -229,12 +229,37 @@ TfFit fit_tf(const FrequencyResponse& response, const TfFitOptions& options) {
   }
   const Scaled sc{options.zeros, options.poles, std::sqrt(pts.front().w_rad_s * pts.back().w_rad_s)};
 
-  Eigen::VectorXd theta = linear_step(sc, pts, nullptr);
-  for (int it = 0; it < options.sk_iterations; ++it) {
-    const Eigen::VectorXd next = linear_step(sc, pts, &theta);
-    const double change = (next - theta).norm() / std::max(1e-300, next.norm());
-    theta = next;
-    if (change < 1e-12) break;
+  // Linear stages on the response with a trial delay removed; returns the start and its cost.
+  const auto start_for = [&](double delay_s, double& cost) {
+    std::vector<Point> shifted = pts;
+    for (Point& pt : shifted) pt.h *= std::polar(1.0, pt.w_rad_s * delay_s);
+    Eigen::VectorXd theta = linear_step(sc, shifted, nullptr);
+    for (int it = 0; it < options.sk_iterations; ++it) {
+      const Eigen::VectorXd next = linear_step(sc, shifted, &theta);
+      const double change = (next - theta).norm() / std::max(1e-300, next.norm());
+      theta = next;
+      if (change < 1e-12) break;
+    }
+    cost = 0.0;
+    for (const Point& pt : shifted) cost += pt.weight * std::norm(std::log(sc.model(theta, pt.w_rad_s) / pt.h));
+    return theta;
+  };
+  double delay0 = 0.0;
+  double best_cost = 0.0;
+  Eigen::VectorXd theta = start_for(0.0, best_cost);
+  if (options.fit_delay) {
+    constexpr int k_grid = 40;
+    const double max_delay = std::numbers::pi / pts.back().w_rad_s;
+    for (int g = 1; g <= k_grid; ++g) {
+      double cost = 0.0;
+      const double d = max_delay * g / k_grid;
+      const Eigen::VectorXd candidate = start_for(d, cost);
+      if (candidate.allFinite() && cost < best_cost) {
+        best_cost = cost;
+        theta = candidate;
+        delay0 = d;
+      }
+    }
   }
   if (!theta.allFinite()) fail("{}: the linearised fit is singular (no excitation across the band?)", response.source);
 
@@ -244,9 +269,17 @@ TfFit fit_tf(const FrequencyResponse& response, const TfFitOptions& options) {
     const std::string name = i <= sc.m ? fmt::format("b{}", i) : fmt::format("a{}", i - sc.m - 1);
     specs.push_back({name, theta[i], Transform::linear, std::max(std::abs(theta[i]), 1e-8 * largest)});
   }
+  const Eigen::Index n_theta = theta.size();
+  if (options.fit_delay) specs.push_back({"delay_s", delay0, Transform::linear, 0.1 / pts.back().w_rad_s});
   const ResidualFunction residual = [&](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
+    const double delay = options.fit_delay ? p[n_theta] : 0.0;
+    if (delay < 0.0) {
+      r.setConstant(std::numeric_limits<double>::quiet_NaN());
+      return;
+    }
     for (std::size_t k = 0; k < pts.size(); ++k) {
-      const Complex e = std::log(sc.model(p, pts[k].w_rad_s) / pts[k].h) * std::sqrt(pts[k].weight);
+      const Complex e = (std::log(sc.model(p, pts[k].w_rad_s) / pts[k].h) - Complex(0.0, pts[k].w_rad_s * delay)) *
+                        std::sqrt(pts[k].weight);
       r[static_cast<Eigen::Index>(2 * k)] = e.real();
       r[static_cast<Eigen::Index>(2 * k + 1)] = e.imag();
     }
@@ -257,7 +290,11 @@ TfFit fit_tf(const FrequencyResponse& response, const TfFitOptions& options) {
   fit.nls = least_squares(specs, 2 * pts.size(), residual, nls_options);
   if (!fit.nls.converged) fail("{}: the transfer-function fit did not converge: {}", response.source, fit.nls.reason);
 
-  const Eigen::VectorXd& best = fit.nls.values;
+  const Eigen::VectorXd best = fit.nls.values.head(n_theta);
+  if (options.fit_delay) {
+    fit.delay_s = fit.nls.values[n_theta];
+    fit.delay_se = fit.nls.std_errors[n_theta];
+  }
   fit.tf = to_s_domain(sc, best);
   fit.gain = lowest_nonzero(fit.tf.num) / lowest_nonzero(fit.tf.den);
   fit.poles = factors_of(fit.tf.den);
@@ -267,7 +304,7 @@ TfFit fit_tf(const FrequencyResponse& response, const TfFitOptions& options) {
   double sq_mag = 0.0;
   double sq_phase = 0.0;
   for (const Point& pt : pts) {
-    const Complex e = std::log(sc.model(best, pt.w_rad_s) / pt.h);
+    const Complex e = std::log(sc.model(best, pt.w_rad_s) / pt.h) - Complex(0.0, pt.w_rad_s * fit.delay_s);
     sq_mag += std::pow(e.real() * 20.0 / std::log(10.0), 2);
     sq_phase += std::pow(e.imag() * 180.0 / std::numbers::pi, 2);
   }
@@ -295,9 +332,9 @@ TfFit fit_tf(const FrequencyResponse& response, const TfFitOptions& options) {
     g.col(j) = (qp - qm) / (2.0 * h);
   }
   Eigen::VectorXd q_se = Eigen::VectorXd::Constant(nq, std::numeric_limits<double>::quiet_NaN());
-  if (same_shape && fit.nls.std_errors.allFinite()) {
-    const Eigen::MatrixXd cov =
-        fit.nls.std_errors.asDiagonal() * fit.nls.correlation * fit.nls.std_errors.asDiagonal();
+  if (same_shape && fit.nls.std_errors.head(nt).allFinite()) {
+    const Eigen::VectorXd se = fit.nls.std_errors.head(nt);
+    const Eigen::MatrixXd cov = se.asDiagonal() * fit.nls.correlation.topLeftCorner(nt, nt) * se.asDiagonal();
     q_se = (g * cov * g.transpose()).diagonal().cwiseSqrt();
   }
   Eigen::Index qi = 0;

@@ -44,6 +44,9 @@ struct TfFitOptions {
   bool use_coherence = true;
   /// Sanathanan-Koerner re-weighted linear iterations before the nonlinear refinement.
   int sk_iterations = 30;
+  /// Fit a transport delay too: G(s) e^(-s delay_s), delay_s >= 0. Sampled data carry one:
+  /// a zero-order hold alone lags like half a sample period.
+  bool fit_delay = false;
 };
 
 /// One factor of the normalised (Bode) form of G(s), with its standard error.
@@ -70,6 +73,8 @@ struct TfFit {
   double gain_se = 0.0;
   std::vector<Factor> poles;  ///< sorted by corner frequency
   std::vector<Factor> zeros;
+  double delay_s = 0.0;  ///< 0 unless options.fit_delay
+  double delay_se = 0.0;
   double rms_mag_db = 0.0;      ///< unweighted, over the points used
   double rms_phase_deg = 0.0;
   std::size_t points = 0;
@@ -78,7 +83,8 @@ struct TfFit {
 
 /// Fits G(s) with the given numbers of poles and zeros: Levy's linearised least squares,
 /// Sanathanan-Koerner iterations, then Levenberg-Marquardt on the log-magnitude and phase
-/// errors. Throws mcg::Error on too few points, zeros > poles, or a fit that does not
+/// errors. With a delay, the linear stages run on the response with trial delays removed
+/// (a grid over 0..pi/w_max) and the best start is refined jointly with the delay. Throws mcg::Error on too few points, zeros > poles, or a fit that does not
 /// converge.
 TfFit fit_tf(const FrequencyResponse& response, const TfFitOptions& options);
 

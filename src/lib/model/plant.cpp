@@ -155,6 +155,7 @@ class PlantImpl {
     if (m_clutch == 2) {
       m_coupling = m_c.compliance ? Coupling::spring : Coupling::rigid;
     }
+    update_gen_mode();
   }
 
   void step(double dt, const Drive& drive) {
@@ -216,10 +217,14 @@ class PlantImpl {
 
  private:
   bool gen_present() const { return m_clutch != 0; }
-  bool gen_circuit() const { return gen_present() && std::isfinite(m_r_load); }
-  bool gen_quasi_static() const {
-    return gen_circuit() &&
-           (m_c.p.generator.R_ohm + m_r_load) / m_c.p.generator.L_H > k_quasi_static_rate;
+  bool gen_circuit() const { return m_gen_circuit; }
+  bool gen_quasi_static() const { return m_gen_quasi; }
+  /// Caches whether the generator circuit is closed, and whether it is fast enough to be
+  /// solved as algebraic; called whenever the clutch state or the load changes.
+  void update_gen_mode() {
+    m_gen_circuit = gen_present() && std::isfinite(m_r_load);
+    m_gen_quasi = m_gen_circuit &&
+                  (m_c.p.generator.R_ohm + m_r_load) / m_c.p.generator.L_H > k_quasi_static_rate;
   }
   bool rigid() const { return m_coupling == Coupling::rigid; }
 
@@ -439,8 +444,10 @@ class PlantImpl {
         return k_end;
       };
       double Tm0 = 0.0, Tg0 = 0.0, Tm1 = 0.0, Tg1 = 0.0;
-      drive_torques(m_y, t, Tm0, Tg0);
-      drive_torques(y1, t + remaining, Tm1, Tg1);
+      if (m_stuck_m || (two_bodies && m_stuck_g)) {
+        drive_torques(m_y, t, Tm0, Tg0);
+        drive_torques(y1, t + remaining, Tm1, Tg1);
+      }
       // Motor body (or the rigid pair).
       if (!m_stuck_m) {
         if (m_dir_m * y1[W_M] <= 0.0) {
@@ -629,6 +636,7 @@ class PlantImpl {
   void set_load(double r_load) {
     if (r_load == m_r_load) return;
     m_r_load = r_load;
+    update_gen_mode();
     if (!gen_circuit()) m_y[I_G] = 0.0;
     if (gen_quasi_static()) m_y[I_G] = gen_current(m_y);
   }
@@ -649,6 +657,7 @@ class PlantImpl {
       m_dir_g = 0;
     }
     m_clutch = next;
+    update_gen_mode();
     if (next == 2) {
       const double Jm = m_c.p.motor.J_kg_m2, Jg = m_c.p.generator.J_kg_m2;
       if (m_c.lag) {
@@ -688,6 +697,8 @@ class PlantImpl {
   double m_phi0 = 0.0;
   double m_t_engage = 0.0;
   double m_r_load = k_open_circuit;
+  bool m_gen_circuit = false;
+  bool m_gen_quasi = false;
   double m_v = 0.0;
   std::deque<std::pair<double, double>> m_queue;
 };

@@ -153,8 +153,13 @@ std::string quote(std::string_view text) {
   for (const char c : text) {
     const auto u = static_cast<unsigned char>(c);
     if (u < 0x20 || u == 0x7f) continue;
-    if (c == '\'') out += '\'';
-    out += c;
+    // gnuplot reads '' as an escaped quote inside a string but as an empty string at its
+    // start, so each quote is spliced in as a separate double-quoted literal instead.
+    if (c == '\'') {
+      out += R"('."'".')";
+    } else {
+      out += c;
+    }
   }
   out += '\'';
   return out;

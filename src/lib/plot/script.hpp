@@ -10,10 +10,11 @@
 
 namespace mcg::plot {
 
-/// A gnuplot single-quoted string literal holding `text`: control characters (newlines,
-/// carriage returns, escapes, DEL) are dropped and each ' is doubled, the only escape
-/// gnuplot knows inside single quotes. Single-quoted strings undergo no backslash escapes, no
-/// macro (@) and no backquote (command) substitution, so data can never become a command.
+/// A gnuplot string expression holding `text`: control characters (newlines, carriage
+/// returns, escapes, DEL) are dropped, the rest goes inside single quotes, and each ' is
+/// spliced in as the double-quoted literal "'" ('it'."'".'s'). Single-quoted strings undergo
+/// no backslash escapes, no macro (@) and no backquote (command) substitution, and "'" holds
+/// nothing to substitute, so data can never become a command.
 std::string quote(std::string_view text);
 
 /// Axis label of a column with its unit from the data contract: "rpm (rev/min)", "t (s)";

@@ -116,9 +116,12 @@ Excitation excite(Generator g, const GeneratorOptions& o, const std::vector<doub
       check_band(o);
       const ChirpSpacing spacing = spacing_of_option(o.spacing, ChirpSpacing::linear);
       e.x = chirp_signal(t, o.amp, o.f0_hz, o.f1_hz, duration_s, spacing);
-      e.meta.set("excitation", fmt::format("chirp {} {} {}..{} Hz over {} s, amplitude {}{}, {}", kind,
+      e.meta.set("excitation", fmt::format("chirp {} {} {}..{} Hz over {} s, amplitude {}{}, {}{}", kind,
                                            spacing_name(spacing), format_number(o.f0_hz), format_number(o.f1_hz),
-                                           format_number(duration_s), format_number(o.amp), unit, about));
+                                           format_number(duration_s), format_number(o.amp), unit, about,
+                                           o.settle_s > 0 ? fmt::format(" ({} s before and after)",
+                                                                        format_number(o.settle_s))
+                                                          : std::string()));
       e.meta.set("excitation_band_hz", fmt::format("{} {}", format_number(o.f0_hz), format_number(o.f1_hz)));
       break;
     }
@@ -203,6 +206,17 @@ std::vector<double> parse_list(const std::string& text, const char* option) {
   return values;
 }
 
+std::vector<double> numbers_in(const std::string& text);
+
+// A metadata value that is one finite number, if present.
+std::optional<double> meta_number(const table::Metadata& meta, std::string_view key) {
+  const auto text = meta.get(key);
+  if (!text) return std::nullopt;
+  double v = 0;
+  if (!table::parse_number(*text, v) || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
 std::vector<double> numbers_in(const std::string& text) {
   std::vector<double> values;
   std::stringstream in(text);
@@ -226,12 +240,27 @@ void generate(Generator generator, const GeneratorOptions& o, std::ostream& out)
   check_values(r_load, "--r-load-schedule", false);
 
   const double duration = o.duration_s.value_or(default_duration_s(generator, o, then));
-  const std::vector<double> t = time_grid(o.dt_s, duration);
-  if (t.size() < 2) {
+  const std::vector<double> t_excitation = time_grid(o.dt_s, duration);
+  if (t_excitation.size() < 2) {
     fail("--duration {} s holds fewer than two samples of --dt {} s", format_number(duration),
          format_number(o.dt_s));
   }
-  Excitation e = excite(generator, o, t, then, duration);
+  Excitation e = excite(generator, o, t_excitation, then, duration);
+  // A chirp is framed by the bias alone, so that the plant is settled when the sweep starts
+  // and every Welch segment that holds part of the sweep lies inside the record.
+  const std::size_t lead =
+      generator == Generator::chirp && o.settle_s > 0 ? whole_samples(o.settle_s, o.dt_s, "--settle") : 0;
+  if (lead > 0) {
+    std::vector<double> framed(lead, 0.0);
+    framed.insert(framed.end(), e.x.begin(), e.x.end());
+    framed.resize(framed.size() + lead, 0.0);
+    e.x = std::move(framed);
+    const double start = static_cast<double>(lead) * o.dt_s;
+    e.meta.set("excitation_start_s", format_number(start));
+    e.meta.set("excitation_end_s", format_number(start + static_cast<double>(t_excitation.size()) * o.dt_s));
+  }
+  std::vector<double> t(e.x.size());
+  for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<double>(k) * o.dt_s;
 
   table::Writer w(out);
   w.meta("source", fmt::format("mcg-sweep {}", k_version));
@@ -331,7 +360,23 @@ void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
                                       periods >= 2 ? periods - 1 : periods, format_number(exact_period),
                                       periods >= 2 ? ", first period skipped" : ""));
   } else {
-    const std::size_t segment = o.segment != 0 ? o.segment : default_segment(x.size());
+    // A framed excitation (a chirp with settling time) is analysed from half a segment before
+    // its start to half a segment after its end: every segment holding the sweep, no more.
+    const auto start = meta_number(tbl.meta, "excitation_start_s");
+    const auto end = meta_number(tbl.meta, "excitation_end_s");
+    std::size_t segment = o.segment;
+    if (start && end && *end > *start) {
+      const auto first = static_cast<std::size_t>(std::max(0.0, std::round((*start - t_in.front()) / dt)));
+      const auto last = std::min(x.size(), static_cast<std::size_t>(std::max(0.0, std::round((*end - t_in.front()) / dt))));
+      if (segment == 0) segment = default_segment(last > first ? last - first : x.size());
+      const std::size_t from = first > segment / 2 ? first - segment / 2 : 0;
+      const std::size_t to = std::min(x.size(), last + segment / 2);
+      if (to > from && to - from >= segment) {
+        x = x.subspan(from, to - from);
+        y = y.subspan(from, to - from);
+      }
+    }
+    if (segment == 0) segment = default_segment(x.size());
     r = welch_h1(x, y, dt, segment, o.overlap);
     const auto step = std::max<std::size_t>(
         1, segment - static_cast<std::size_t>(std::lround(o.overlap * static_cast<double>(segment))));

@@ -33,6 +33,7 @@ struct GeneratorOptions {
   double amp = 1.0;           ///< staircase, chirp, multisine (peak), prbs, aprbs amplitude
   int steps = 5;              ///< staircase: levels per side
   double hold_s = 1.0;        ///< staircase: time on each level
+  double settle_s = 2.0;      ///< chirp: bias held this long before and after the sweep
   double f0_hz = 0.5;         ///< chirp, multisine band
   double f1_hz = 200.0;
   std::string spacing;        ///< "linear" or "log"; default linear (chirp), log (multisine)

@@ -22,7 +22,7 @@ struct RunOptions {
   double noise_v_gen_V = 0.0;         ///< Gaussian noise on v_gen, standard deviation
   bool adc = false;                   ///< i through the board's 10-bit ADC (1 ohm shunt, 2.5 V offset)
   std::uint64_t seed = 1;
-  double max_step_s = 1e-4;           ///< largest integration step
+  double max_step_s = 1e-3;           ///< largest integration step (see model::SimOptions)
 };
 
 /// Reads the input table from `in` (named `source` in messages), simulates, writes the
