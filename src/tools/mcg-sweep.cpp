@@ -89,6 +89,9 @@ int main(int argc, char** argv) {
   add_common(*chirp, gen);
   add_amp(*chirp, gen, "amplitude (column's unit)");
   add_band(*chirp, gen);
+  chirp->add_option("--settle", gen.settle_s, "bias alone before and after the sweep, s")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
   generators[chirp] = Generator::chirp;
 
   CLI::App* multisine = app.add_subcommand("multisine", "periodic sum of sines at chosen lines");

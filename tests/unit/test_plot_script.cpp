@@ -21,8 +21,9 @@ Input input(const std::string& csv, const std::string& label = "stdin") {
 
 TEST(PlotQuote, DoublesSingleQuotesAndDropsControlCharacters) {
   EXPECT_EQ(quote("rpm"), "'rpm'");
-  EXPECT_EQ(quote("it's"), "'it''s'");
-  EXPECT_EQ(quote("a\nsystem('ls')\r\x1b[2J\x7f"), "'asystem(''ls'')[2J'");
+  EXPECT_EQ(quote("it's"), R"('it'."'".'s')");
+  EXPECT_EQ(quote("'"), R"(''."'".'')");
+  EXPECT_EQ(quote("a\nsystem('ls')\r\x1b[2J\x7f"), R"('asystem('."'".'ls'."'".')[2J')");
   EXPECT_EQ(quote("x\"; system(\"touch pwned\"); \""), "'x\"; system(\"touch pwned\"); \"'");
   EXPECT_EQ(quote("`id` @macro \\n"), "'`id` @macro \\n'");
   EXPECT_EQ(quote("Ω"), "'Ω'");
@@ -152,8 +153,8 @@ TEST(PlotScript, HostileNamesAndTitlesStayInsideStringLiterals) {
   const auto script = build_script(
       spec, {input("# title: a' ; system('touch pwned') ; '\nt,x\"; system(\"touch pwned\"); \",`touch pwned`\n0,1,2\n",
                    "f'\n.csv")});
-  EXPECT_THAT(script, HasSubstr("set output 'o''x.png'\n"));
-  EXPECT_THAT(script, HasSubstr("set title 'a'' ; system(''touch pwned'') ; '''\n"));
+  EXPECT_THAT(script, HasSubstr(R"(set output 'o'."'".'x.png')"));
+  EXPECT_THAT(script, HasSubstr(R"(set title 'a'."'".' ; system('."'".'touch pwned'."'".') ; '."'".'')"));
   EXPECT_THAT(script, HasSubstr("title 'x\"; system(\"touch pwned\"); \"'"));
   EXPECT_THAT(script, HasSubstr("title '`touch pwned`'"));
   // Every line outside the data block is a known command; no data text starts a line.
