@@ -1,5 +1,6 @@
 // mcg-fit: parameters from measured runs: friction, transfer function, grey-box model.
 #include "common/tool.hpp"
+#include "fit/gap.hpp"
 #include "fit/run.hpp"
 
 #include <CLI/CLI.hpp>
@@ -57,7 +58,27 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   md->add_option("files", model.files, "measured runs ('-' = stdin)");
 
+  mcg::fit::GapOptions gap;
+  CLI::App* gp = app.add_subcommand("gap", "where the model misses the runs, which effect explains it, how far it shrinks");
+  gp->add_option("--config", gap.config, "INI parameter set of the model as given (later files win)");
+  gp->add_option("--train", gap.train, "runs the candidates are fitted on ('-' = stdin)")->required();
+  gp->add_option("--validate", gap.validate, "held-out runs they are scored on (none: one --train file is split)");
+  gp->add_option("--split", gap.split_fraction, "training share of a single file that is split")
+      ->check(CLI::Range(0.2, 0.8))
+      ->capture_default_str();
+  gp->add_option("--format", gap.format, "csv (summary on stderr) or text")
+      ->check(CLI::IsMember({"csv", "text"}))
+      ->capture_default_str();
+  gp->add_option("--residuals", gap.residuals, "write the validation residual series (CSV) to this file");
+  gp->add_option("--threads", gap.threads, "candidates fitted at once (0 = every core)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+
   return mcg::tool_main_status(app, argc, argv, [&]() -> int {
+    if (gp->parsed()) {
+      mcg::fit::run_gap(gap, std::cout, std::cerr);
+      return 0;
+    }
     if (fr->parsed()) {
       mcg::fit::run_friction(friction, std::cout);
       return 0;

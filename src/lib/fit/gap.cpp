@@ -786,7 +786,10 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
     for (std::size_t b = a + 1; b < strong.size(); ++b) {
       const GapCandidate& first = *strong[a];
       const GapCandidate& second = *strong[b];
-      Job job{first.name + "+" + second.name, {first.name, second.name}, first.model, first.free, {}, 10, {}, {}};
+      // Named in catalog order, so that a pair reads the same whichever single fitted better.
+      const bool in_order = find_plan(first.name) < find_plan(second.name);
+      const std::string name = in_order ? first.name + "+" + second.name : second.name + "+" + first.name;
+      Job job{name, {first.name, second.name}, first.model, first.free, {}, 10, {}, {}};
       job.start.effects.push_back(*second.model.effect(second.name));
       for (const auto& key : find_plan(second.name)->free) job.free.push_back(second.name + "." + key);
       pair_jobs.push_back(std::move(job));
