@@ -1,0 +1,70 @@
+// Unit tests of [controller] sections as board registers: the scale factor, F, refusals.
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "common/error.hpp"
+#include "config/ini.hpp"
+#include "link/connection.hpp"
+
+namespace mcg::link {
+namespace {
+
+std::vector<std::pair<const RegisterInfo*, double>> regs_of(const std::string& text) {
+  std::istringstream in(text);
+  return controller_registers(config::Ini::parse(in, "c.ini"));
+}
+
+double value_of(const std::vector<std::pair<const RegisterInfo*, double>>& regs, std::string_view name) {
+  for (const auto& [reg, value] : regs) {
+    if (reg->name == name) return value;
+  }
+  ADD_FAILURE() << "no " << name;
+  return 0.0;
+}
+
+std::string error_of(const std::string& text) {
+  try {
+    regs_of(text);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(LinkControllerIni, ReportPiMapsToBoardUnits) {
+  // The report's PI on 512-count/rev errors with 922 counts of full scale: each coefficient
+  // scales by (512/60000) (60000/2048) (1000/922) = 0.25 * 1000/922 on the board.
+  const auto regs = regs_of(
+      "[controller]\ntype = pi\nb = 11.645 -6.987\na = 1 -1\ndt_s = 0.001\ninput_scale = 0.008533333333333333\n"
+      "duty_full_scale = 922\n");
+  const double k = 0.25 * 1000.0 / 922.0;
+  EXPECT_NEAR(value_of(regs, "b0"), 11.645 * k, 1e-12);
+  EXPECT_NEAR(value_of(regs, "b1"), -6.987 * k, 1e-12);
+  EXPECT_EQ(value_of(regs, "b2"), 0.0);
+  EXPECT_EQ(value_of(regs, "coef_frac"), 12.0);  // 3.158 * 4096 = 12934 fits in 16 bits
+  EXPECT_EQ(value_of(regs, "mode"), 2.0);
+  EXPECT_EQ(regs.front().first->name, "coef_frac");
+}
+
+TEST(LinkControllerIni, LargeGainsGetFewerFractionalBits) {
+  // kp = 644 (the report's P design in its own units) -> 644 * 0.25 * 1000/922 = 174.6: Q7 holds
+  // up to 255.99, Q8 only 127.99.
+  const auto regs = regs_of("[controller]\nb = 644\na = 1\n");
+  EXPECT_EQ(value_of(regs, "coef_frac"), 7.0);
+  EXPECT_NEAR(value_of(regs, "kp"), 644 * 0.25 * 1000.0 / 922.0, 1e-12);
+  EXPECT_EQ(value_of(regs, "mode"), 1.0);
+}
+
+TEST(LinkControllerIni, FormsTheBoardCannotRun) {
+  EXPECT_EQ(error_of("[controller]\nb = 1 2\na = 1 -0.5\n"),
+            "c.ini:3: [controller] a: the board runs a = 1 (P) or a = 1 -1 (incremental PI, PID)");
+  EXPECT_EQ(error_of("[controller]\nb = 1\na = 1\ndt_s = 0.002\n"),
+            "c.ini:4: [controller] dt_s: the board's controller runs every 0.001 s");
+  EXPECT_EQ(error_of("[controller]\nb = 1e9 1\na = 1 -1\n"),
+            "c.ini:2: [controller] b: a coefficient exceeds the board's 16-bit range even with F = 0");
+  EXPECT_TRUE(regs_of("[plant]\nk = 1\n").empty());
+}
+
+}  // namespace
+}  // namespace mcg::link
