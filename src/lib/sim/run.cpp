@@ -165,7 +165,9 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   std::vector<std::string> effect_texts;
   for (const auto& e : model.effects) effect_texts.push_back(model::format_effect(e));
   meta.set("effects", effect_texts.empty() ? std::string("none") : join(effect_texts, "; "));
-  meta.set("timing", "v, clutch, r_load of row n act over [t(n), t(n+1)); rpm, i, v_gen sampled at t(n)");
+  const std::string drive_name = closed ? "rpm_cmd" : (tbl.has("v") ? "v" : "duty");
+  meta.set("timing", fmt::format("{}, clutch, r_load of row n act over [t(n), t(n+1)); rpm, i, v_gen sampled at t(n){}",
+                                 drive_name, closed ? "; duty, v: the controller's output at t(n), held to t(n+1)" : ""));
   meta.set("initial_state", fmt::format("at rest, t = {}", config::format_number(t.front())));
   meta.erase("rpm_estimator");
   meta.erase("encoder");
