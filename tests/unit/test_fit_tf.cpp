@@ -2,6 +2,9 @@
 #include "fit/tf.hpp"
 
 #include "common/error.hpp"
+#include "model/model.hpp"
+#include "signal/excitation.hpp"
+#include "signal/spectrum.hpp"
 
 #include <gtest/gtest.h>
 
@@ -103,6 +106,71 @@ TEST(FitTf, ZeroCoherencePointsAreIgnored) {
   EXPECT_NEAR(fit.poles[0].corner_rad_s, 65.0, 1e-6);
   EXPECT_NEAR(fit.gain, 16.557, 1e-7);
   EXPECT_EQ(fit.points, 70U);
+}
+
+// The report's Fig. 16-1 procedure on the nonlinear model: a log chirp of 2 V about 6 V,
+// 0.5..200 Hz over 20 s, clutch engaged, generator open; Welch H1 from v to omega; two poles.
+// The linearisation at the operating speed w0 has the closed form
+//   G(s) = Kt / ((L s + R)(J s + B) + Kt Ke),  B = dF/dw at w0 (all friction elements),
+// and the fit must land on it (16.9/((s/67+1)(s/888+1)) here); the report's
+// 16.557/((s/65+1)(s/950+1)) is only near: its 950 rad/s is 7 % above the model's own pole.
+TEST(FitTf, ReportPlantFromSimulatedChirp) {
+  const double dt = 1e-3;
+  std::vector<double> t;
+  for (int k = 0; k < 20000; ++k) t.push_back(k * dt);
+  const std::vector<double> chirp = signal::chirp_signal(t, 2.0, 0.5, 200.0, 20.0, signal::ChirpSpacing::log);
+  model::Inputs in;
+  in.t_s = t;
+  for (double c : chirp) in.v_V.push_back(6.0 + c);
+  in.clutch.assign(t.size(), 2.0);
+  in.r_load_ohm.assign(t.size(), model::k_open_circuit);
+  const model::Model rig;
+  const model::Outputs out = model::simulate(rig, in);
+  const std::size_t skip = 1000;  // start-up transient
+  const std::span<const double> x(in.v_V.data() + skip, in.v_V.size() - skip);
+  const std::span<const double> y(out.omega_rad_s.data() + skip, out.omega_rad_s.size() - skip);
+  const signal::Response r = signal::welch_h1(x, y, dt, 2048, 0.5);
+  FrequencyResponse fr;
+  fr.source = "<chirp>";
+  for (std::size_t k = 0; k < r.f_hz.size(); ++k) {
+    if (r.f_hz[k] < 0.5 || r.f_hz[k] > 200.0 || !std::isfinite(std::abs(r.h[k]))) continue;
+    fr.f_hz.push_back(r.f_hz[k]);
+    fr.mag_db.push_back(signal::magnitude_db(r.h[k]));
+    fr.phase_deg.push_back(std::arg(r.h[k]) * 180.0 / std::numbers::pi);
+    fr.coherence.push_back(r.coherence[k]);
+  }
+  TfFitOptions options;
+  options.fit_delay = true;
+  const TfFit fit = fit_tf(fr, options);
+  ASSERT_EQ(fit.poles.size(), 2U);
+
+  // Closed form at the mean speed of the run.
+  const auto& p = rig.params;
+  double w0 = 0.0;
+  for (std::size_t k = skip; k < out.omega_rad_s.size(); ++k) w0 += out.omega_rad_s[k];
+  w0 /= static_cast<double>(out.omega_rad_s.size() - skip);
+  const auto slope = [w0](const model::Friction& f) {
+    return f.viscous[0] + 2.0 * f.viscous[1] * w0 + 3.0 * f.viscous[2] * w0 * w0;
+  };
+  const double b = slope(p.motor.friction) + slope(p.generator.friction) + slope(p.clutch_engaged);
+  const double j = p.motor.J_kg_m2 + p.generator.J_kg_m2;
+  const auto& m = p.motor;
+  const double a2 = m.L_H * j;
+  const double a1 = m.R_ohm * j + m.L_H * b;
+  const double a0 = m.R_ohm * b + m.Kt_Nm_A * m.Ke_V_s_rad;
+  const double disc = std::sqrt(a1 * a1 - 4.0 * a2 * a0);
+  const double slow = (a1 - disc) / (2.0 * a2);
+  const double fast = (a1 + disc) / (2.0 * a2);
+  const double gain = m.Kt_Nm_A / a0;
+  EXPECT_NEAR(fit.gain, gain, 0.02 * gain);
+  EXPECT_NEAR(fit.poles[0].corner_rad_s, slow, 0.03 * slow);
+  EXPECT_NEAR(fit.poles[1].corner_rad_s, fast, 0.1 * fast);  // partly traded against the delay
+  // Near the report's numbers (its gain 16.557 and corners 65, 950 rad/s).
+  EXPECT_NEAR(fit.gain, 16.557, 0.05 * 16.557);
+  EXPECT_NEAR(fit.poles[0].corner_rad_s, 65.0, 0.1 * 65.0);
+  EXPECT_NEAR(fit.poles[1].corner_rad_s, 950.0, 0.15 * 950.0);
+  // The samples carry the zero-order hold of the inputs: about half a period of delay.
+  EXPECT_NEAR(fit.delay_s, 0.5e-3, 0.15e-3);
 }
 
 TEST(FitTf, ErrorsNameTheProblem) {

@@ -174,6 +174,7 @@ void covariance_statistics(const Eigen::MatrixXd& jacobian, const Eigen::VectorX
     }
   }
   cov = norms.cwiseInverse().asDiagonal() * cov * norms.cwiseInverse().asDiagonal();
+  cov = 0.5 * (cov + cov.transpose()).eval();
   const double s2 = std::isfinite(sigma) ? sigma * sigma : 0.0;
   std_errors.resize(n);
   correlation.resize(n, n);
