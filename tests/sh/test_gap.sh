@@ -53,6 +53,7 @@ check() {
 steps_load() { mcg-sweep step --level 4 --at 0.1 --then 9@0.6,6@1.1,12@1.6,3@2.1,8@2.5 --duration 3 --clutch "$1" \
   --r-load-schedule inf@0,5.6@0.9,inf@1.9; }
 prbs_at() { mcg-sweep prbs --bias "$1" --amp "$2" --clock 0.006 --duration 3 --clutch "$3" --seed "$4"; }
+prbs_loaded() { mcg-sweep prbs --bias "$1" --amp "$2" --clock 0.006 --duration 3 --clutch 2 --r-load 5.6 --seed "$3"; }
 chirp_at() { mcg-sweep chirp --bias "$1" --amp "$2" --f0 1 --f1 60 --duration 3 --clutch "$3"; }
 stairs_low() { mcg-sweep staircase --amp "$1" --steps 6 --hold 0.2 --duration 3 --clutch "$2"; }
 engage() { mcg-sweep step --level 7 --at 0.1 --then 10@1.2,5@2.2 --duration 3 --clutch-schedule "1@0,2@0.6,1@1.5,2@1.9"; }
@@ -72,6 +73,10 @@ run_case brush_drop brush_drop "brush_drop:V_b_V=0.7" "stairs_low 6 1" "chirp_at
 run_case stribeck stribeck "stribeck:v_s_rad_s=8,shape_exp=1.5" "stairs_low 4 0" "prbs_at 3 1.5 2 3"
 run_case cogging cogging "cogging:T_c_Nm=0.0015,N_per_rev=14,phase_rad=0.7" "stairs_low 2.5 0" "prbs_at 2.2 0.8 0 4"
 run_case clutch_compliance clutch_compliance "clutch_compliance:k_Nm_per_rad=0.1,zeta=0.08" "chirp_at 7 2.5 2" "engage"
+run_case hbridge hbridge "hbridge:R_on_ohm=0.4,deadband=0.04" "steps_load 2" "prbs_at 6 2 0 7"
+run_case clutch_engage_lag clutch_engage_lag "clutch_engage_lag:T_max_Nm=0.04,tau_s=0.03" "engage" \
+  "mcg-sweep step --level 9 --at 0.1 --then 6@1.4 --duration 3 --clutch-schedule 0@0,2@0.8,1@1.8,2@2.3"
+run_case thermal thermal "thermal:R_th_K_W=8,tau_th_s=4" "steps_load 2" "prbs_loaded 10 3 8"
 run_case two_effects "dead_time+brush_drop" "dead_time:tau_d_s=0.003 brush_drop:V_b_V=0.7" "prbs_at 8 2.5 2 6" \
   "steps_load 0"
 
