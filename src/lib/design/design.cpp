@@ -142,7 +142,7 @@ Design design_pi_crossover(const Setup& setup, double pm_deg, double wc) {
   if (!(e_lo > 0.0 && e_hi < 0.0)) {
     const LoopEval plant({setup.plant});
     const double need = deg(std::remainder(target - plant.phase_rad(wc), 2.0 * k_pi));
-    fail("a PI gives 0 to -90 degrees at {} rad/s, the phase margin needs {} degrees there", num(wc), num(need));
+    fail("a PI gives 0 to -90 degrees at {} rad/s, the phase margin needs {:.4g} degrees there", num(wc), need);
   }
   const double wz = std::exp(bisect(err, lo, hi));
   const Tf shape = s_tf({1.0, wz}, {1.0, 0.0});
@@ -207,7 +207,7 @@ Design design_lead(const Setup& setup, double pm_deg, double wc) {
   if (!(err(lo) < 0.0 && err(hi) > 0.0)) {
     const LoopEval plant({setup.plant});
     const double need = deg(std::remainder(target - plant.phase_rad(wc), 2.0 * k_pi));
-    fail("a lead gives 0 to 90 degrees at {} rad/s, the phase margin needs {} degrees there", num(wc), num(need));
+    fail("a lead gives 0 to 90 degrees at {} rad/s, the phase margin needs {:.4g} degrees there", num(wc), need);
   }
   const double phi = bisect(err, lo, hi);
   const Tf c = shape(phi);

@@ -117,11 +117,28 @@ StepResponse step_response(const Tf& plant, const std::optional<Tf>& controller,
     g.den = mul(g.den, monomial(static_cast<int>(m)));
     g = cancel_origin(g);
   }
-  const Tf loop = series(c, g);
-  Tf closed = feedback(loop);
-  Tf to_u = c;
-  to_u.num = mul(c.num, g.den);
-  to_u.den = add(mul(c.den, g.den), mul(c.num, g.num));
+  // r → y = CG/(1 + CG) and r → u = C/(1 + CG), in the domain of g and c.
+  auto closed_pair = [](const Tf& cc, const Tf& gg, Tf& to_y, Tf& to_u) {
+    const Poly den = add(mul(cc.den, gg.den), mul(cc.num, gg.num));
+    to_y = gg;
+    to_y.num = mul(cc.num, gg.num);
+    to_y.den = den;
+    to_y.delay_s = 0.0;
+    to_u = to_y;
+    to_u.num = mul(cc.num, gg.den);
+  };
+  Tf closed;
+  Tf to_u;
+  closed_pair(c, g, closed, to_u);
+  if (!plant.discrete() && plant.delay_s + (controller ? controller->delay_s : 0.0) == 0.0) {
+    // Without a delay the continuous closed loop is rational: its ZOH transform is exact for a step.
+    Tf cs = controller ? *controller : Tf{};
+    Tf cy;
+    Tf cu;
+    closed_pair(cs, plant, cy, cu);
+    closed = c2d(cy, h, C2dMethod::zoh, 0.0, "closed loop");
+    to_u = c2d(cu, h, C2dMethod::zoh, 0.0, "closed loop");
+  }
   if (t_end <= 0.0) t_end = auto_duration(roots(closed.den), Domain::z, h);
   const double count = std::floor(t_end / h + 1e-9) + 1.0;
   if (count > 2e6) fail("step response of {} samples is too long; shorten --t-end", count);
