@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
   tfc->add_option("--f-min", tf.fit.f_min_hz, "ignore frequencies below, Hz")->check(CLI::Range(0.0, 1e9));
   tfc->add_option("--f-max", tf.fit.f_max_hz, "ignore frequencies above, Hz")->check(CLI::Range(0.0, 1e9));
   tfc->add_flag("!--no-coherence", tf.fit.use_coherence, "weight all frequencies alike");
+  tfc->add_flag("--delay", tf.fit.fit_delay, "fit a transport delay too (written as delay_s)");
   tfc->add_option("file", tf.file, "f_hz,mag_db,phase_deg[,coherence] table ('-' = stdin)")->capture_default_str();
 
   mcg::fit::ModelRunOptions model;

@@ -158,6 +158,7 @@ void run_tf(const TfRunOptions& options, std::ostream& out) {
   ini.set("plant", "num", num, "descending powers of s");
   ini.set("plant", "den", den, "descending powers of s");
   ini.set("plant", "domain", "s");
+  if (options.fit.fit_delay) ini.set("plant", "delay_s", num6(fit.delay_s), se_comment(fit.delay_se, "s"));
   const std::string sec = "fit.tf";
   ini.set(sec, "source", fmt::format("mcg-fit {}", k_version));
   ini.set(sec, "poles", static_cast<double>(options.fit.poles));

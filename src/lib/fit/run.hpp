@@ -29,7 +29,7 @@ struct TfRunOptions {
 };
 
 /// Writes [plant] (tf in the syntax mcg-design reads, num/den in descending powers of s,
-/// domain = s) and [fit.tf] (gain, corners and dampings with standard errors, RMS errors).
+/// domain = s, delay_s when a delay was fitted) and [fit.tf] (gain, corners and dampings with standard errors, RMS errors).
 void run_tf(const TfRunOptions& options, std::ostream& out);
 
 /// Options of `mcg-fit model`.
