@@ -1,6 +1,6 @@
-// The gap diagnosis: residual analysis in closed form, data preparation, and diagnoses of
-// runs generated with one effect withheld from the nominal model (the Slow* tests; they
-// simulate dozens of runs and are left out of the sanitizer build).
+// The gap diagnosis: residual analysis in closed form and data preparation. The diagnoses
+// of runs with withheld effects run the Release tools in tests/sh/test_gap.sh (each one
+// simulates hundreds of runs: too slow for the sanitizer build of these tests).
 #include "common/error.hpp"
 #include "fit/diag_residual.hpp"
 #include "fit/gap.hpp"
@@ -297,46 +297,6 @@ TEST(GapData, ErrorsNameTheProblem) {
   } catch (const Error& e) {
     EXPECT_STREQ(e.what(), "--validate: no validation file (only a single --train file is split)");
   }
-}
-
-// ---------------------------------------------------------------------------------------
-// Withheld effects: the diagnosis sees only the data and the nominal model.
-
-struct Case {
-  std::vector<std::string> effects_train;
-  std::vector<std::string> effects_validate;
-  Program train;
-  Program validate;
-};
-
-GapReport diagnose_case(const Case& c) {
-  const table::Table train = measure(c.train, c.effects_train, 11, "train.csv");
-  const table::Table validate = measure(c.validate, c.effects_validate, 12, "validate.csv");
-  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
-  return diagnose_gap(model::Model{}, data, GapSettings{});
-}
-
-/// The share of the gap above the noise floor that the diagnosis removes, in %.
-double gap_shrink_pct(const GapReport& r) {
-  const double floor = r.floors.front().floor;
-  const auto& none = *std::find_if(r.candidates.begin(), r.candidates.end(), [](const auto& c) { return c.name == "none"; });
-  auto above = [&](double rms) { return std::sqrt(std::max(0.0, rms * rms - floor * floor)); };
-  return 100.0 * (1.0 - above(r.candidates.front().rms[0]) / above(none.rms[0]));
-}
-
-TEST(SlowGap, NoEffectIsDiagnosedNone) {
-  const Case c{{}, {}, steps(3.0, 2.0, 12.0, 21, 2, true), prbs(3.0, 7.0, 2.0, 22, 0, k_inf)};
-  const GapReport r = diagnose_case(c);
-  EXPECT_EQ(r.diagnosis, "none") << r.reason;
-  EXPECT_FALSE(r.candidates.front().significant);
-}
-
-TEST(SlowGap, DeadTimeIsNamedAndShrinksTheGap) {
-  const Case c{{"dead_time:tau_d_s=0.003"}, {"dead_time:tau_d_s=0.003"}, prbs(3.0, 8.0, 2.5, 31, 0, k_inf),
-               steps(3.0, 3.0, 12.0, 32, 2, true)};
-  const GapReport r = diagnose_case(c);
-  EXPECT_EQ(r.diagnosis, "dead_time") << r.reason;
-  EXPECT_GE(gap_shrink_pct(r), 60.0);
 }
 
 }  // namespace
