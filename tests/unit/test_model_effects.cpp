@@ -1,0 +1,225 @@
+// The effect catalog: parsing, and each effect's physics against its closed form.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "common/error.hpp"
+#include "model/model.hpp"
+
+namespace mcg::model {
+namespace {
+
+Inputs constant(double v, double duration_s, double dt_s, int clutch, double r_load = k_open_circuit) {
+  Inputs in;
+  const auto n = static_cast<std::size_t>(std::llround(duration_s / dt_s)) + 1;
+  for (std::size_t k = 0; k < n; ++k) {
+    in.t_s.push_back(static_cast<double>(k) * dt_s);
+    in.v_V.push_back(v);
+    in.clutch.push_back(clutch);
+    in.r_load_ohm.push_back(r_load);
+  }
+  return in;
+}
+
+Model with(const std::string& spec) {
+  Model m;
+  m.effects.push_back(parse_effect(spec));
+  return m;
+}
+
+std::string error_of(const std::string& spec) {
+  try {
+    parse_effect(spec, "--effect");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ModelEffects, CatalogHasTheFixedNamesInOrder) {
+  std::vector<std::string> names;
+  for (const auto& e : effect_catalog()) names.push_back(e.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"stribeck", "dead_time", "supply_sag", "hbridge", "brush_drop",
+                                             "clutch_compliance", "clutch_engage_lag", "cogging", "thermal",
+                                             "param_mismatch"}));
+  for (const auto& e : effect_catalog()) {
+    for (const auto& p : e.params) {
+      EXPECT_LE(p.lower, p.default_value) << e.name << "." << p.name;
+      EXPECT_GE(p.upper, p.default_value) << e.name << "." << p.name;
+      EXPECT_FALSE(p.unit.empty()) << e.name << "." << p.name;
+    }
+  }
+}
+
+TEST(ModelEffects, ParseFillsDefaultsAndRoundTrips) {
+  const Effect e = parse_effect("cogging:T_c_Nm=0.0015, phase_rad=0.7");
+  EXPECT_EQ(e.get("T_c_Nm"), 0.0015);
+  EXPECT_EQ(e.get("N_per_rev"), 14.0);
+  EXPECT_EQ(e.get("phase_rad"), 0.7);
+  EXPECT_EQ(format_effect(e), "cogging:T_c_Nm=0.0015,N_per_rev=14,phase_rad=0.7");
+  const Effect back = parse_effect(format_effect(e));
+  EXPECT_EQ(back.params, e.params);
+  EXPECT_EQ(parse_effect("dead_time").get("tau_d_s"), 0.002);
+}
+
+TEST(ModelEffects, ParseErrorsNameTheBadText) {
+  EXPECT_EQ(error_of("stribeck:v_s_rad_s=8a"), "--effect: stribeck.v_s_rad_s: invalid number '8a'");
+  EXPECT_EQ(error_of("stribeck:v_s_rad_s"), "--effect: expected key=value, got 'v_s_rad_s'");
+  EXPECT_EQ(error_of("stribeck:"), "--effect: no parameters after ':' in 'stribeck:'");
+  EXPECT_EQ(error_of("stribeck:v_s_rad_s=1,v_s_rad_s=2"), "--effect: parameter 'v_s_rad_s' given twice");
+  EXPECT_EQ(error_of("thermal:R_th_K_W=-1"), "--effect: thermal.R_th_K_W = -1 is out of range [0.1, 200] K/W");
+  EXPECT_EQ(error_of("brush_drop:V_b_V=nan"), "--effect: brush_drop.V_b_V: invalid number 'nan'");
+}
+
+/// Steady state of the motor alone at v: returns (w, i).
+std::pair<double, double> steady(const Model& m, double v) {
+  const Outputs out = simulate(m, constant(v, 1.5, 1e-3, 0), {});
+  return {out.omega_rad_s.back(), out.i_A.back()};
+}
+
+TEST(ModelEffects, StribeckLowersKineticFrictionAtLowSpeed) {
+  // Steady state: Kt i = Tc + (Ts - Tc) exp(-(w/v_s)^d) + P(w).
+  const Params p = builtin_rig();
+  const Friction& f = p.motor.friction;
+  const auto [w, i] = steady(with("stribeck:v_s_rad_s=8,shape_exp=1.5"), 0.6);
+  EXPECT_NEAR(p.motor.Kt_Nm_A * i, f.kinetic_Nm(w) + (f.Ts_Nm - f.Tc_Nm) * std::exp(-std::pow(w / 8.0, 1.5)), 1e-9);
+  EXPECT_LT(w, steady(Model{}, 0.6).first);
+}
+
+TEST(ModelEffects, BrushDropOpposesTheCurrent) {
+  // v = R i + Ke w + V_b tanh(i / 0.01 A) at steady state.
+  const Params p = builtin_rig();
+  const auto [w, i] = steady(with("brush_drop:V_b_V=0.7"), 6.0);
+  EXPECT_NEAR(p.motor.R_ohm * i + p.motor.Ke_V_s_rad * w + 0.7 * std::tanh(i / 0.01), 6.0, 1e-6);
+  EXPECT_NEAR(p.motor.Kt_Nm_A * i, p.motor.friction.kinetic_Nm(w), 1e-9);
+}
+
+TEST(ModelEffects, SupplySagDropsWithDutyAndCurrent) {
+  // v_m = v - |v/20| R_s i.
+  const Params p = builtin_rig();
+  const auto [w, i] = steady(with("supply_sag:R_s_ohm=1.5"), 10.0);
+  EXPECT_NEAR(p.motor.R_ohm * i + p.motor.Ke_V_s_rad * w, 10.0 - 0.5 * 1.5 * i, 1e-6);
+}
+
+TEST(ModelEffects, HbridgeDeadbandAndOnResistance) {
+  const Params p = builtin_rig();
+  // Inside the deadband nothing reaches the motor.
+  const Outputs dead = simulate(with("hbridge:deadband=0.05,R_on_ohm=0.1"), constant(0.9, 0.2, 1e-3, 0), {});
+  EXPECT_EQ(dead.i_A.back(), 0.0);
+  EXPECT_EQ(dead.omega_rad_s.back(), 0.0);
+  // Outside: d' = 0.5 - 0.05, and two switches in the path.
+  const auto [w, i] = steady(with("hbridge:deadband=0.05,R_on_ohm=0.1"), 10.0);
+  EXPECT_NEAR((p.motor.R_ohm + 0.2) * i + p.motor.Ke_V_s_rad * w, 0.45 * 20.0, 1e-6);
+}
+
+TEST(ModelEffects, DeadTimeShiftsTheResponseExactly) {
+  // A 3 ms delay of a step at 0.100 s equals the undelayed step at 0.103 s.
+  Inputs a = constant(0.0, 0.3, 1e-3, 2);
+  Inputs b = a;
+  for (std::size_t k = 0; k < a.t_s.size(); ++k) {
+    a.v_V[k] = a.t_s[k] >= 0.1 - 1e-9 ? 8.0 : 0.0;
+    b.v_V[k] = b.t_s[k] >= 0.103 - 1e-9 ? 8.0 : 0.0;
+  }
+  const Outputs delayed = simulate(with("dead_time:tau_d_s=0.003"), a, {});
+  const Outputs shifted = simulate(Model{}, b, {});
+  for (std::size_t k = 0; k < a.t_s.size(); ++k) EXPECT_NEAR(delayed.rpm[k], shifted.rpm[k], 1e-6);
+  // Inside a row: a 2.5 ms delay lands half-way between rows.
+  const Outputs half = simulate(with("dead_time:tau_d_s=0.0025"), a, {});
+  EXPECT_EQ(half.i_A[102], 0.0);
+  EXPECT_GT(half.i_A[103], 0.0);
+}
+
+TEST(ModelEffects, ParamMismatchScalesTheNominalParameters) {
+  Model scaled = with("param_mismatch:Kt_scale=0.94,J_scale=1.12,coulomb_scale=1.2");
+  Model explicit_model;
+  for (Machine* m : {&explicit_model.params.motor, &explicit_model.params.generator}) {
+    m->Kt_Nm_A *= 0.94;
+    m->Ke_V_s_rad *= 0.94;
+    m->J_kg_m2 *= 1.12;
+    m->friction.Tc_Nm *= 1.2;
+  }
+  explicit_model.params.clutch_disengaged.Tc_Nm *= 1.2;
+  explicit_model.params.clutch_engaged.Tc_Nm *= 1.2;
+  const Outputs a = simulate(scaled, constant(7.0, 0.3, 1e-3, 2, 5.6), {});
+  const Outputs b = simulate(explicit_model, constant(7.0, 0.3, 1e-3, 2, 5.6), {});
+  EXPECT_EQ(a.rpm, b.rpm);
+}
+
+TEST(ModelEffects, CoggingShiftsTheBreakawayWithPosition) {
+  // At theta = 0 the cogging torque is T_c sin(phase): with phase = pi/2 it adds T_c to the
+  // drive, so breakaway needs Kt i > Ts - T_c, i.e. v > (Ts - T_c) R / Kt.
+  const Params p = builtin_rig();
+  const double v_break = (p.motor.friction.Ts_Nm - 1.5e-3) * p.motor.R_ohm / p.motor.Kt_Nm_A;
+  const Model m = with("cogging:T_c_Nm=0.0015,N_per_rev=14,phase_rad=1.5707963267948966");
+  EXPECT_EQ(simulate(m, constant(v_break * 0.99, 0.2, 1e-3, 0), {}).theta_rad.back(), 0.0);
+  EXPECT_GT(simulate(m, constant(v_break * 1.01, 0.2, 1e-3, 0), {}).theta_rad.back(), 0.01);
+  // At speed the ripple averages out: the mean speed is close to the nominal one.
+  const Outputs fast = simulate(m, constant(8.0, 1.0, 1e-4, 0), {});
+  const Outputs nominal = simulate(Model{}, constant(8.0, 1.0, 1e-4, 0), {});
+  double mean = 0.0;
+  for (std::size_t k = 5000; k < fast.rpm.size(); ++k) mean += fast.rpm[k] - nominal.rpm[k];
+  EXPECT_NEAR(mean / 5001.0, 0.0, 1.0);
+}
+
+TEST(ModelEffects, ThermalRaisesTheResistanceOfAStalledWinding) {
+  // Stalled (motor alone, 0.3 V < breakaway 0.375 V): dT settles where
+  // dT = R_th i^2 R0 (1 + alpha dT) with i = v / (R0 (1 + alpha dT)).
+  Model m = with("thermal:R_th_K_W=50,tau_th_s=0.5,alpha_per_K=0.00393");
+  const Outputs out = simulate(m, constant(0.3, 10.0, 1e-2, 0), {});
+  const double R0 = builtin_rig().motor.R_ohm;
+  double dT = 0.0;
+  for (int it = 0; it < 100; ++it) dT = 50.0 * 0.3 * 0.3 / (R0 * (1.0 + 0.00393 * dT));
+  EXPECT_NEAR(out.i_A.back(), 0.3 / (R0 * (1.0 + 0.00393 * dT)), 1e-7);
+  EXPECT_LT(out.i_A.back(), 0.3 / R0);
+}
+
+TEST(ModelEffects, ClutchComplianceTwistCarriesTheLoadTorque) {
+  // Steady state engaged with a load: the spring carries the generator side's torque,
+  // k phi = Kt i_g + F_g(w).
+  Model m = with("clutch_compliance:k_Nm_per_rad=0.1,zeta=0.3");
+  Plant plant(m, {}, 2);
+  for (int k = 0; k < 1500; ++k) plant.step(1e-3, {9.0, 2, 5.6});
+  const State s = plant.state();
+  const Params p = builtin_rig();
+  const double load = p.generator.Kt_Nm_A * s.i_gen_A + p.generator.friction.kinetic_Nm(s.omega_gen_rad_s);
+  EXPECT_NEAR(s.omega_rad_s, s.omega_gen_rad_s, 1e-6);
+  EXPECT_NEAR(0.1 * (s.theta_rad - s.theta_gen_rad), load, 1e-8);
+}
+
+TEST(ModelEffects, ClutchEngageLagSlipsThenLocks) {
+  Model m = with("clutch_engage_lag:T_max_Nm=0.05,tau_s=0.02");
+  Plant plant(m, {}, 1);
+  for (int k = 0; k < 500; ++k) plant.step(1e-3, {8.0, 1, k_open_circuit});
+  const double w_before = plant.state().omega_rad_s;
+  // 1 ms after the command the capacity, 0.05 (1 - exp(-0.05)) = 2.4e-3 N m, cannot yet
+  // break the generator free (5.6e-3 N m): the motor runs on alone.
+  plant.step(1e-3, {8.0, 2, k_open_circuit});
+  EXPECT_EQ(plant.state().omega_gen_rad_s, 0.0);
+  EXPECT_GT(plant.state().omega_rad_s, 0.95 * w_before);
+  // 10 ms after, the plates slip: the generator turns, slower than the motor, and the motor
+  // has not dropped to the rigid engagement's half speed.
+  for (int k = 0; k < 9; ++k) plant.step(1e-3, {8.0, 2, k_open_circuit});
+  EXPECT_GT(plant.state().omega_gen_rad_s, 0.0);
+  EXPECT_LT(plant.state().omega_gen_rad_s, plant.state().omega_rad_s);
+  EXPECT_GT(plant.state().omega_rad_s, 0.6 * w_before);
+  for (int k = 0; k < 300; ++k) plant.step(1e-3, {8.0, 2, k_open_circuit});
+  EXPECT_EQ(plant.state().omega_rad_s, plant.state().omega_gen_rad_s);
+  // Locked, it runs like the rigid rig.
+  Plant rigid(Model{}, {}, 2);
+  for (int k = 0; k < 1000; ++k) rigid.step(1e-3, {8.0, 2, k_open_circuit});
+  for (int k = 0; k < 500; ++k) plant.step(1e-3, {8.0, 2, k_open_circuit});
+  EXPECT_NEAR(plant.state().omega_rad_s, rigid.state().omega_rad_s, 1e-3);
+}
+
+TEST(ModelEffects, ModelIniCarriesEffects) {
+  Model m = with("supply_sag:R_s_ohm=1.5");
+  EXPECT_EQ(get_parameter(m, "supply_sag.R_s_ohm"), 1.5);
+  const auto list = parameters(m);
+  EXPECT_EQ(list.back().name, "supply_sag.R_s_ohm");
+  EXPECT_EQ(list.back().unit, "ohm");
+  EXPECT_EQ(list.back().upper, 20.0);
+}
+
+}  // namespace
+}  // namespace mcg::model
