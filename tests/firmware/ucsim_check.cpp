@@ -26,6 +26,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cctype>
 #include <cstring>
 #include <functional>
 #include <optional>
@@ -346,6 +347,41 @@ std::optional<int> read_reg(Sim& sim, std::uint8_t reg) {
   return fwtest::i16_at(f->payload, 2);
 }
 
+// Simulated time in ms (s51 counts clock ticks, 12 per machine cycle at 12 MHz).
+double sim_ms(Sim& sim)
+{
+  std::istringstream out(sim.console("expr sim_ticks"));
+  std::string line;
+  double ticks = -1;
+  while (std::getline(out, line)) {
+    if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0]))) {
+      ticks = std::stod(line);
+    }
+  }
+  return ticks / 12000.0;
+}
+
+// Waits until the simulation has run ms further (wall time is no measure of it).
+void wait_sim(Sim& sim, double ms)
+{
+  const double until = sim_ms(sim) + ms;
+  while (sim_ms(sim) < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+}
+
+// Holds a key on the SIM keypad (external RAM 0x9F04) for 60 ms, then releases it for 60 ms: each
+// longer than the 40 ms service period, so the menu sees one press.
+void press(Sim& sim, unsigned key)
+{
+  char cmd[48];
+  std::snprintf(cmd, sizeof cmd, "set mem xram 0x9f04 0x%02x", key);
+  sim.console(cmd);
+  wait_sim(sim, 60);
+  sim.console("set mem xram 0x9f04 0xff");
+  wait_sim(sim, 60);
+}
+
 // Runs the benchmark image to its end and returns the duties it stored at 0xA000 (4 x 256, i16).
 std::vector<int> bench_duties(const std::string& image, const std::string& dir) {
   const std::string map = image.substr(0, image.size() - 4) + ".map";
@@ -480,6 +516,16 @@ int main(int argc, char** argv) {
           "garbage reported: " + std::to_string(error_frames) + " error frames, rx_errors " +
               std::to_string(rx_errors.value_or(-1)));
     check(read_reg(sim, MCG_REG_KP) == -32768, "the truncated write did not happen");
+
+    // The report's Kp bug, on the 8051 build: menu (C), two items on (A A), edit (D), 1.5, store.
+    for (unsigned key : {0x0Cu, 0x0Au, 0x0Au, 0x0Du, 0x01u, 0x0Fu, 0x05u, 0x0Du}) {
+      press(sim, key);
+    }
+    check(read_reg(sim, MCG_REG_KP) == 384, "Kp 1.5 entered on the keypad reads back 384 (Q8)");
+    const Bytes menu = read_xram(sim, 0x9F10, 0x9F2F);
+    check(std::string(menu.begin(), menu.end()) == "Kp                     1.500    ",
+          "LCD shows the Kp item and its value: '" + std::string(menu.begin(), menu.end()) + "'");
+    press(sim, 0x0C);  // back to the main screen
 
     // The RAM log: open loop at duty 400, the SIM encoder then counts 10 pulses per ms.
     check(sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_DUTY, 400))->payload.at(0) == MCG_ST_OK &&
