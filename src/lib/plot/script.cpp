@@ -200,6 +200,7 @@ std::string build_script(const Spec& spec, const std::vector<Input>& inputs) {
   const std::string style = style_of(spec);
   out += "set grid\n";
   out += "set key top right\n";
+  out += "set autoscale xfix\n";
 
   if (spec.mode == Mode::bode) {
     out += title ? fmt::format("set multiplot layout 2,1 title {}\n", quote(*title)) : "set multiplot layout 2,1\n";
