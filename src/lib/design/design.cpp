@@ -344,6 +344,16 @@ double peak_sensitivity(const std::vector<Tf>& factors, double* omega) {
 
 bool meets(const Setup& setup, const Tf& cont, const TuneLimits& limits) {
   const std::vector<Tf> f = loop_factors(setup, cont);
+  {
+    // A coarse look at |S| first: any sample above the limit already rules the loop out.
+    const LoopEval le(f);
+    double lo = 0.0;
+    double hi = 0.0;
+    le.range(lo, hi);
+    for (double w : linsys::log_grid(lo, hi, 300)) {
+      if (1.0 / std::abs(1.0 + le.value(w)) > limits.ms_max) return false;
+    }
+  }
   if (f[0].domain == f[1].domain) {
     if (!linsys::is_stable(linsys::closed_loop_poles(linsys::series(f[0], f[1])), f[1].domain)) return false;
   }
@@ -394,7 +404,7 @@ Design tune(const Setup& setup, const std::string& structure, const TuneLimits& 
     double good_rho = rho;
     if (i + 1 < grid.size()) {
       double bad = grid[i + 1];
-      for (int it = 0; it < 30 && bad / good > 1.0 + 1e-6; ++it) {
+      for (int it = 0; it < 12 && bad / good > 1.0 + 1e-5; ++it) {
         const double mid = std::sqrt(good * bad);
         double r = 0.0;
         if (feasible(mid, r)) {
