@@ -1,0 +1,65 @@
+// The plant text parser: the report's expressions, and errors that point at the character.
+#include "common/error.hpp"
+#include "linsys/parse.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+namespace mcg::linsys {
+namespace {
+
+std::string error_of(const char* text) {
+  try {
+    parse_tf(text, "--plant");
+  } catch (const mcg::Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(LinsysParse, ReportPlantsEvaluateAsWritten) {
+  const Complex s(3.0, 40.0);
+  const ParsedTf g = parse_tf("16.557/((s/65+1)*(s/950+1))", "t");
+  ASSERT_EQ(g.domain, Domain::s);
+  const Complex want = 16.557 / ((s / 65.0 + 1.0) * (s / 950.0 + 1.0));
+  EXPECT_NEAR(std::abs(g.tf.eval(s) - want), 0.0, 1e-14);
+  const ParsedTf pi = parse_tf("4658*(s/500+1)/s", "t");
+  EXPECT_NEAR(std::abs(pi.tf.eval(s) - 4658.0 * (s / 500.0 + 1.0) / s), 0.0, 1e-10);
+  const ParsedTf den = parse_tf("1/(1.6194e-5*s^2 + .016437*s + 1)", "t");
+  EXPECT_EQ(trim(den.tf.den), (Poly{1.6194e-5, 0.016437, 1.0}));
+}
+
+TEST(LinsysParse, DelaysAndZ) {
+  const ParsedTf d = parse_tf("0.5*exp(-0.002*s)/(s+1)", "t");
+  EXPECT_DOUBLE_EQ(d.tf.delay_s, 0.002);
+  EXPECT_NEAR(d.tf.dc_gain(), 0.5, 1e-15);
+  const ParsedTf z = parse_tf("z^-1", "t");
+  ASSERT_EQ(z.domain, Domain::z);
+  EXPECT_EQ(trim(z.tf.num), (Poly{1.0}));
+  EXPECT_EQ(trim(z.tf.den), (Poly{1.0, 0.0}));
+  // (11.645 − 6.987 z^−1)/(1 − z^−1): the common z cancels.
+  const ParsedTf pi = parse_tf("(11.645 - 6.987*z^-1)/(1 - z^-1)", "t");
+  EXPECT_EQ(trim(pi.tf.num), (Poly{11.645, -6.987}));
+  EXPECT_EQ(trim(pi.tf.den), (Poly{1.0, -1.0}));
+  EXPECT_FALSE(parse_tf("42", "t").domain.has_value());
+}
+
+TEST(LinsysParse, ErrorsPointAtTheCharacter) {
+  EXPECT_EQ(error_of("16.557/((s/65+1)*(s/950+1)"), "--plant: unbalanced '(' at character 8");
+  EXPECT_EQ(error_of("1/(s+1))"), "--plant: unexpected ')' at character 8");
+  EXPECT_EQ(error_of("1/(s+z)"), "--plant: s and z mixed at character 6");
+  EXPECT_EQ(error_of("2*x/(s+1)"), "--plant: unknown symbol 'x' at character 3");
+  EXPECT_EQ(error_of("1/0"), "--plant: division by zero at character 2");
+  EXPECT_EQ(error_of("s^1.5"), "--plant: expected a whole-number exponent at character 3");
+  EXPECT_EQ(error_of("1/(s+)"), "--plant: unexpected ')' at character 6");
+  EXPECT_EQ(error_of("2 s"), "--plant: unexpected 's' at character 3");
+  EXPECT_EQ(error_of(""), "--plant: empty expression at character 1");
+  EXPECT_EQ(error_of("exp(-0.002*s)/(s+1) + 1"), "--plant: terms with different delays added at character 21");
+  EXPECT_EQ(error_of("exp(s^2)"), "--plant: exp() takes c - tau*s (a delay) at character 1");
+  EXPECT_EQ(error_of("exp(0.1*s)"), "--plant: negative delay 0.1 s (a prediction) is not causal");
+}
+
+}  // namespace
+}  // namespace mcg::linsys
