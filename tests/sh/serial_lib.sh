@@ -1,0 +1,85 @@
+# Shared by the test_serial*.sh suites: a work directory, background processes that are always
+# ended, bounded waits, and checks that count failures.
+set -u
+export LC_ALL=C TZ=UTC
+work=$(mktemp -d)
+bg_pids=()
+failures=0
+checks=0
+
+cleanup() {
+  for pid in "${bg_pids[@]}"; do kill "$pid" 2> /dev/null; done
+  wait 2> /dev/null
+  rm -rf "$work"
+}
+trap cleanup EXIT
+
+# check DESCRIPTION COMMAND...: runs COMMAND, counts a failure when it fails.
+check() {
+  local what=$1
+  shift
+  checks=$((checks + 1))
+  if "$@"; then
+    echo "ok   $what"
+  else
+    echo "FAIL $what"
+    failures=$((failures + 1))
+  fi
+}
+
+# same FILE TEXT: FILE holds exactly TEXT (plus the final newline).
+same() {
+  if [ "$(cat "$1")" != "$2" ]; then
+    echo "  expected: $2"
+    echo "  got:      $(cat "$1")"
+    return 1
+  fi
+}
+
+# wait_for PATH: waits up to 10 s for PATH to exist.
+wait_for() {
+  local i
+  for i in $(seq 100); do
+    [ -e "$1" ] && return 0
+    sleep 0.1
+  done
+  echo "  $1 did not appear"
+  return 1
+}
+
+# start_board LINK [mcg-sim options]: the emulated board in the background, ended at exit.
+start_board() {
+  local link=$1
+  shift
+  timeout 300 mcg-sim --board "$link" "$@" 2> "$work/board.err" &
+  bg_pids+=($!)
+  board_pid=$!
+  wait_for "$link"
+}
+
+# wait_bounded PID SECONDS: waits for PID to end (its status in $status), killing it after
+# SECONDS; returns 1 if it had to be killed.
+wait_bounded() {
+  local i
+  for i in $(seq $(($2 * 10))); do
+    if ! kill -0 "$1" 2> /dev/null; then
+      wait "$1"
+      status=$?
+      return 0
+    fi
+    sleep 0.1
+  done
+  kill -KILL "$1" 2> /dev/null
+  wait "$1"
+  status=$?
+  echo "  pid $1 had to be killed"
+  return 1
+}
+
+# rows FILE: data rows of a CSV (lines after the header, metadata excluded).
+rows() { grep -v '^#' "$1" | tail -n +2 | grep -c .; }
+
+finish() {
+  echo "$(basename "$0"): $((checks - failures)) of $checks checks passed"
+  [ "$failures" = 0 ]
+}
