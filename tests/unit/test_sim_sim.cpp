@@ -1,0 +1,224 @@
+// mcg-sim's library side: the encoder estimator, the controller emulation, the closed loop and run().
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "common/error.hpp"
+#include "config/ini.hpp"
+#include "sim/controller.hpp"
+#include "sim/encoder.hpp"
+#include "sim/run.hpp"
+#include "table/table.hpp"
+
+namespace mcg::sim {
+namespace {
+
+constexpr double k_two_pi = 2.0 * std::numbers::pi;
+
+TEST(SimEncoder, ParsesAndFormatsTheContractText) {
+  const CountEstimator e = parse_rpm_estimator("counts over 0.005 s window, 2048 counts/rev");
+  EXPECT_EQ(e.window_s, 0.005);
+  EXPECT_EQ(e.counts_per_rev, 2048.0);
+  EXPECT_DOUBLE_EQ(e.rpm_per_count(), 5.859375);
+  EXPECT_EQ(format_rpm_estimator(e), "counts over 0.005 s window, 2048 counts/rev");
+  try {
+    parse_rpm_estimator("average over 5 ms", "run.csv: rpm_estimator");
+    FAIL();
+  } catch (const Error& err) {
+    EXPECT_STREQ(err.what(),
+                 "run.csv: rpm_estimator: expected 'counts over <W> s window, <N> counts/rev', got 'average over 5 ms'");
+  }
+}
+
+TEST(SimEncoder, CountsLikeARealCounter) {
+  // floor(theta N / 2 pi), also below zero.
+  EXPECT_EQ(encoder_count(0.0, 2048), 0.0);
+  EXPECT_EQ(encoder_count(k_two_pi / 2048 * 0.999, 2048), 0.0);
+  EXPECT_EQ(encoder_count(k_two_pi / 2048 * 1.001, 2048), 1.0);
+  EXPECT_EQ(encoder_count(-1e-9, 2048), -1.0);
+  // Constant 1000 rpm sampled at 1 ms: 1000/60 * 2048 * 0.005 = 170.67 counts per window,
+  // so the estimate alternates between 170 and 171 counts and averages to the true speed.
+  std::vector<double> t, theta;
+  for (int k = 0; k <= 3000; ++k) {
+    t.push_back(k * 1e-3);
+    theta.push_back(1000.0 / 60.0 * k_two_pi * k * 1e-3);
+  }
+  const auto rpm = estimate_rpm(t, theta, {});
+  double sum = 0.0;
+  for (std::size_t k = 5; k < rpm.size(); ++k) {
+    const double counts = rpm[k] / 5.859375;
+    EXPECT_TRUE(counts == 170.0 || counts == 171.0) << counts;
+    sum += rpm[k];
+  }
+  EXPECT_NEAR(sum / static_cast<double>(rpm.size() - 5), 1000.0, 0.1);
+  // During the first window the shaft was at rest before t0.
+  EXPECT_EQ(rpm[0], 0.0);
+  EXPECT_EQ(rpm[2] / 5.859375, encoder_count(theta[2], 2048));
+}
+
+TEST(SimEncoder, UnevenSamplingInterpolatesTheAngleAtTheWindowStart) {
+  std::vector<double> t{0.0, 0.004, 0.0095, 0.0102};
+  std::vector<double> theta{0.0, 4.0, 9.5, 10.2};   // 1000 rad/s
+  const auto rpm = estimate_rpm(t, theta, {0.005, 2048});
+  // At 0.0102 the window starts at 0.0052: angle 5.2 by interpolation.
+  EXPECT_DOUBLE_EQ(rpm[3], (encoder_count(10.2, 2048) - encoder_count(5.2, 2048)) * 5.859375);
+}
+
+TEST(SimController, ReportPiDifferenceEquation) {
+  // y_n = y_{n-1} + 11.645 e_n - 6.987 e_{n-1}, e in counts = rpm error * 512/60000.
+  Controller c = report_pi();
+  c.duty_resolution = 0.0;
+  c.round_output = false;
+  ControllerState s(c);
+  const double e = 100.0 * 512.0 / 60000.0;
+  EXPECT_NEAR(s.step(100.0) * 922.0, 11.645 * e, 1e-9);
+  EXPECT_NEAR(s.step(100.0) * 922.0, 11.645 * e + 11.645 * e - 6.987 * e, 1e-9);
+}
+
+TEST(SimController, SaturatesWithoutWindingUpAndQuantises) {
+  Controller c = report_pi();
+  ControllerState s(c);
+  for (int k = 0; k < 1000; ++k) EXPECT_LE(s.step(5000.0), 1.0);
+  EXPECT_EQ(s.step(5000.0), 1.0);
+  // Anti-windup: the recursion remembers 922, so a reversed error acts at once.
+  const double after = s.step(-5000.0);
+  EXPECT_LT(after, 1.0 - 0.5);
+  // Duty resolution 0.2 %: every output is a multiple of 0.002.
+  ControllerState q(c);
+  for (int k = 0; k < 50; ++k) {
+    const double d = q.step(37.0);
+    EXPECT_NEAR(d / 0.002, std::round(d / 0.002), 1e-9);
+  }
+}
+
+TEST(SimController, IniFormatRoundTripsAndRejectsBadValues) {
+  config::Ini ini;
+  Controller c = report_pi();
+  c.b = {644.0};
+  c.a = {1.0};
+  c.type = "p";
+  controller_to_ini(c, ini);
+  std::istringstream text(ini.str());
+  const auto back = controller_from_ini(config::Ini::parse(text, "p.ini"));
+  ASSERT_TRUE(back.has_value());
+  EXPECT_EQ(back->b, c.b);
+  EXPECT_EQ(back->a, c.a);
+  EXPECT_EQ(back->input_scale, c.input_scale);
+  EXPECT_EQ(back->type, "p");
+  std::istringstream bad("[controller]\nb = 1\na = 0 1\n");
+  try {
+    controller_from_ini(config::Ini::parse(bad, "c.ini"));
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "c.ini:3: [controller] a: needs a_0 != 0");
+  }
+  std::istringstream none("[motor]\nR_ohm = 4\n");
+  EXPECT_FALSE(controller_from_ini(config::Ini::parse(none, "m.ini")).has_value());
+}
+
+ClosedLoopInputs step_command(double rpm, double duration_s) {
+  ClosedLoopInputs in;
+  for (int k = 0; k * 1e-3 <= duration_s + 1e-12; ++k) {
+    in.t_s.push_back(k * 1e-3);
+    in.rpm_cmd.push_back(rpm);
+    in.clutch.push_back(2);
+    in.r_load_ohm.push_back(model::k_open_circuit);
+  }
+  return in;
+}
+
+TEST(SimClosedLoop, ReportPiOvershootsA100RpmStepAndSettles) {
+  // The report: "Overshoot of the simulation is approximately 30 %" (design: 16 %).
+  const auto out = simulate_closed_loop(model::Model{}, report_pi(), {}, step_command(100.0, 0.6));
+  const double peak = *std::max_element(out.plant.rpm.begin(), out.plant.rpm.end());
+  EXPECT_GT(peak, 116.0);
+  double mean = 0.0;
+  for (std::size_t k = 400; k < out.plant.rpm.size(); ++k) mean += out.plant.rpm[k];
+  mean /= static_cast<double>(out.plant.rpm.size() - 400);
+  EXPECT_NEAR(mean, 100.0, 3.0);
+  // The duty is the controller's: multiples of 0.2 %, v = 20 V duty.
+  for (std::size_t k = 0; k < out.duty.size(); ++k) {
+    EXPECT_NEAR(out.duty[k] / 0.002, std::round(out.duty[k] / 0.002), 1e-9);
+    EXPECT_DOUBLE_EQ(out.v_V[k], 20.0 * out.duty[k]);
+  }
+}
+
+TEST(SimClosedLoop, RowsSparserThanTheTicksStillTickEveryMillisecond) {
+  // Rows every 5 ms: the loop still runs at 1 ms and tracks the same way.
+  ClosedLoopInputs sparse;
+  const ClosedLoopInputs dense = step_command(300.0, 0.5);
+  for (std::size_t k = 0; k < dense.t_s.size(); k += 5) {
+    sparse.t_s.push_back(dense.t_s[k]);
+    sparse.rpm_cmd.push_back(300.0);
+    sparse.clutch.push_back(2);
+    sparse.r_load_ohm.push_back(model::k_open_circuit);
+  }
+  const auto a = simulate_closed_loop(model::Model{}, report_pi(), {}, dense);
+  const auto b = simulate_closed_loop(model::Model{}, report_pi(), {}, sparse);
+  for (std::size_t k = 0; k < sparse.t_s.size(); ++k) EXPECT_NEAR(b.plant.rpm[k], a.plant.rpm[5 * k], 1e-6);
+}
+
+std::string run_text(const RunOptions& opt, const std::string& input) {
+  std::istringstream in(input);
+  std::ostringstream out;
+  run(opt, in, "<stdin>", out);
+  return out.str();
+}
+
+TEST(SimRun, NoiseIsReproducibleFromTheSeedAndRecorded) {
+  std::string input = "# sample_period: 0.001\nt,v\n";
+  for (int k = 0; k < 50; ++k) input += fmt::format("{},{}\n", k * 1e-3, 6.0);
+  RunOptions opt;
+  opt.noise_i_A = 0.003;
+  opt.seed = 42;
+  const std::string a = run_text(opt, input);
+  EXPECT_EQ(a, run_text(opt, input));
+  opt.seed = 43;
+  EXPECT_NE(a, run_text(opt, input));
+  std::istringstream text(a);
+  const table::Table t = table::read(text, "out");
+  EXPECT_EQ(t.meta.get("seed"), "42");
+  EXPECT_EQ(t.meta.get("sample_period"), "0.001");
+  EXPECT_EQ(t.meta.get("source"), fmt::format("mcg-sim {}", "0.1.0"));
+  EXPECT_EQ(t.names, (std::vector<std::string>{"t", "v", "clutch", "r_load", "omega", "rpm", "i", "i_gen",
+                                                "v_gen", "theta"}));
+}
+
+TEST(SimRun, AdcQuantisesTheCurrentLikeTheBoard) {
+  std::string input = "t,v\n";
+  for (int k = 0; k < 30; ++k) input += fmt::format("{},{}\n", k * 1e-3, 15.0);
+  RunOptions opt;
+  opt.adc = true;
+  opt.clutch = 0;
+  std::istringstream text(run_text(opt, input));
+  const table::Table t = table::read(text, "out");
+  for (double i : t.col("i")) {
+    EXPECT_NEAR((i + 2.5) / (5.0 / 1024.0), std::round((i + 2.5) / (5.0 / 1024.0)), 1e-6);
+    EXPECT_LE(i, 1023.0 * 5.0 / 1024.0 - 2.5 + 1e-9);
+  }
+  // The inrush (15 V / 3.91 ohm = 3.8 A) saturates at the top code: 2.4951 A.
+  EXPECT_NEAR(*std::max_element(t.col("i").begin(), t.col("i").end()), 1023.0 * 5.0 / 1024.0 - 2.5, 1e-6);
+}
+
+TEST(SimRun, MeasuredMetadataOfReplacedColumnsIsDropped) {
+  const std::string input =
+      "# rpm_estimator: counts over 0.005 s window, 2048 counts/rev\n# i_measurement: shunt\nt,v,rpm,i\n0,1,5,0.1\n";
+  std::istringstream text(run_text({}, input));
+  const table::Table t = table::read(text, "out");
+  EXPECT_FALSE(t.meta.get("rpm_estimator").has_value());
+  EXPECT_FALSE(t.meta.get("i_measurement").has_value());
+  EXPECT_EQ(t.col("rpm")[0], 0.0);
+}
+
+TEST(SimRun, EffectOptionOverridesTheConfigSection) {
+  RunOptions opt;
+  opt.effects = {"dead_time:tau_d_s=0.004"};
+  std::istringstream text(run_text(opt, "t,v\n0,1\n0.001,1\n"));
+  const table::Table t = table::read(text, "out");
+  EXPECT_EQ(t.meta.get("effects"), "dead_time:tau_d_s=0.004");
+}
+
+}  // namespace
+}  // namespace mcg::sim
