@@ -647,6 +647,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   for (const char* name : {"rpm", "i"}) {
     double chain_sq = 0.0;
     double data_sq = 0.0;
+    double signal_sq = 0.0;
     std::size_t rows = 0;
     bool stated = true;
     for (const ScoredRun& sr : data.validate) {
@@ -670,6 +671,8 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
       const auto n = static_cast<double>(part.size());
       chain_sq += nf.chain * nf.chain * n;
       data_sq += nf.data * nf.data * n;
+      const double r = rms_finite(part);
+      if (std::isfinite(r)) signal_sq += r * r * n;
       rows += part.size();
     }
     if (rows == 0) continue;
@@ -678,6 +681,9 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
     of.noise.chain = std::sqrt(chain_sq / static_cast<double>(rows));
     of.noise.data = std::sqrt(data_sq / static_cast<double>(rows));
     of.floor = stated && of.noise.chain > 0.0 ? of.noise.chain : of.noise.data;
+    // Noise-free data (a simulation without a measurement chain) still needs a scale:
+    // 0.1 % of the signal's RMS.
+    of.floor = std::max(of.floor, 1e-3 * std::sqrt(signal_sq / static_cast<double>(rows)));
     if (of.floor > 0.0) report.floors.push_back(of);
   }
   if (report.floors.empty()) fail("no noise floor: the validation runs measure neither rpm nor i with any noise");
