@@ -56,6 +56,20 @@ TEST(LinkControllerIni, LargeGainsGetFewerFractionalBits) {
   EXPECT_EQ(value_of(regs, "mode"), 1.0);
 }
 
+TEST(LinkControllerIni, FixedPointSectionGivesTheQuantisedCoefficients) {
+  // docs/formats.md: the report's PI in Q4.11, b0_q = 23849 (11.64502), b1_q = -14309, a1_q = -2048.
+  const auto regs = regs_of(
+      "[controller]\nb = 11.645 -6.987\na = 1 -1\n[fixed_point]\nq_frac_bits = 11\nn_b = 2\nn_a = 1\n"
+      "b0_q = 23849\nb1_q = -14309\na1_q = -2048\n");
+  const double k = 0.25 * 1000.0 / 922.0;
+  EXPECT_NEAR(value_of(regs, "b0"), 23849.0 / 2048.0 * k, 1e-12);
+  EXPECT_NEAR(value_of(regs, "b1"), -14309.0 / 2048.0 * k, 1e-12);
+  EXPECT_EQ(value_of(regs, "mode"), 2.0);
+  // output = duty: y is the duty, so 1000 per unit instead of 1000/922.
+  const auto duty = regs_of("[controller]\nb = 0.01\na = 1\noutput = duty\n");
+  EXPECT_NEAR(value_of(duty, "kp"), 0.01 * 0.25 * 1000.0, 1e-12);
+}
+
 TEST(LinkControllerIni, FormsTheBoardCannotRun) {
   EXPECT_EQ(error_of("[controller]\nb = 1 2\na = 1 -0.5\n"),
             "c.ini:3: [controller] a: the board runs a = 1 (P) or a = 1 -1 (incremental PI, PID)");

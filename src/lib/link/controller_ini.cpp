@@ -1,6 +1,8 @@
 // [controller] sections of mcg-design and mcg-sim as board registers.
 #include <cmath>
 
+#include <fmt/format.h>
+
 #include "common/error.hpp"     // mcg::fail
 #include "config/ini.hpp"       // Ini
 #include "link/connection.hpp"  // controller_registers
@@ -11,16 +13,40 @@ namespace mcg::link {
 std::vector<std::pair<const RegisterInfo*, double>> controller_registers(const config::Ini& ini) {
   std::vector<std::pair<const RegisterInfo*, double>> out;
   if (!ini.has_section("controller")) return out;
-  const auto b = ini.numbers("controller", "b");
+  auto b = ini.numbers("controller", "b");
   if (!b) return out;
-  const std::vector<double> a = ini.numbers("controller", "a").value_or(std::vector<double>{1.0});
+  std::vector<double> a = ini.numbers("controller", "a").value_or(std::vector<double>{1.0});
   if (a.empty() || a[0] == 0.0) ini.reject("controller", "a", "a_0 must not be 0");
+  if (const auto frac = ini.number("fixed_point", "q_frac_bits")) {
+    // The design's quantised coefficients, the ones its [margins_quantised] analysed.
+    if (*frac < 0 || *frac > 30 || *frac != std::floor(*frac)) ini.reject("fixed_point", "q_frac_bits", "not 0..30");
+    const double lsb = std::ldexp(1.0, -static_cast<int>(*frac));
+    const auto count = [&](std::string_view key) {
+      const double n = ini.number_or("fixed_point", key, 0.0);
+      if (n < 0 || n > 8 || n != std::floor(n)) ini.reject("fixed_point", key, "not a coefficient count");
+      return static_cast<int>(n);
+    };
+    const int n_b = count("n_b");
+    const int n_a = count("n_a");
+    const auto coef = [&](const std::string& key) {
+      const auto v = ini.number("fixed_point", key);
+      if (!v) ini.reject("fixed_point", "n_b", fmt::format("no {}", key));
+      return *v * lsb;
+    };
+    b->clear();
+    for (int k = 0; k < n_b; ++k) b->push_back(coef(fmt::format("b{}_q", k)));
+    a.assign(1, 1.0);
+    for (int k = 1; k <= n_a; ++k) a.push_back(coef(fmt::format("a{}_q", k)));
+  }
   const double dt_s = ini.number_or("controller", "dt_s", 1e-3);
   if (std::fabs(dt_s - MCG_TICK_US * 1e-6) > 1e-12) {
     ini.reject("controller", "dt_s", "the board's controller runs every 0.001 s");
   }
   const double input_scale = ini.number_or("controller", "input_scale", 512.0 / 60000.0);
-  const double duty_full_scale = ini.number_or("controller", "duty_full_scale", 922.0);
+  const std::string output = ini.get("controller", "output").value_or("duty_counts");
+  if (output != "duty_counts" && output != "duty") ini.reject("controller", "output", "not duty_counts or duty");
+  // output = duty: y is the duty itself, full scale 1.
+  const double duty_full_scale = output == "duty" ? 1.0 : ini.number_or("controller", "duty_full_scale", 922.0);
   if (!(input_scale > 0.0) || !std::isfinite(input_scale)) ini.reject("controller", "input_scale", "must be > 0");
   if (!(duty_full_scale > 0.0) || !std::isfinite(duty_full_scale)) {
     ini.reject("controller", "duty_full_scale", "must be > 0");
