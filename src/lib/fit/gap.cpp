@@ -739,7 +739,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
       ++done;
       continue;
     }
-    Job job{plan.name, {plan.name}, pm.model, mismatch_free(), {plan.name}, 10, {}, {base}};
+    Job job{plan.name, {plan.name}, pm.model, mismatch_free(), {plan.name}, 15, {}, {base}};
     add_effect(job.start, plan.name);
     for (const auto& key : plan.free) {
       job.free.push_back(plan.name + "." + key);
