@@ -8,7 +8,9 @@
 #include "mcg_protocol.h" /* MCG_BOARD_UCSIM, MCG_KEY_NONE */
 #include "uart_mcs51.h"   /* uart_init */
 
-static volatile uint8_t MCG_XDATA MCG_AT(SIM_IO_XADDR) s_io[0x30];
+static volatile uint8_t MCG_XDATA MCG_AT(SIM_IO_XADDR) s_io[SIM_KEY_QUEUE + SIM_KEY_QUEUE_MAX];
+static uint8_t MCG_XDATA s_key_next;     /* next queued key */
+static uint8_t MCG_XDATA s_key_released; /* 1: the last sample presented a queued key */
 static volatile uint8_t s_ticks;
 static int16_t s_duty;
 static int16_t s_pulse_acc; /* test encoder: duty-ticks not yet turned into pulses */
@@ -25,7 +27,7 @@ void board_tick_isr(void) MCG_ISR(1) {
 
 void hal_init(void) {
   uint8_t i;
-  for (i = 0; i < sizeof s_io; ++i) {
+  for (i = 0; i < SIM_KEY_QUEUE; ++i) {
     s_io[i] = ' ';
   }
   s_io[0] = 0;
@@ -33,6 +35,9 @@ void hal_init(void) {
   s_io[2] = 0;
   s_io[3] = 0;
   s_io[4] = MCG_KEY_NONE;
+  s_io[5] = 0;
+  s_key_next = 0;
+  s_key_released = 0;
   s_duty = 0;
   s_pulse_acc = 0;
   s_ticks = 0;
@@ -78,7 +83,17 @@ void hal_clutch_write(uint8_t on) { s_io[2] = on; }
 
 void hal_load_write(uint8_t on) { s_io[3] = on; }
 
-uint8_t hal_key_read(void) { return s_io[4]; }
+uint8_t hal_key_read(void) {
+  if (s_key_released) {
+    s_key_released = 0;
+    return MCG_KEY_NONE;
+  }
+  if (s_key_next < s_io[5] && s_key_next < SIM_KEY_QUEUE_MAX) {
+    s_key_released = 1;
+    return s_io[SIM_KEY_QUEUE + s_key_next++];
+  }
+  return s_io[4];
+}
 
 void hal_lcd_write(uint8_t row, const char* text16) {
   uint8_t base = row ? 0x20u : 0x10u;
