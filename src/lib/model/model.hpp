@@ -74,7 +74,8 @@ struct Effect {
   std::string name;
   std::vector<std::pair<std::string, double>> params;
 
-  /// Value of parameter `key`; the key must belong to the effect (assert).
+  /// Value of parameter `key` (the catalog's default when not listed); the key must belong
+  /// to the effect (assert).
   double get(std::string_view key) const;
   void set(std::string_view key, double value);
 };

@@ -115,6 +115,14 @@ double Effect::get(std::string_view key) const {
   for (const auto& [k, v] : params) {
     if (k == key) return v;
   }
+  // Not set: the catalog's default (an Effect built by hand may list only some parameters).
+  const EffectSpec* spec = find_effect(name);
+  assert(spec != nullptr && "effect not in the catalog");
+  if (spec != nullptr) {
+    for (const auto& p : spec->params) {
+      if (p.name == key) return p.default_value;
+    }
+  }
   assert(false && "effect parameter not in the catalog");
   return 0.0;
 }
