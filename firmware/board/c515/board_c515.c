@@ -65,10 +65,17 @@ void hal_init(void) {
   ADCON |= 0x80; /* BD: baud rate generator */
   PCON |= 0x80;  /* SMOD: 9600 baud at 12 MHz */
   uart_init();
+  EA = 1;
+  /* The HD44780 needs more than 15 ms after power-up before its first command. */
+  while (s_ticks < C515_LCD_POWER_UP_MS) {
+  }
   lcd_command(0x38); /* 8-bit bus, 2 lines */
   lcd_command(0x0C); /* display on, no cursor */
   lcd_command(0x01); /* clear */
   lcd_command(0x06); /* increment */
+  EA = 0;
+  s_ticks = 0;
+  s_count_taken = s_count_at_tick;
   EA = 1;
 }
 

@@ -30,6 +30,7 @@
 #define C515_LCD_DATA_XADDR 0xFF81u /* HD44780 data register */
 #define C515_LCD_BUSY 0x80u
 #define C515_LCD_BUSY_POLLS 200u /* give up waiting after this many polls: never hang */
+#define C515_LCD_POWER_UP_MS 20u /* wait before the first LCD command (HD44780: > 15 ms) */
 #define C515_KEY_XADDR 0xFFC0u   /* key encoder: bits 0..3 key code, bit 7 data available */
 #define C515_KEY_AVAILABLE 0x80u
 
