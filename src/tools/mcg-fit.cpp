@@ -13,7 +13,8 @@ int main(int argc, char** argv) {
 
   mcg::fit::FrictionRunOptions friction;
   CLI::App* fr = app.add_subcommand("friction", "static, Coulomb and viscous friction per clutch state, stacked");
-  fr->add_option("--config", friction.config, "INI parameter set (R, Kt, Ke, J; later files win)");
+  fr->add_option("--config", friction.config, "INI parameter set (R, Kt, Ke, J; repeatable, later files win)")
+      ->allow_extra_args(false);
   fr->add_option("--order", friction.fit.order, "order of the viscous polynomial")
       ->check(CLI::Range(1, 3))
       ->capture_default_str();
@@ -33,18 +34,21 @@ int main(int argc, char** argv) {
   CLI::App* tfc = app.add_subcommand("tf", "rational transfer function fitted to a frequency response");
   tfc->add_option("--poles", tf.fit.poles, "number of poles")->check(CLI::Range(1, 12))->capture_default_str();
   tfc->add_option("--zeros", tf.fit.zeros, "number of zeros")->check(CLI::Range(0, 12))->capture_default_str();
-  tfc->add_option("--f-min", tf.fit.f_min_hz, "ignore frequencies below, Hz")->check(CLI::Range(0.0, 1e9));
-  tfc->add_option("--f-max", tf.fit.f_max_hz, "ignore frequencies above, Hz")->check(CLI::Range(0.0, 1e9));
+  tfc->add_option("--fmin", tf.fit.f_min_hz, "ignore frequencies below, Hz")->check(CLI::Range(0.0, 1e9));
+  tfc->add_option("--fmax", tf.fit.f_max_hz, "ignore frequencies above, Hz")->check(CLI::Range(0.0, 1e9));
   tfc->add_flag("!--no-coherence", tf.fit.use_coherence, "weight all frequencies alike");
   tfc->add_flag("--delay", tf.fit.fit_delay, "fit a transport delay too (written as delay_s)");
   tfc->add_option("file", tf.file, "f_hz,mag_db,phase_deg[,coherence] table ('-' = stdin)")->capture_default_str();
 
   mcg::fit::ModelRunOptions model;
   CLI::App* md = app.add_subcommand("model", "grey-box fit of the nonlinear model to time series");
-  md->add_option("--config", model.config, "INI parameter set: initial and fixed values (later files win)");
+  md->add_option("--config", model.config, "INI parameter set: initial and fixed values (repeatable, later files win)")
+      ->allow_extra_args(false);
   md->add_option("--free", model.free, "parameters to fit, comma separated (default: J, R, Kt, Ke, Tc of the motor)")
+      ->allow_extra_args(false)
       ->delimiter(',');
-  md->add_option("--outputs", model.outputs, "measured columns compared (default: all present of rpm,i,i_gen,v_gen)")
+  md->add_option("--outputs", model.outputs, "measured columns compared (default: rpm and each varying i, i_gen, v_gen)")
+      ->allow_extra_args(false)
       ->delimiter(',');
   md->add_flag("--batch", model.batch, "one fit per file, one CSV row each, files in parallel");
   md->add_flag("--list", model.list, "list the parameter names, values, units and bounds, then stop");

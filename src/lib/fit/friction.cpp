@@ -20,9 +20,10 @@ namespace {
 constexpr double k_rest_min_s = 0.02;
 /// Motion shows in the encoder estimate this long after it began (window + first count).
 constexpr double k_detect_lag_s = 0.015;
-/// Block length for averaging a measured current at rest (beats its noise down); a drive
-/// torque from the voltage balance is noise-free and used sample by sample.
-constexpr double k_block_s = 0.01;
+/// A measured current is averaged over this many trailing samples before its largest value at
+/// rest is taken (noise / sqrt(3)); short enough to follow a staircase step. A drive torque
+/// from the voltage balance is noise-free and used sample by sample.
+constexpr std::size_t k_smooth_samples = 3;
 constexpr std::size_t k_min_rows = 100;
 
 struct Window {
@@ -44,19 +45,10 @@ struct StateData {
 
 int sign_of(double x) { return (x > 0.0) - (x < 0.0); }
 
-/// Largest mean of `d * torque` over blocks of `block_s` tiling [from, to) backwards from `to`.
-double max_block_mean(const std::vector<double>& t, const std::vector<double>& torque, int d, std::size_t from,
-                      std::size_t to, double block_s) {
+/// Largest `d * torque` over the samples [from, to).
+double largest(const std::vector<double>& torque, int d, std::size_t from, std::size_t to) {
   double best = -1e300;
-  std::size_t end = to;
-  while (end > from) {
-    std::size_t begin = end - 1;
-    while (begin > from && t[end - 1] - t[begin - 1] < block_s) --begin;
-    double sum = 0.0;
-    for (std::size_t k = begin; k < end; ++k) sum += d * torque[k];
-    best = std::max(best, sum / static_cast<double>(end - begin));
-    end = begin;
-  }
+  for (std::size_t k = from; k < to; ++k) best = std::max(best, d * torque[k]);
   return best;
 }
 
@@ -142,7 +134,16 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
     start = k + 1;
   }
 
-  // Starts from rest.
+  // Starts from rest, judged on the drive torque smoothed where it is a noisy measurement.
+  std::vector<double> held(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    std::size_t count = 1;
+    held[k] = drive[k];
+    for (std::size_t j = 1; measured[k] && j < k_smooth_samples && j <= k && measured[k - j]; ++j, ++count) {
+      held[k] += drive[k - j];
+    }
+    held[k] /= static_cast<double>(count);
+  }
   std::size_t rest_start = 0;
   bool resting = false;
   for (std::size_t k = 0; k < n; ++k) {
@@ -159,10 +160,9 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
       const int d = sign_of(omega[k]);
       std::size_t split = k;
       while (split > rest_start && in.t_s[k] - in.t_s[split - 1] <= k_detect_lag_s) --split;
-      const double block_s = measured[k] ? k_block_s : 0.0;
-      if (split > rest_start && in.t_s[split] - in.t_s[rest_start] >= block_s) {
-        const double lower = max_block_mean(in.t_s, drive, d, rest_start, split, block_s);
-        const double upper = max_block_mean(in.t_s, drive, d, split, k + 1, block_s);
+      if (split > rest_start) {
+        const double lower = largest(held, d, rest_start, split);
+        const double upper = largest(held, d, split, k + 1);
         st.breakaways.push_back({std::min(lower, upper), std::max(lower, upper)});
       }
     }

@@ -100,8 +100,19 @@ Run make_run(const table::Table& table, const std::vector<std::string>& outputs,
     fail("{}: too short: {} rows (at least {} needed)", table.source, table.rows(), min_rows);
   }
   if (outputs.empty()) {
-    for (const auto& name : measurable_columns()) {
-      if (table.has(name)) run.outputs.push_back(name);
+    // The measured speed (rpm, else omega) and every electrical column that varies.
+    const auto varies = [&](const std::string& name) {
+      const auto& y = table.col(name);
+      const auto first = std::find_if(y.begin(), y.end(), [](double v) { return std::isfinite(v); });
+      return first != y.end() && std::any_of(first, y.end(), [&](double v) { return std::isfinite(v) && v != *first; });
+    };
+    if (table.has("rpm")) {
+      run.outputs.push_back("rpm");
+    } else if (table.has("omega")) {
+      run.outputs.push_back("omega");
+    }
+    for (const char* name : {"i", "i_gen", "v_gen"}) {
+      if (table.has(name) && varies(name)) run.outputs.push_back(name);
     }
     if (run.outputs.empty()) {
       fail("{}: no measured column to compare with the model (one of rpm, i, i_gen, v_gen, omega)", table.source);

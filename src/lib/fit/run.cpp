@@ -30,7 +30,8 @@ namespace {
 std::string num6(double x) { return fmt::format("{:.6g}", x); }
 
 std::string se_comment(double se, std::string_view unit) {
-  return std::isfinite(se) ? fmt::format("+- {} {}", num6(se), unit) : std::string("not determined by the data");
+  if (!std::isfinite(se)) return "not determined by the data";
+  return unit.empty() ? "+- " + num6(se) : fmt::format("+- {} {}", num6(se), unit);
 }
 
 std::vector<table::Table> read_all(const std::vector<std::string>& files) {
@@ -196,6 +197,12 @@ int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& e
   FitProblem problem;
   problem.model = base;
   problem.free = options.free.empty() ? k_default_free : options.free;
+  const auto infos = model::parameters(base);
+  for (const auto& name : problem.free) {
+    if (std::none_of(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; })) {
+      fail("unknown parameter '{}' (see mcg-fit model --list)", name);
+    }
+  }
   problem.sim.max_step_s = options.max_step_s;
   problem.nls.max_evaluations = options.max_evaluations;
 
