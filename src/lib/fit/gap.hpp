@@ -8,8 +8,11 @@
 //   param_mismatch  the nominal parameters refitted on the training runs through the scale
 //                   factors of the param_mismatch effect (Kt, J, Coulomb, static, viscous, R)
 //   EFFECT          the refitted model plus one catalog effect, its parameters started from
-//                   the best point of a coarse grid, then everything refitted jointly
+//                   the best point of a coarse grid (on the refit and on the model as
+//                   given), fitted alone, then refitted jointly with the nominal scales
 //   A+B             pairs of the strongest significant effects, refitted jointly
+// The refit is repeated from any effect fit's nominal scales that fit the training runs
+// better, so that an effect never wins merely by a better nominal start.
 // Each candidate is scored on the validation runs only, with the residual of every output
 // normalised by its noise floor:
 //   score = sum_outputs mean(r^2) / floor^2        (about 1 per output for a perfect model)
@@ -44,7 +47,6 @@ inline constexpr double k_gap_rel_threshold = 0.2;
 /// How the diagnosis runs.
 struct GapSettings {
   unsigned threads = 0;                ///< candidates fitted at once; 0 = all cores
-  double split_fraction = 0.6;         ///< training share when a single file is split
   std::size_t pair_effects = 3;        ///< pairs are formed among this many strongest effects
   int max_evaluations = 0;             ///< simulation budget per candidate fit; 0 = by size
   std::function<void(const std::string&)> progress;  ///< progress lines (none when empty)
