@@ -76,6 +76,17 @@ wait_bounded() {
   return 1
 }
 
+# wait_rows FILE N: waits up to 20 s until the CSV FILE has more than N data rows.
+wait_rows() {
+  local i
+  for i in $(seq 200); do
+    [ -s "$1" ] && [ "$(rows "$1")" -gt "$2" ] && return 0
+    sleep 0.1
+  done
+  echo "  $1 did not reach $2 rows"
+  return 1
+}
+
 # rows FILE: data rows of a CSV (lines after the header, metadata excluded).
 rows() { grep -v '^#' "$1" | tail -n +2 | grep -c .; }
 

@@ -66,16 +66,16 @@ check "the stream is off again" eval 'S get stream > "$work/v" && same "$work/v"
 # handler mcg-serial installs for the capture overrides that.)
 mcg-serial -p "$tty" stream > "$work/int.csv" 2> "$work/int.err" &
 spid=$!
-sleep 1.5
+wait_rows "$work/int.csv" 200
 kill -INT $spid
 check "SIGINT: stream ends within 5 s" wait_bounded $spid 5
 check "SIGINT ends stream with status 0" eval '[ "$status" = 0 ] || { cat "$work/int.err"; false; }'
 check "SIGINT: the rows captured are on stdout" eval '[ "$(rows "$work/int.csv")" -gt 200 ] && tail -c 1 "$work/int.csv" | od -c | grep -q "\\\\n"'
 
 # a second tool on the same port
-S stream --seconds 2 > /dev/null 2>&1 &
+S stream --seconds 3 > "$work/busy.csv" 2>&1 &
 spid=$!
-sleep 0.7
+wait_rows "$work/busy.csv" 0
 check "port busy while another mcg-serial has it" eval '! S get rpm 2> "$work/err" &&
   same "$work/err" "mcg-serial: error: $tty: port busy (another program has it open)"'
 wait $spid
@@ -109,7 +109,7 @@ fi
 S set clutch 1 > /dev/null
 S stream > "$work/gone.csv" 2> "$work/gone.err" &
 spid=$!
-sleep 1.2
+wait_rows "$work/gone.csv" 400
 kill "$board_pid"
 wait $spid
 status=$?
