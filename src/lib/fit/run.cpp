@@ -42,8 +42,17 @@ std::vector<table::Table> read_all(const std::vector<std::string>& files) {
 }
 
 void write_friction(config::Ini& ini, const std::string& section, const FrictionTerm& term, std::string_view origin) {
-  ini.set(section, "Ts_Nm", num6(term.value.Ts_Nm), se_comment(term.se.Ts_Nm, "N m, " + std::string(origin)));
-  ini.set(section, "Tc_Nm", num6(term.value.Tc_Nm), se_comment(term.se.Tc_Nm, "N m"));
+  // A friction level cannot be negative (the model rejects it); a negative difference of two
+  // totals is written as 0 and the estimate kept in the comment.
+  const auto level = [&](const char* key, double value, double se, const std::string& note) {
+    if (value >= 0.0) {
+      ini.set(section, key, num6(value), se_comment(se, "N m" + note));
+    } else {
+      ini.set(section, key, "0", fmt::format("estimate {} {} is below 0{}", num6(value), se_comment(se, "N m"), note));
+    }
+  };
+  level("Ts_Nm", term.value.Ts_Nm, term.se.Ts_Nm, ", " + std::string(origin));
+  level("Tc_Nm", term.value.Tc_Nm, term.se.Tc_Nm, "");
   static const char* const keys[3] = {"visc1_Nm_s_rad", "visc2_Nm_s2_rad2", "visc3_Nm_s3_rad3"};
   static const char* const units[3] = {"N m s/rad", "N m s^2/rad^2", "N m s^3/rad^3"};
   for (std::size_t c = 0; c < 3; ++c) {
