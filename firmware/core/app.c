@@ -89,7 +89,13 @@ uint8_t app_dump_start(void) {
 
 /* Sends the next chunks of the log while the transmit buffer has room for a whole one. */
 static void dump_pump(void) {
-  while (g_dump_next < MCG_LOG_DUMP_FRAMES && hal_uart_tx_free() >= MCG_FRAME_OVERHEAD + sizeof s_data) {
+  /* While streaming, leave room for a stream block and a short answer: the dump takes only the
+   * spare bytes of the line, and no block is dropped for it. */
+  MCG_SLOW uint8_t need = (uint8_t)(MCG_FRAME_OVERHEAD + sizeof s_data);
+  if (g_stream_on) {
+    need = (uint8_t)(need + MCG_FRAME_OVERHEAD + sizeof s_block + MCG_FRAME_OVERHEAD + 4u);
+  }
+  while (g_dump_next < MCG_LOG_DUMP_FRAMES && hal_uart_tx_free() >= need) {
     MCG_SLOW uint8_t first = (uint8_t)(g_dump_next * MCG_LOG_DUMP_CHUNK);
     MCG_SLOW uint8_t n = (uint8_t)(MCG_LOG_POINTS - first);
     MCG_SLOW uint8_t i;

@@ -197,6 +197,39 @@ TEST(FwStream, BlocksEveryThirtyTwoMillisecondsWithinTheBudget) {
   EXPECT_EQ(reads, seconds * 10);
 }
 
+// A log dump while the stream runs at 9600 baud: the dump takes the spare bytes, no block is lost.
+TEST(FwStream, DumpDuringStreamLosesNothing)
+{
+  Board b;
+  b.set_baud(9600);
+  b.set_pulses(5);
+  ASSERT_EQ(b.write(MCG_REG_LOG_INTERVAL, 1), MCG_ST_OK);
+  ASSERT_EQ(b.request(MCG_CMD_LOG_START)->payload.at(0), MCG_ST_OK);
+  b.run(300, 5);
+  ASSERT_EQ(b.write(MCG_REG_STREAM, 1), MCG_ST_OK);
+  b.run(100, 5);
+  ASSERT_TRUE(b.request(MCG_CMD_LOG_DUMP));
+  std::vector<Frame> frames = b.take_other();
+  const auto rest = b.run(8000, 5);
+  frames.insert(frames.end(), rest.begin(), rest.end());
+  int chunks = 0;
+  int last_seq = -1;
+  int gaps = 0;
+  for (const Frame& f : frames) {
+    if (f.cmd == MCG_MSG_LOG_DATA) {
+      ++chunks;
+    } else if (f.cmd == MCG_MSG_STREAM) {
+      if (last_seq >= 0 && f.payload[0] != ((last_seq + 1) & 0xFF)) {
+        ++gaps;
+      }
+      last_seq = f.payload[0];
+    }
+  }
+  EXPECT_EQ(chunks, static_cast<int>(MCG_LOG_DUMP_FRAMES));
+  EXPECT_EQ(gaps, 0);
+  EXPECT_EQ(b.read(MCG_REG_TX_DROPS), 0);
+}
+
 TEST(FwStream, LostBlocksShowAsSequenceGaps) {
   Board b;
   ASSERT_EQ(b.write(MCG_REG_STREAM, 1), MCG_ST_OK);
