@@ -119,6 +119,7 @@ void run_set(const LinkOptions& link, const std::string& name, const std::string
   const RegisterInfo& reg = require_register(name);
   if (!reg.writable) fail("set: {} is read-only", reg.name);
   const double v = parse_value(reg, value, "set");
+  if (reg.unit != Unit::Gain) to_raw(reg, v, 0);  // range check before touching the port
   auto c = connect(link);
   write_verified(*c, reg, v, "set", err);
 }
