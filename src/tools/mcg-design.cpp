@@ -24,6 +24,10 @@ void add_plant_options(CLI::App* sub, mcg::design::Options& o) {
   sub->add_option("--prewarp", o.prewarp_rad_s, "Tustin prewarp frequency, rad/s")->check(CLI::Range(1e-12, k_inf));
   sub->add_flag("--zoh", o.zoh, "sample the continuous plant through a zero-order hold at --dt");
   sub->add_flag("--loop", o.loop, "wrap the plant in the report's chain: PWM, H-bridge, encoder, counts per sample");
+  sub->add_flag("--rig", o.rig, "plant: the rig model of --config (or built in) linearised at an operating point");
+  sub->add_option("--clutch", o.clutch, "clutch state of --rig (2)")->check(CLI::IsMember({0, 1, 2}));
+  sub->add_option("--speed-rpm", o.speed_rpm, "operating speed of --rig, rpm")->check(CLI::Range(1e-9, k_inf));
+  sub->add_option("--r-load", o.r_load_ohm, "generator load of --rig, ohm (inf = open)")->check(CLI::Range(0.0, k_inf));
   sub->add_option("--pwm-full-counts", o.pwm_full_counts, "duty counts at 100 % (922)")->check(CLI::Range(1e-9, k_inf));
   sub->add_option("--pwm-logic-v", o.pwm_logic_v, "PWM output at 100 % duty, V (5)")->check(CLI::Range(1e-9, k_inf));
   sub->add_option("--hbridge-gain", o.hbridge_gain, "H-bridge gain, V/V (4)")->check(CLI::Range(1e-9, k_inf));

@@ -2,6 +2,8 @@
 // write INI or CSV.
 #include "design/run.hpp"
 
+#include "design/rig.hpp"
+
 #include "common/error.hpp"
 #include "config/ini.hpp"
 #include "linsys/parse.hpp"
@@ -118,6 +120,21 @@ Resolved resolve(const Options& o) {
     r.raw = tf_from_lists(parse_list(o.num, "--num"), parse_list(o.den, "--den"), "--den");
     r.raw_where = "--num/--den";
     if (o.domain == "z") domain = Domain::z;
+  } else if (o.rig || ini.get("plant", "model") == std::optional<std::string>("rig")) {
+    if (auto m = ini.get("plant", "model"); m && *m != "rig") ini.reject("plant", "model", "must be rig");
+    int clutch = o.clutch;
+    if (clutch < 0) {
+      const double c = ini.number("plant", "clutch").value_or(2.0);
+      if (c != 0.0 && c != 1.0 && c != 2.0) ini.reject("plant", "clutch", "must be 0, 1 or 2");
+      clutch = static_cast<int>(c);
+    }
+    const std::optional<double> rpm = flag(o.speed_rpm) ? flag(o.speed_rpm) : ini.number("plant", "speed_rpm");
+    if (!rpm) fail("--speed-rpm: required for the linearised rig (or speed_rpm in [plant])");
+    const double r_load = flag(o.r_load_ohm).value_or(ini.number("plant", "r_load_ohm").value_or(INFINITY));
+    r.raw = linearise_rig(model::from_ini(ini), clutch, *rpm * 2.0 * k_pi / 60.0, r_load);
+    r.raw_where = fmt::format("rig model linearised at clutch {}, {} rpm, r_load {} ohm", clutch,
+                              format_number(*rpm), format_number(r_load));
+    domain = Domain::s;
   } else if (auto text = ini.get("plant", "tf")) {
     r.raw_where = origin_of(ini, "plant", "tf");
     const linsys::ParsedTf p = linsys::parse_tf(*text, r.raw_where);

@@ -28,6 +28,12 @@ struct Options {
   bool zoh = false;   ///< sample the continuous plant through a zero-order hold at dt
   bool loop = false;  ///< wrap the plant in the chain of the report's Figure 17-1
 
+  // The rig model (model INI sections of --config) linearised at an operating point.
+  bool rig = false;
+  int clutch = -1;          ///< 0, 1, 2; -1: [plant] clutch or 2
+  double speed_rpm = NAN;
+  double r_load_ohm = NAN;  ///< NaN: [plant] r_load_ohm or open (inf)
+
   // The chain (PWM, H-bridge, encoder, software conversion).
   double pwm_full_counts = NAN;
   double pwm_logic_v = NAN;
