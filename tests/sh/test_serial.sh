@@ -11,6 +11,9 @@ tty=$work/ttyMCG
 start_board "$tty" || exit 1
 S() { timeout 30 mcg-serial -p "$tty" "$@"; }
 
+check "list: one port per line, path and description" eval 'timeout 30 mcg-serial list > "$work/ports" &&
+  ! grep -v "^/dev/[^	]*	" "$work/ports"'
+
 # get / set / read-back
 check "get prints the default speed command" eval 'S get rpm_cmd > "$work/out" && same "$work/out" 420'
 check "set then get" eval 'S set rpm_cmd 500 && S get rpm_cmd > "$work/out" && same "$work/out" 500'
