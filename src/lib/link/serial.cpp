@@ -7,7 +7,6 @@
 #include <chrono>
 #include <cmath>
 #include <ostream>
-#include <thread>
 
 #include <fmt/format.h>
 

@@ -1,8 +1,6 @@
 // mcg-serial stream: live stream blocks to CSV, with loss accounting.
 #include <chrono>
 #include <cmath>
-#include <deque>
-#include <limits>
 #include <ostream>
 
 #include <fmt/format.h>
