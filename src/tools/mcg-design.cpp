@@ -119,7 +119,9 @@ int main(int argc, char** argv) {
   add_plant_options(loop, o);
 
   return mcg::tool_main(app, argc, argv, [&] {
-    o.command = app.get_subcommands().front()->get_name();
+    const CLI::App* sub = app.get_subcommands().front();
+    o.command = sub->get_name();
+    o.plant_given = sub->count("--plant") > 0;
     mcg::design::run(o, std::cout);
   });
 }

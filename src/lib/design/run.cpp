@@ -108,7 +108,7 @@ Resolved resolve(const Options& o) {
   const Ini& ini = r.ini;
   bool builtin = false;
   std::optional<Domain> domain;
-  if (!o.plant.empty()) {
+  if (!o.plant.empty() || o.plant_given) {
     if (!o.num.empty() || !o.den.empty()) fail("--plant: give either --plant or --num/--den, not both");
     const linsys::ParsedTf p = linsys::parse_tf(o.plant, "--plant");
     r.raw = p.tf;

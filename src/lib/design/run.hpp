@@ -18,6 +18,7 @@ struct Options {
 
   // The plant: text, coefficient lists, or the INI's [plant]; the report's loop by default.
   std::string plant;
+  bool plant_given = false;  ///< --plant was on the command line (even if empty)
   std::string num;
   std::string den;
   std::string domain;  ///< for --num/--den: "s" (default) or "z"
