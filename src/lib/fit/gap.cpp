@@ -431,6 +431,16 @@ std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& 
       if (k >= jobs.size()) return;
       try {
         out[k] = run_job(jobs[k], data, floors, settings, jac_threads, cogging_n);
+      } catch (const Error& e) {
+        // A candidate the data cannot fit is reported as such; the others go on.
+        GapCandidate& c = out[k];
+        c.name = jobs[k].name;
+        c.effects = jobs[k].effects;
+        c.model = jobs[k].start;
+        c.status = fmt::format("fit failed: {}", e.what());
+        c.score = k_nan;
+        c.rms.assign(floors.size(), k_nan);
+        c.train_rms_rpm = k_nan;
       } catch (...) {
         std::lock_guard lock(mutex);
         if (!error) error = std::current_exception();
@@ -691,7 +701,8 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   const auto n_val = static_cast<double>(report.validation_samples * outputs);
   auto fpe = [&](double score, std::size_t k) {
     const auto kk = static_cast<double>(k);
-    return kk < n_val ? score * (n_val + kk) / (n_val - kk) : std::numeric_limits<double>::infinity();
+    return std::isfinite(score) && kk < n_val ? score * (n_val + kk) / (n_val - kk)
+                                             : std::numeric_limits<double>::infinity();
   };
 
   // Before: the model as given.
@@ -756,6 +767,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
     const double pm_cost = training_cost(pm.model, data.train);
     double best = pm_cost;
     for (const auto& c : singles) {
+      if (!c.evaluated) continue;
       model::Model trial = pm.model;
       *std::find_if(trial.effects.begin(), trial.effects.end(), [](const auto& e) { return e.name == "param_mismatch"; }) =
           *c.model.effect("param_mismatch");
@@ -771,7 +783,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
       Job again{"param_mismatch", {}, start, mismatch_free(), {}, 10, {}, {}};
       GapCandidate refit = std::move(run_jobs({again}, data, report.floors, settings, threads, {}, done, total).front());
       refit.fpe = fpe(refit.score, refit.free.size());
-      if (training_cost(refit.model, data.train) < pm_cost) pm = std::move(refit);
+      if (refit.evaluated && training_cost(refit.model, data.train) < pm_cost) pm = std::move(refit);
     }
   }
   const double ref_score = std::min(before.score, pm.score);
