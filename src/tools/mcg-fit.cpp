@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.002, 100.0))
       ->capture_default_str();
   fr->add_flag("!--no-current", friction.fit.use_current, "ignore a measured current (use the voltage balance)");
+  fr->add_flag("!--no-static", friction.fit.static_friction, "runs never rest: no static level (Ts written = Tc)");
   fr->add_option("files", friction.files, "runs with t, v, clutch, r_load, rpm [, i] ('-' = stdin)")->required();
 
   mcg::fit::TfRunOptions tf;

@@ -119,6 +119,32 @@ TEST_F(FitFriction, VoltageBalanceAndGeneratorLoad) {
   EXPECT_EQ(result.params.clutch_disengaged.Ts_Nm, rig.params.clutch_disengaged.Ts_Nm);
 }
 
+// A run that never rests (it starts moving at once and stays above 4 V): no static level
+// unless asked to do without; then Coulomb and viscous terms still come back.
+TEST(FitFrictionNoStatic, RunThatNeverRests) {
+  Program p;
+  for (double v = 4.0; v <= 14.0; v += 1.0) p.hold(v, 0.6, 0);
+  const std::vector<table::Table> runs{measure(model::Model{}, p.inputs, 9)};
+  try {
+    fit_friction(runs, model::builtin_rig());
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "clutch state 0: no start from rest: static friction cannot be estimated (--no-static skips it)");
+  }
+  FrictionOptions options;
+  options.static_friction = false;
+  options.order = 2;
+  const auto result = fit_friction(runs, model::builtin_rig(), options);
+  ASSERT_TRUE(result.motor.has_value());
+  const auto& m = model::builtin_rig().motor.friction;
+  EXPECT_EQ(result.motor->value.Ts_Nm, result.motor->value.Tc_Nm);
+  EXPECT_EQ(result.states[0].breakaways, 0U);
+  // A quadratic over 60..230 rad/s stands in for the cubic: the curve matches within 2 %.
+  for (double w = 70.0; w <= 220.0; w += 50.0) {
+    EXPECT_NEAR(result.motor->value.kinetic_Nm(w), m.kinetic_Nm(w), 0.02 * m.kinetic_Nm(w)) << w;
+  }
+}
+
 std::string error_of(const std::vector<table::Table>& runs, const FrictionOptions& options = {}) {
   try {
     fit_friction(runs, model::builtin_rig(), options);

@@ -191,7 +191,9 @@ StateFriction estimate(int clutch, const StateData& data, const FrictionOptions&
     fail("clutch state {}: no quasi-steady stretch while moving (runs too fast for the {} s settling time?)", clutch,
          options.settle_s);
   }
-  if (data.breakaways.empty()) fail("clutch state {}: no start from rest: static friction cannot be estimated", clutch);
+  if (data.breakaways.empty() && options.static_friction) {
+    fail("clutch state {}: no start from rest: static friction cannot be estimated (--no-static skips it)", clutch);
+  }
 
   std::vector<double> speeds;
   for (const auto& w : data.windows) speeds.push_back(std::abs(w.omega_rad_s));
@@ -231,19 +233,24 @@ StateFriction estimate(int clutch, const StateData& data, const FrictionOptions&
     out.total.se.viscous[static_cast<std::size_t>(c - 1)] = se[c];
   }
 
-  double sum = 0.0;
-  double width2 = 0.0;
-  for (const auto& e : data.breakaways) {
-    sum += 0.5 * (e.lower_Nm + e.upper_Nm);
-    width2 += (e.upper_Nm - e.lower_Nm) * (e.upper_Nm - e.lower_Nm);
+  if (!options.static_friction) {
+    out.total.value.Ts_Nm = out.total.value.Tc_Nm;
+    out.total.se.Ts_Nm = out.total.se.Tc_Nm;
+  } else {
+    double sum = 0.0;
+    double width2 = 0.0;
+    for (const auto& e : data.breakaways) {
+      sum += 0.5 * (e.lower_Nm + e.upper_Nm);
+      width2 += (e.upper_Nm - e.lower_Nm) * (e.upper_Nm - e.lower_Nm);
+    }
+    const auto count = static_cast<double>(data.breakaways.size());
+    const double mean = sum / count;
+    double spread2 = 0.0;
+    for (const auto& e : data.breakaways) spread2 += std::pow(0.5 * (e.lower_Nm + e.upper_Nm) - mean, 2);
+    const double var_mean = count > 1 ? spread2 / (count - 1.0) / count : 0.0;
+    out.total.value.Ts_Nm = mean;
+    out.total.se.Ts_Nm = std::sqrt(var_mean + width2 / count / 12.0);
   }
-  const auto count = static_cast<double>(data.breakaways.size());
-  const double mean = sum / count;
-  double spread2 = 0.0;
-  for (const auto& e : data.breakaways) spread2 += std::pow(0.5 * (e.lower_Nm + e.upper_Nm) - mean, 2);
-  const double var_mean = count > 1 ? spread2 / (count - 1.0) / count : 0.0;
-  out.total.value.Ts_Nm = mean;
-  out.total.se.Ts_Nm = std::sqrt(var_mean + width2 / count / 12.0);
   out.windows = data.windows.size();
   out.breakaways = data.breakaways.size();
   return out;

@@ -25,6 +25,9 @@ struct FrictionOptions {
   double window_s = 0.1;
   /// Use the measured current `i` where the run has it (else the voltage balance).
   bool use_current = true;
+  /// Estimate the static level from starts from rest. Off for runs that never rest (a
+  /// closed loop that keeps the shaft moving): then Ts is reported equal to Tc.
+  bool static_friction = true;
 };
 
 /// A friction element and the standard errors of its values (same layout).
