@@ -365,6 +365,16 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   c.name = job.name;
   c.effects = job.effects;
   model::Model start = job.start;
+  if (job.grid_effects.empty() && !job.other_starts.empty()) {
+    double best = training_cost(start, data.train);
+    for (const model::Model& other : job.other_starts) {
+      const double cost = training_cost(other, data.train);
+      if (cost < best) {
+        best = cost;
+        start = other;
+      }
+    }
+  }
   for (const auto& e : job.grid_effects) {
     if (const EffectPlan* plan = find_plan(e)) {
       std::vector<model::Model> bases{start};
@@ -807,8 +817,15 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
       // Named in catalog order, so that a pair reads the same whichever single fitted better.
       const bool in_order = find_plan(first.name) < find_plan(second.name);
       const std::string name = in_order ? first.name + "+" + second.name : second.name + "+" + first.name;
-      Job job{name, {first.name, second.name}, first.model, first.free, {}, 10, {}, {}};
+      // Started from the better single's model with the other effect added, or from the
+      // model as given with both effects at their single-fit values.
+      Job job{name, {first.name, second.name}, first.model, first.free, {}, 10, {}, {base}};
       job.start.effects.push_back(*second.model.effect(second.name));
+      job.other_starts.front().effects.push_back(*first.model.effect(first.name));
+      job.other_starts.front().effects.push_back(*second.model.effect(second.name));
+      for (const GapCandidate* single : {&first, &second}) {
+        for (const auto& key : find_plan(single->name)->free) job.stage1_free.push_back(single->name + "." + key);
+      }
       for (const auto& key : find_plan(second.name)->free) job.free.push_back(second.name + "." + key);
       pair_jobs.push_back(std::move(job));
     }
