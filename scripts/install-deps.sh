@@ -6,7 +6,7 @@ packages=(
   libcli11-dev libfmt-dev libeigen3-dev libserialport-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   sdcc sdcc-ucsim
-  gnuplot-nox mandoc groff-base socat
+  gnuplot-nox mandoc groff-base socat parallel
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Runs the lab pipelines of scripts/lab/ on data made here: identification of a folder of runs
+# with GNU parallel (local cores), the Slurm array's merge step, and design-and-verify.
+# Usage: test_lab_scripts.sh TOOL_DIR SOURCE_DIR
+set -u
+tool_dir=$1
+src=$2
+export PATH="$tool_dir:$PATH" LC_ALL=C
+command -v parallel >/dev/null || { echo "GNU parallel missing: skipped"; exit 125; }
+command -v gnuplot >/dev/null || { echo "gnuplot missing: skipped"; exit 125; }
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+passed=0
+failed=0
+check() {
+  if eval "$2"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "FAIL: $1"; fi
+}
+
+# Three measured-style runs of the built-in rig, inertia changed in one of them.
+mkdir -p "$work/runs"
+mcg-sweep prbs --bias 6 --amp 3 --clock 0.05 --duration 3 --clutch 2 --seed 1 \
+  | mcg-sim --encoder --seed 1 > "$work/runs/a.csv"
+mcg-sweep prbs --bias 5 --amp 3 --clock 0.05 --duration 3 --clutch 2 --seed 2 \
+  | mcg-sim --encoder --seed 2 > "$work/runs/b.csv"
+printf '[motor]\nJ_kg_m2 = 9e-6\n' > "$work/heavy.ini"
+mcg-sweep prbs --bias 6 --amp 2 --clock 0.05 --duration 3 --clutch 2 --seed 3 \
+  | mcg-sim --encoder --seed 3 --config "$work/heavy.ini" > "$work/runs/c.csv"
+
+"$src/scripts/lab/identify.sh" --jobs 2 --free motor.J_kg_m2,motor.Tc_Nm "$work/runs" > "$work/fits.csv" 2> "$work/fits.err"
+check "identify.sh exits 0" '[ $? = 0 ]'
+check "identify.sh writes one row per file" '[ "$(grep -vc "^#" "$work/fits.csv")" = 4 ]'
+check "identify.sh names the files in order" 'grep -q "^# file.3: .*c.csv$" "$work/fits.csv"'
+check "every fit converged" '[ "$(awk -F, "!/^#/ && NR > 1 && \$(NF-1) != 1" "$work/fits.csv" | grep -vc "^file")" = 0 ]'
+j3=$(awk -F, '!/^#/ { if (!h) { for (k = 1; k <= NF; k++) if ($k == "motor.J_kg_m2") c = k; h = 1; next } if ($1 == 3) print $c }' "$work/fits.csv")
+check "the heavy run's inertia comes back (9e-6 +-10 %, got $j3)" 'awk -v j="$j3" "BEGIN { exit !(j > 8.1e-6 && j < 9.9e-6) }"'
+
+# The Slurm array's per-task rows, merged.
+ls "$work"/runs/*.csv | LC_ALL=C sort > "$work/runs.list"
+mkdir -p "$work/array"
+for id in 1 2 3; do
+  SLURM_ARRAY_TASK_ID=$id bash "$src/scripts/lab/identify.sbatch" "$work/runs.list" "$work/array"
+done
+"$src/scripts/lab/merge-rows.sh" "$work/runs.list" "$work/array" > "$work/merged.csv"
+check "merge-rows.sh merges the array's rows" '[ "$(grep -vc "^#" "$work/merged.csv")" = 4 ]'
+
+# Design a PI for 50 degrees on the report's plant and verify it on the nonlinear model.
+"$src/scripts/lab/design-verify.sh" '16.557/((s/65+1)*(s/950+1))' 50 "$work/design" > "$work/design.out" 2>&1
+check "design-verify.sh exits 0" '[ $? = 0 ]'
+check "design-verify.sh writes the controller" 'grep -q "^\[controller\]" "$work/design/pi.ini"'
+check "design-verify.sh plots the step" '[ "$(head -c 4 "$work/design/verify.png" | od -An -c | tr -d " ")" = "211PNG" ]'
+check "the verified loop reaches 520 rpm" 'awk -F, "!/^#/ { if (!h) { for (k = 1; k <= NF; k++) if (\$k == \"rpm_true\" || \$k == \"rpm\") c = k; h = 1; next } last = \$c } END { exit !(last > 500 && last < 540) }" "$work/design/verify.csv"'
+
+echo "lab scripts: $passed passed, $failed failed"
+[ "$failed" = 0 ]
