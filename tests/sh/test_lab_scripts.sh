@@ -50,5 +50,18 @@ check "design-verify.sh writes the controller" 'grep -q "^\[controller\]" "$work
 check "design-verify.sh plots the step" '[ "$(head -c 4 "$work/design/verify.png" | od -An -c | tr -d " ")" = "211PNG" ]'
 check "the verified loop reaches 520 rpm" 'awk -F, "!/^#/ { if (!h) { for (k = 1; k <= NF; k++) if (\$k == \"rpm_true\" || \$k == \"rpm\") c = k; h = 1; next } last = \$c } END { exit !(last > 500 && last < 540) }" "$work/design/verify.csv"'
 
+# Capture from the emulated board under the designed PI and compare with the model.
+tty="$work/ttyMCG"
+timeout 60 mcg-sim --board "$tty" > "$work/board.log" 2>&1 &
+board=$!
+for _ in $(seq 50); do [ -e "$tty" ] && break; sleep 0.1; done
+timeout 40 "$src/scripts/lab/capture-compare.sh" "$tty" "$work/design/pi.ini" "$work/cc" > "$work/cc.out" 2>&1
+check "capture-compare.sh exits 0" '[ $? = 0 ]'
+kill "$board" 2>/dev/null
+wait "$board" 2>/dev/null
+rms=$(sed -n 's/.*rpm RMS difference \([0-9.]*\) rpm.*/\1/p' "$work/cc.out")
+check "board and model agree within 40 rpm RMS (got ${rms:-nothing})" 'awk -v r="${rms:-999}" "BEGIN { exit !(r < 40) }"'
+check "capture-compare.sh captured the step to 520 rpm" 'awk -F, "!/^#/ && \$2 > 500 { n++ } END { exit !(n > 100) }" "$work/cc/measured.csv"'
+
 echo "lab scripts: $passed passed, $failed failed"
 [ "$failed" = 0 ]
