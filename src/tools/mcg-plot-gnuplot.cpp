@@ -10,10 +10,18 @@ int main(int argc, char** argv) {
                "mcg-plot-gnuplot"};
   mcg::plot::Options o;
   app.add_option("files", o.files, "tables to plot (default stdin; later ones are overlaid)");
-  app.add_option("--overlay", o.overlays, "table drawn dashed over the first (e.g. simulated over measured)");
+  app.add_option("--overlay", o.overlays, "table drawn dashed over the first (e.g. simulated over measured)")
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   app.add_option("-x,--x", o.x, "column on the horizontal axis")->capture_default_str();
-  app.add_option("-y,--y", o.y, "columns on the left axis (default: all but x)")->delimiter(',');
-  app.add_option("--y2", o.y2, "columns on the right axis")->delimiter(',');
+  app.add_option("-y,--y", o.y, "columns on the left axis, e.g. rpm,rpm_cmd (default: all but x)")
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  app.add_option("--y2", o.y2, "columns on the right axis, e.g. i")
+      ->delimiter(',')
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   auto* bode = app.add_flag("--bode", o.bode, "magnitude and phase panels from f_hz,mag_db,phase_deg (log f)");
   auto* xy = app.add_flag("--xy", o.xy, "points of y against x (e.g. -x v -y i), in any order");
   app.add_flag("--steps", o.steps, "draw samples as held until the next (zero-order hold)");

@@ -134,16 +134,19 @@ std::string style_of(const Spec& spec) {
   return spec.steps ? "steps" : "lines";
 }
 
+std::string dashes(std::size_t block) { return block > 1 ? fmt::format(" dashtype {}", block) : ""; }
+
 // Legend entry of column `name` from input `index` (file label only when overlaying).
 std::string legend(const std::string& name, const std::vector<Input>& inputs, std::size_t index) {
   if (inputs.size() == 1) return quote(name);
   return quote(fmt::format("{} ({})", name, inputs[index].label));
 }
 
-std::string curve(std::size_t block, std::size_t column, std::size_t color, bool overlay, bool y2,
-                  const std::string& style, const std::string& title) {
+// Curve of data block `block` (1 = the first table, solid; each overlay its own dash pattern).
+std::string curve(std::size_t block, std::size_t column, std::size_t color, bool y2, const std::string& style,
+                  const std::string& title) {
   return fmt::format("$data{} using 1:{}{} with {} linecolor {}{} title {}", block, column,
-                     y2 ? " axes x1y2" : "", style, color, overlay ? " dashtype 2" : "", title);
+                     y2 ? " axes x1y2" : "", style, color, dashes(block), title);
 }
 
 }  // namespace
@@ -213,7 +216,7 @@ std::string build_script(const Spec& spec, const std::vector<Input>& inputs) {
         if (i > 0) plot += ", \\\n     ";
         const std::string title_text = inputs.size() == 1 ? "notitle" : "title " + quote(inputs[i].label);
         plot += fmt::format("$data{} using 1:{} with lines linecolor {}{} {}", i + 1, panel + 2, i + 1,
-                            i > 0 ? " dashtype 2" : "", title_text);
+                            dashes(i + 1), title_text);
       }
       out += plot + "\n";
     }
@@ -235,7 +238,7 @@ std::string build_script(const Spec& spec, const std::vector<Input>& inputs) {
       for (std::size_t j = 0; j < all.size(); ++j) {
         if (!first) plot += ", \\\n     ";
         first = false;
-        plot += curve(i + 1, j + 2, j + 1, i > 0, j >= s.y.size(), style, legend(all[j], inputs, i));
+        plot += curve(i + 1, j + 2, j + 1, j >= s.y.size(), style, legend(all[j], inputs, i));
       }
     }
     out += plot + "\n";
