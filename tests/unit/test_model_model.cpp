@@ -123,5 +123,31 @@ TEST(ModelPhysics, BodyStaysAtRestBelowBreakaway) {
   EXPECT_GT(above.omega_rad_s.back(), 1.0);
 }
 
+TEST(ModelInputs, ValidationNamesTheLineAndColumn) {
+  Inputs in = step_inputs(1.0, 0.003, 1e-3, 2, k_open_circuit);
+  auto message = [](const Inputs& bad) {
+    try {
+      validate_inputs(bad, "run.csv", 10);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(message(in), "");
+  Inputs t = in;
+  t.t_s[2] = t.t_s[1];
+  EXPECT_EQ(message(t), "run.csv:12: column 't': 0.001 does not increase (previous row: 0.001)");
+  Inputs v = in;
+  v.v_V[1] = std::nan("");
+  EXPECT_EQ(message(v), "run.csv:11: column 'v': an unmeasured value (nan or empty) is not allowed here");
+  Inputs c = in;
+  c.clutch[3] = 1.5;
+  EXPECT_EQ(message(c), "run.csv:13: column 'clutch': 1.5 is not a clutch state (0, 1 or 2)");
+  Inputs r = in;
+  r.r_load_ohm[0] = -5.6;
+  EXPECT_EQ(message(r), "run.csv:10: column 'r_load': -5.6 is not a load (>= 0 ohm, inf = open circuit)");
+  EXPECT_EQ(message(Inputs{}), "run.csv: no data rows");
+}
+
 }  // namespace
 }  // namespace mcg::model

@@ -4,6 +4,7 @@
 #include <numbers>
 
 #include "common/error.hpp"
+#include "config/ini.hpp"
 #include "model/model.hpp"
 
 namespace mcg::model {
@@ -44,20 +45,25 @@ Outputs simulate(const Model& model, const Inputs& in, const SimOptions& options
 
 void validate_inputs(const Inputs& in, std::string_view source, std::size_t first_line) {
   const std::size_t n = in.t_s.size();
-  if (n == 0) fail("{}: no rows", source);
+  if (n == 0) fail("{}: no data rows", source);
+  const auto not_finite = [](double x) {
+    return std::isnan(x) ? "an unmeasured value (nan or empty) is not allowed here" : "an infinite value is not allowed here";
+  };
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t line = first_line + k;
-    if (!std::isfinite(in.t_s[k])) fail("{}:{}: column 't': not a finite time", source, line);
+    if (!std::isfinite(in.t_s[k])) fail("{}:{}: column 't': {}", source, line, not_finite(in.t_s[k]));
     if (k > 0 && !(in.t_s[k] > in.t_s[k - 1])) {
-      fail("{}:{}: column 't': time does not increase ({} after {})", source, line, in.t_s[k], in.t_s[k - 1]);
+      fail("{}:{}: column 't': {} does not increase (previous row: {})", source, line,
+           config::format_number(in.t_s[k]), config::format_number(in.t_s[k - 1]));
     }
-    if (!std::isfinite(in.v_V[k])) fail("{}:{}: column 'v': not a finite voltage", source, line);
+    if (!std::isfinite(in.v_V[k])) fail("{}:{}: column 'v': {}", source, line, not_finite(in.v_V[k]));
     const double c = in.clutch[k];
     if (!(c == 0.0 || c == 1.0 || c == 2.0)) {
-      fail("{}:{}: column 'clutch': {} is not a clutch state (0, 1 or 2)", source, line, c);
+      fail("{}:{}: column 'clutch': {} is not a clutch state (0, 1 or 2)", source, line, config::format_number(c));
     }
     if (std::isnan(in.r_load_ohm[k]) || in.r_load_ohm[k] < 0.0) {
-      fail("{}:{}: column 'r_load': {} is not a load (>= 0 ohm, inf = open)", source, line, in.r_load_ohm[k]);
+      fail("{}:{}: column 'r_load': {} is not a load (>= 0 ohm, inf = open circuit)", source, line,
+           config::format_number(in.r_load_ohm[k]));
     }
   }
 }
