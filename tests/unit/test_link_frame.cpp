@@ -106,6 +106,18 @@ TEST(LinkFrame, SilenceInsideAFrameDropsIt) {
   EXPECT_EQ(out[0].cmd, 0x84);
 }
 
+TEST(LinkFrame, LateReadIsNotASilence) {
+  // The host was busy for 200 ms; the rest of the frame waited in the port's buffer. Only a
+  // wait that brought nothing (poll) counts as a silence on the line.
+  Decoder d(0.02);
+  std::vector<Frame> out;
+  const Bytes wire = encode(0x81, Bytes{0, 1, 0, 1, 0, 2});
+  d.feed(Bytes(wire.begin(), wire.begin() + 4), 0.000, out);
+  d.feed(Bytes(wire.begin() + 4, wire.end()), 0.200, out);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(d.stats().timeouts, 0u);
+}
+
 TEST(LinkFrame, EveryIntactFrameSurvivesRandomDamage) {
   std::mt19937_64 rng(20240611);
   std::uniform_int_distribution<int> byte(0, 255);

@@ -32,7 +32,6 @@ void Decoder::drop_front(std::size_t count) {
 }
 
 void Decoder::feed(std::span<const std::uint8_t> bytes, double now_s, std::vector<Frame>& out) {
-  poll(now_s, out);
   if (bytes.empty()) return;
   m_buf.insert(m_buf.end(), bytes.begin(), bytes.end());
   m_last_byte_s = now_s;

@@ -46,10 +46,11 @@ class Decoder {
   explicit Decoder(double frame_timeout_s = MCG_FRAME_TIMEOUT_MS * 1e-3) : m_timeout_s(frame_timeout_s) {}
 
   /// Feeds bytes that arrived at `now_s` (any monotonic clock, seconds); appends every
-  /// complete, CRC-checked frame to `out`.
+  /// complete, CRC-checked frame to `out`. Never drops a partial frame for lateness: bytes
+  /// that waited in the port's buffer while the host was busy are not a silence on the line.
   void feed(std::span<const std::uint8_t> bytes, double now_s, std::vector<Frame>& out);
-  /// Applies the inter-byte timeout at `now_s` when no bytes came; appends frames found by
-  /// rescanning a dropped partial frame to `out`.
+  /// Call after a wait on the line that brought nothing: applies the inter-byte timeout at
+  /// `now_s`; appends frames found by rescanning a dropped partial frame to `out`.
   void poll(double now_s, std::vector<Frame>& out);
   /// True while a partial frame is buffered.
   bool pending() const { return !m_buf.empty(); }

@@ -45,7 +45,11 @@ void Session::pump(double timeout_s) {
   std::uint8_t buf[512];
   const std::size_t n = m_port.read_some(buf, timeout_s);
   std::vector<Frame> frames;
-  m_decoder.feed(std::span<const std::uint8_t>(buf, n), now_s(), frames);
+  if (n == 0) {
+    m_decoder.poll(now_s(), frames);  // a real silence: the wait brought nothing
+  } else {
+    m_decoder.feed(std::span<const std::uint8_t>(buf, n), now_s(), frames);
+  }
   for (auto& f : frames) m_frames.push_back(std::move(f));
 }
 
