@@ -53,7 +53,10 @@ class Child {
     int out[2] = {-1, -1};
     if (::pipe2(in, O_CLOEXEC) != 0) fail("cannot create a pipe: {}", std::strerror(errno));
     if (capture_stdout && ::pipe2(out, O_CLOEXEC) != 0) {
-      fail("cannot create a pipe: {}", std::strerror(errno));
+      const int error = errno;
+      ::close(in[0]);
+      ::close(in[1]);
+      fail("cannot create a pipe: {}", std::strerror(error));
     }
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
