@@ -971,16 +971,17 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
   }
   out << "# validation_samples: " << report.validation_samples << "\n";
   out << "effect,rms_before_rpm,rms_after_rpm,shrink_pct,gap_before_rpm,gap_after_rpm,gap_shrink_pct,"
-         "rms_before_i_A,rms_after_i_A,score,fpe,n_params,n_added,params,significant,status\n";
+         "rms_before_i_A,rms_after_i_A,train_rms_rpm,score,fpe,n_params,n_added,params,significant,status\n";
   for (const auto& c : report.candidates) {
     const double after_rpm = at_or_nan(c.rms, s.rpm);
     const double gap_before = above_noise(before_rpm, s.floor_rpm);
     const double gap_after = above_noise(after_rpm, s.floor_rpm);
     const double shrink = 100.0 * (before_rpm - after_rpm) / before_rpm;
     const double gap_shrink = gap_before > 0.0 ? 100.0 * (gap_before - gap_after) / gap_before : k_nan;
-    out << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", c.name, number(before_rpm, 6),
+    out << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", c.name, number(before_rpm, 6),
                        number(after_rpm, 6), number(shrink, 4), number(gap_before, 6), number(gap_after, 6),
                        number(gap_shrink, 4), number(before_i, 6), number(at_or_nan(c.rms, s.i), 6),
+                       number(c.train_rms_rpm, 6),
                        number(c.score, 6), number(c.fpe, 6), c.free.size(), c.added_parameters, params_text(c),
                        c.significant ? 1 : 0, c.status);
   }
