@@ -66,6 +66,8 @@ TEST(DesignReport, PiWithZeroAt500For50Degrees) {
   EXPECT_NEAR(param(d, "ki"), 4666.587, 1e-3);
   EXPECT_NEAR(param(d, "ki") / param(d, "kp"), 500.0, 1e-9);
   EXPECT_NEAR(d.wc_rad_s, 51.7509, 1e-3);
+  // D/A cost ω_s/ω_c = 2π·1000/51.751 = 121.41 (report: 121.4).
+  EXPECT_NEAR(2.0 * k_pi * 1000.0 / d.wc_rad_s, 121.412, 1e-3);
   const linsys::Margins m = linsys::margins(linsys::series(tf("4658*(s/500+1)/s"), su.plant));
   EXPECT_NEAR(m.pm_deg, 50.0358, 1e-3);
   EXPECT_NEAR(m.pm_omega_rad_s, 51.6839, 1e-3);
