@@ -30,26 +30,13 @@ trap 'rm -rf "$rows"' EXIT
 remote=()
 [ -n "$sshlogin" ] && remote=(--sshlogin "$sshlogin" --transferfile {} --cleanup)
 [ "$jobs" = 0 ] && jobs=100%
-status=0
-# Each job is one single-threaded fit writing a one-row table; --keep-order is not needed since
-# the rows are merged by index below.
+# Each job is one single-threaded fit writing a one-row table DIR/K.csv and its status DIR/K.rc,
+# the layout of the Slurm array, so the same merge-rows.sh joins them in file order.
+printf '%s\n' "${files[@]}" > "$rows/list"
 printf '%s\n' "${files[@]}" | parallel --will-cite --jobs "$jobs" "${remote[@]}" --halt never \
   "mcg-fit model --batch --threads 1 ${fit_args[*]} {} > $rows/{#}.csv 2> $rows/{#}.err; echo \$? > $rows/{#}.rc" || true
-first=1
 for k in $(seq 1 ${#files[@]}); do
-  f=${files[$((k - 1))]}
-  rc=$(cat "$rows/$k.rc" 2>/dev/null || echo 1)
-  if [ "$rc" != 0 ]; then
-    status=1
-    sed "s|^|identify.sh: $f: |" "$rows/$k.err" >&2
-  fi
-  [ -s "$rows/$k.csv" ] || { echo "identify.sh: error: $f: no result" >&2; status=1; continue; }
-  if [ $first = 1 ]; then
-    echo "# source: scripts/lab/identify.sh (GNU parallel, mcg-fit model --batch per file)"
-    for j in $(seq 1 ${#files[@]}); do echo "# file.$j: ${files[$((j - 1))]}"; done
-    grep -v '^#' "$rows/$k.csv" | head -1
-    first=0
-  fi
-  grep -v '^#' "$rows/$k.csv" | tail -n +2 | sed "s/^1,/$k,/"
+  [ -s "$rows/$k.err" ] && sed "s|^|identify.sh: ${files[$((k - 1))]}: |" "$rows/$k.err" >&2
 done
-exit $status
+MERGE_SOURCE="scripts/lab/identify.sh (GNU parallel, mcg-fit model --batch per file)" \
+  "$(dirname "$0")/merge-rows.sh" "$rows/list" "$rows"

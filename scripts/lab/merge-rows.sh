@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Merges the one-row tables of a Slurm identification array (identify.sbatch) into one table,
+# Merges the one-row tables of an identification array (identify.sbatch, identify.sh) into one table,
 # rows in list order; reports files whose fit failed and exits non-zero if any did.
 # Usage: merge-rows.sh LIST DIR > fits.csv
 set -euo pipefail
@@ -13,7 +13,7 @@ for k in $(seq 1 ${#files[@]}); do
   [ "$rc" = 0 ] || { echo "merge-rows.sh: ${files[$((k - 1))]}: fit status $rc" >&2; status=1; }
   [ -s "$dir/$k.csv" ] || continue
   if [ $first = 1 ]; then
-    echo "# source: scripts/lab/merge-rows.sh (Slurm array of mcg-fit model --batch)"
+    echo "# source: ${MERGE_SOURCE:-scripts/lab/merge-rows.sh (Slurm array of mcg-fit model --batch)}"
     for j in $(seq 1 ${#files[@]}); do echo "# file.$j: ${files[$((j - 1))]}"; done
     grep -v '^#' "$dir/$k.csv" | head -1
     first=0
