@@ -202,7 +202,7 @@ std::string build_script(const Spec& spec, const std::vector<Input>& inputs) {
   const auto title = title_of(spec, inputs);
   const std::string style = style_of(spec);
   out += "set grid\n";
-  out += "set key top right\n";
+  out += "set key top right box opaque\n";
   out += "set autoscale xfix\n";
 
   if (spec.mode == Mode::bode) {
