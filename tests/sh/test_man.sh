@@ -22,7 +22,7 @@ for tool in "$tool_dir"/mcg-*; do
   if [ ! -f "$page" ]; then check bad "$name has no man page"; continue; fi
   text=$(mandoc -T ascii "$page" | sed "s/.\x08//g")
   helps=$("$tool" --help 2>&1)
-  for sub in $("$tool" --help 2>&1 | awk '/^SUBCOMMANDS:/{s=1;next} s&&/^  [a-z]/{print $1}'); do
+  for sub in $("$tool" --help 2>&1 | awk 'tolower($0) ~ /^subcommands:/{s=1;next} s&&/^  [a-z]/{print $1}'); do
     helps="$helps
 $("$tool" "$sub" --help 2>&1)"
   done
