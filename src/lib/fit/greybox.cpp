@@ -111,8 +111,11 @@ Run make_run(const table::Table& table, const std::vector<std::string>& outputs,
     } else if (table.has("omega")) {
       run.outputs.push_back("omega");
     }
+    // Without the generator on the rig (clutch 0 throughout) its columns hold noise only.
+    const bool generator = std::any_of(run.inputs.clutch.begin(), run.inputs.clutch.end(), [](double c) { return c != 0.0; });
     for (const char* name : {"i", "i_gen", "v_gen"}) {
-      if (table.has(name) && varies(name)) run.outputs.push_back(name);
+      const bool of_generator = std::string_view(name) != "i";
+      if (table.has(name) && varies(name) && (generator || !of_generator)) run.outputs.push_back(name);
     }
     if (run.outputs.empty()) {
       fail("{}: no measured column to compare with the model (one of rpm, i, i_gen, v_gen, omega)", table.source);

@@ -43,7 +43,8 @@ struct Run {
 
 /// Builds a run from a table with columns t, v (or duty, then v = duty * supply_V), clutch,
 /// r_load and the measured `outputs` (empty: rpm, or omega when there is no rpm, and each of
-/// i, i_gen, v_gen that is present and not constant). When the
+/// i, i_gen, v_gen that is present and not constant, the generator's two only when the
+/// clutch is not 0 throughout). When the
 /// `# i_measurement:` metadata names the ADC range ("range -2.5..2.495 A"), current samples
 /// at either end of it are saturated and count as not measured. Throws mcg::Error naming the file (and line) for a missing column, a bad
 /// input value, or fewer than `min_rows` rows ("too short").
