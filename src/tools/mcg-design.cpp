@@ -35,18 +35,6 @@ void add_plant_options(CLI::App* sub, mcg::design::Options& o) {
       ->check(CLI::Range(1e-9, k_inf));
 }
 
-void add_fixed_options(CLI::App* sub, mcg::design::Options& o) {
-  sub->add_option("--coef-bits", o.coef_bits, "bits of a fixed-point coefficient word")
-      ->check(CLI::Range(2, 32))
-      ->capture_default_str();
-  sub->add_option("--acc-bits", o.acc_bits, "bits of the accumulator")->check(CLI::Range(2, 63))->capture_default_str();
-  sub->add_option("--e-max", o.e_max_counts, "largest |error| the firmware can see, counts")
-      ->check(CLI::Range(1e-9, k_inf))
-      ->capture_default_str();
-  sub->add_option("--out-min", o.out_min, "lowest output, duty counts (-pwm-full-counts)");
-  sub->add_option("--out-max", o.out_max, "highest output, duty counts (pwm-full-counts)");
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -60,7 +48,6 @@ int main(int argc, char** argv) {
   auto design_sub = [&](const char* name, const char* help) {
     CLI::App* sub = app.add_subcommand(name, help);
     add_plant_options(sub, o);
-    add_fixed_options(sub, o);
     return sub;
   };
   CLI::App* p = design_sub("p", "P controller for a phase margin");

@@ -1,14 +1,20 @@
 // The report's design problems solved exactly, and each design against its defining equations.
 #include "common/error.hpp"
+#include "config/ini.hpp"
 #include "design/design.hpp"
 #include "design/fixed_point.hpp"
+#include "link/connection.hpp"
+#include "link/registers.hpp"
 #include "linsys/parse.hpp"
 #include "linsys/response.hpp"
 
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 namespace mcg::design {
 namespace {
@@ -167,27 +173,65 @@ TEST(DesignDesign, TuneMeetsItsLimitsAndCannotGoFaster) {
   EXPECT_FALSE(any);
 }
 
-TEST(DesignFixedPoint, ReportPiInQ4_11) {
-  const FixedPoint q = quantise({11.645, -6.987}, {1.0, -1.0}, FixedPointSpec{});
-  EXPECT_EQ(q.frac_bits, 11);
-  EXPECT_EQ(q.q_format(16), "Q4.11");
-  EXPECT_EQ(q.b_q, (std::vector<std::int64_t>{23849, -14309}));
-  EXPECT_EQ(q.a_q, (std::vector<std::int64_t>{2048, -2048}));
-  EXPECT_DOUBLE_EQ(q.acc_max, (23849.0 + 14309.0) * 32767.0 + 2048.0 * 922.0 + 1024.0);
+TEST(DesignFixedPoint, ReportPiInBoardRegisters) {
+  // The report's PI on 512-count/rev errors and 922 duty counts: on the board each coefficient
+  // scales by (512/2048) (1000/922); 3.1575 * 2^12 = 12933.3 fits int16, so F = 12.
+  const auto q = board_fixed_point({11.645, -6.987}, {1.0, -1.0}, DesignUnits{});
+  ASSERT_TRUE(q);
+  const double k = 0.25 * 1000.0 / 922.0;
+  EXPECT_DOUBLE_EQ(q->factor, k);
+  EXPECT_EQ(q->mode, "pi");
+  EXPECT_EQ(q->coef_frac, 12);
+  EXPECT_EQ(q->regs, (std::vector<std::int32_t>{12933, -7760, 0}));
+  EXPECT_EQ(std::lround(11.645 * k * 4096.0), 12933);
+  EXPECT_EQ(std::lround(-6.987 * k * 4096.0), -7760);
+  ASSERT_EQ(q->b.size(), 2U);
+  EXPECT_DOUBLE_EQ(q->b[0], 12933.0 / 4096.0 / k);
+  EXPECT_DOUBLE_EQ(q->b[1], -7760.0 / 4096.0 / k);
+  EXPECT_EQ(q->a, (std::vector<double>{1.0, -1.0}));
+  EXPECT_DOUBLE_EQ(q->acc_max, 1000.0 * std::ldexp(1.0, 20) + 8191.0 * (12933.0 + 7760.0));
 }
 
-TEST(DesignFixedPoint, AccumulatorBoundLowersTheFraction) {
-  FixedPointSpec spec;
-  spec.e_max_counts = 1e6;
-  const FixedPoint q = quantise({11.645, -6.987}, {1.0, -1.0}, spec);
-  const double limit = std::ldexp(1.0, 31) - 1.0;
-  EXPECT_LE(q.acc_max, limit);
-  const double next = (std::round(11.645 * std::ldexp(1.0, q.frac_bits + 1)) +
-                       std::round(6.987 * std::ldexp(1.0, q.frac_bits + 1))) * 1e6;
-  EXPECT_GT(next, limit);
-  spec.e_max_counts = 1e9;
-  EXPECT_THROW(quantise({11.645, -6.987}, {1.0, -1.0}, spec), mcg::Error);
-  EXPECT_THROW(quantise({1e-6, 1.0}, {1.0, -1.0}, FixedPointSpec{}), mcg::Error);
+TEST(DesignFixedPoint, SameRegistersAsMcgSerial) {
+  // mcg-serial quantises [controller] itself (src/lib/link/controller_ini.cpp): both must agree.
+  const std::vector<std::vector<double>> bs{{11.645, -6.987}, {644.0}, {40.0, -70.0, 31.0}, {0.3, -0.29}};
+  for (const auto& b : bs) {
+    const std::vector<double> a = b.size() == 1 ? std::vector<double>{1.0} : std::vector<double>{1.0, -1.0};
+    const auto q = board_fixed_point(b, a, DesignUnits{});
+    ASSERT_TRUE(q);
+    std::istringstream text(fmt::format("[controller]\nb = {}\na = {}\n", linsys::list_text(b), linsys::list_text(a)));
+    const auto regs = link::controller_registers(config::Ini::parse(text, "c.ini"));
+    int frac = -1;
+    std::vector<std::int32_t> raw;
+    for (const auto& [reg, value] : regs) {
+      if (reg->name == "coef_frac") frac = static_cast<int>(value);
+    }
+    for (const auto& [reg, value] : regs) {
+      if (reg->unit == link::Unit::Gain) raw.push_back(link::to_raw(*reg, value, frac));
+    }
+    EXPECT_EQ(frac, q->coef_frac) << linsys::list_text(b);
+    EXPECT_EQ(raw, q->regs) << linsys::list_text(b);
+  }
+}
+
+TEST(DesignFixedPoint, PGainGetsFewerFractionalBits) {
+  // 644 (the report's P design) * 0.27115 = 174.62: Q8.7 holds it, Q7.8 does not.
+  const auto q = board_fixed_point({644.0}, {1.0}, DesignUnits{});
+  ASSERT_TRUE(q);
+  EXPECT_EQ(q->mode, "p");
+  EXPECT_EQ(q->coef_frac, 7);
+  EXPECT_EQ(q->regs, (std::vector<std::int32_t>{22351}));
+  EXPECT_EQ(q->a, (std::vector<double>{1.0}));
+}
+
+TEST(DesignFixedPoint, FormsTheBoardDoesNotRun) {
+  EXPECT_FALSE(board_fixed_point({1.0, -0.5}, {1.0, -0.9}, DesignUnits{}));  // lead/lag
+  EXPECT_FALSE(board_fixed_point({1.0, -0.5}, {1.0}, DesignUnits{}));        // FIR
+  DesignUnits slow;
+  slow.dt_s = 0.002;
+  EXPECT_FALSE(board_fixed_point({11.645, -6.987}, {1.0, -1.0}, slow));
+  EXPECT_THROW(board_fixed_point({2e5, -1.0}, {1.0, -1.0}, DesignUnits{}), mcg::Error);   // > 32767 at F = 0
+  EXPECT_THROW(board_fixed_point({1.0, -1e-6}, {1.0, -1.0}, DesignUnits{}), mcg::Error);  // b1 rounds to 0
 }
 
 }  // namespace

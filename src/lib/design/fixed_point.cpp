@@ -1,78 +1,73 @@
-// Q-format choice and quantisation of the controller's coefficients.
+// Quantisation of a designed controller into the board's registers.
 #include "design/fixed_point.hpp"
 
 #include "common/error.hpp"
 #include "config/ini.hpp"
+#include "mcg_protocol.h"  // MCG_COUNTS_PER_REV, MCG_DUTY_FULL, MCG_COEF_FRAC_BITS_MAX, MCG_TICK_US
 
-#include <algorithm>
 #include <cmath>
 #include <cstddef>
 
 namespace mcg::design {
 
-std::string FixedPoint::q_format(int coef_bits) const { return fmt::format("Q{}.{}", coef_bits - 1 - frac_bits, frac_bits); }
+namespace {
 
-FixedPoint quantise(const std::vector<double>& b0, const std::vector<double>& a0, const FixedPointSpec& spec) {
-  if (a0.empty() || a0[0] == 0.0) fail("fixed point: a_0 must be non-zero");
-  if (spec.coef_bits < 2 || spec.coef_bits > 32) fail("fixed point: coefficient bits must be in 2..32, got {}", spec.coef_bits);
-  if (spec.acc_bits < spec.coef_bits || spec.acc_bits > 63) {
-    fail("fixed point: accumulator bits must be in {}..63, got {}", spec.coef_bits, spec.acc_bits);
+constexpr double k_coef_max = 32767.0;   ///< int16 register
+constexpr double k_e_max_q8 = 8191.0;    ///< |e| bound in Q8 pulses per tick (-8191 <= e <= r <= 6291)
+constexpr double k_acc_limit = 2147483647.0;
+
+}  // namespace
+
+double DesignUnits::factor() const {
+  // The same expression as mcg-serial's (src/lib/link/controller_ini.cpp), so both round alike.
+  return input_scale * (60000.0 / MCG_COUNTS_PER_REV) * (MCG_DUTY_FULL / duty_full_scale);
+}
+
+std::optional<BoardFixedPoint> board_fixed_point(const std::vector<double>& b, const std::vector<double>& a,
+                                                 const DesignUnits& units) {
+  if (std::fabs(units.dt_s - MCG_TICK_US * 1e-6) > 1e-12) return std::nullopt;
+  if (a.empty() || a[0] == 0.0 || b.empty()) return std::nullopt;
+  const bool incremental = a.size() == 2 && a[1] == -a[0];
+  if (!(a.size() == 1 || incremental)) return std::nullopt;
+  if ((!incremental && b.size() != 1) || (incremental && b.size() < 2) || b.size() > 3) return std::nullopt;
+
+  BoardFixedPoint q;
+  q.mode = !incremental ? "p" : b.size() == 3 ? "pid" : "pi";
+  q.factor = units.factor();
+  const double scale = q.factor / a[0];
+  std::vector<double> g;
+  double largest = 0.0;
+  std::size_t k_largest = 0;
+  for (std::size_t k = 0; k < b.size(); ++k) {
+    g.push_back(b[k] * scale);
+    if (std::fabs(g[k]) > largest) k_largest = k;
+    largest = std::fmax(largest, std::fabs(g[k]));
   }
-  if (!(spec.e_max_counts > 0.0)) fail("fixed point: e_max_counts must be positive");
-  if (!(spec.out_min < spec.out_max)) fail("fixed point: out_min must be below out_max");
-  std::vector<double> b = b0;
-  std::vector<double> a = a0;
-  for (double& x : b) x /= a0[0];
-  for (double& x : a) x /= a0[0];
-  const double coef_max = std::ldexp(1.0, spec.coef_bits - 1) - 1.0;
-  const double acc_limit = std::ldexp(1.0, spec.acc_bits - 1) - 1.0;
-  const double y_max = std::max(std::abs(spec.out_min), std::abs(spec.out_max));
-  double biggest = 0.0;
-  for (double x : b) biggest = std::max(biggest, std::abs(x));
-  for (std::size_t k = 1; k < a.size(); ++k) biggest = std::max(biggest, std::abs(a[k]));
-  int f = spec.coef_bits - 1;
-  if (biggest > 0.0) f = std::min(f, static_cast<int>(std::floor(std::log2(coef_max / biggest))) + 1);
-  for (; f >= 0; --f) {
-    const double scale = std::ldexp(1.0, f);
-    bool fits = true;
-    double acc = f > 0 ? std::ldexp(1.0, f - 1) : 0.0;
-    FixedPoint q;
-    q.frac_bits = f;
-    for (double x : b) {
-      const double v = std::round(x * scale);
-      fits = fits && std::abs(v) <= coef_max;
-      acc += std::abs(v) * spec.e_max_counts;
-      q.b_q.push_back(static_cast<std::int64_t>(v));
-    }
-    q.a_q.push_back(static_cast<std::int64_t>(scale));
-    for (std::size_t k = 1; k < a.size(); ++k) {
-      const double v = std::round(a[k] * scale);
-      fits = fits && std::abs(v) <= coef_max;
-      acc += std::abs(v) * y_max;
-      q.a_q.push_back(static_cast<std::int64_t>(v));
-    }
-    if (!fits || acc > acc_limit) continue;
-    q.acc_max = acc;
-    for (std::size_t k = 0; k < b.size(); ++k) {
-      if (b[k] != 0.0 && q.b_q[k] == 0) {
-        fail("fixed point: b{} = {} rounds to 0 in {} (widen the coefficients or lower e_max_counts)", k,
-             config::format_number(b[k]), q.q_format(spec.coef_bits));
-      }
-      q.b.push_back(static_cast<double>(q.b_q[k]) / scale);
-    }
-    for (std::size_t k = 0; k < a.size(); ++k) {
-      if (a[k] != 0.0 && q.a_q[k] == 0) {
-        fail("fixed point: a{} = {} rounds to 0 in {} (widen the coefficients or lower e_max_counts)", k,
-             config::format_number(a[k]), q.q_format(spec.coef_bits));
-      }
-      q.a.push_back(static_cast<double>(q.a_q[k]) / scale);
-    }
-    return q;
+  int f = static_cast<int>(MCG_COEF_FRAC_BITS_MAX);
+  while (f >= 0 && std::round(std::ldexp(largest, f)) > k_coef_max) --f;
+  if (f < 0) {
+    fail("fixed point: b{} = {} is {} /1000 duty per pulse/ms on the board, beyond its 16 bits even at coef_frac = 0",
+         k_largest, config::format_number(b[k_largest]), config::format_number(g[k_largest]));
   }
-  fail("fixed point: no Q format keeps {}-bit coefficients and a {}-bit accumulator from overflowing for |e| <= {} "
-       "counts and y in [{}, {}]",
-       spec.coef_bits, spec.acc_bits, config::format_number(spec.e_max_counts), config::format_number(spec.out_min),
-       config::format_number(spec.out_max));
+  q.coef_frac = f;
+  double sum = 0.0;
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    const double v = std::round(std::ldexp(g[k], f));
+    if (v == 0.0 && g[k] != 0.0) {
+      fail("fixed point: b{} = {} rounds to 0 in the board's Q{}.{} (the controller would change structure)", k,
+           config::format_number(b[k]), 15 - f, f);
+    }
+    q.regs.push_back(static_cast<std::int32_t>(v));
+    sum += std::fabs(v);
+    q.b.push_back(std::ldexp(v, -f) / q.factor);
+  }
+  if (incremental && q.regs.size() == 2) q.regs.push_back(0);
+  q.a = incremental ? std::vector<double>{1.0, -1.0} : std::vector<double>{1.0};
+  q.acc_max = MCG_DUTY_FULL * std::ldexp(1.0, f + 8) + k_e_max_q8 * sum;
+  if (q.acc_max > k_acc_limit) {
+    fail("fixed point: the accumulator can reach {} > 2^31 - 1 at coef_frac = {}", config::format_number(q.acc_max), f);
+  }
+  return q;
 }
 
 }  // namespace mcg::design

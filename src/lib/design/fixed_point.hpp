@@ -1,40 +1,50 @@
-// Fixed-point coefficients for the board's difference equation (docs/formats.md, [fixed_point]).
+// The board's controller registers for a designed difference equation (man/mcg-protocol.7,
+// CONTROLLER AND FIXED POINT; docs/formats.md, [fixed_point]).
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace mcg::design {
 
-/// The integer arithmetic the firmware runs each tick n (all integers):
-///   acc = Σ_k b_q[k]·e[n−k] − Σ_{k>=1} a_q[k]·y[n−k]           (acc_bits-bit accumulator)
-///   y[n] = clamp((acc + 2^(F−1)) >> F, out_min, out_max)          (F = frac_bits, F = 0: no rounding term)
-/// with c_q = round(c·2^F) for the real coefficients normalised to a_0 = 1, each in a signed
-/// coef_bits-bit word; e in [−e_max, e_max] counts, y the stored (clamped) output.
-struct FixedPointSpec {
-  int coef_bits = 16;
-  int acc_bits = 32;
-  double e_max_counts = 32767.0;
-  double out_min = -922.0;
-  double out_max = 922.0;
+/// The design's units: e = input_scale · rpm error (counts per sample), y in duty counts with
+/// duty_full_scale counts at 100 %.
+struct DesignUnits {
+  double input_scale = 512.0 / 60000.0;  ///< counts per sample per rpm (512 counts/rev, 1 ms)
+  double duty_full_scale = 922.0;        ///< duty counts at 100 %
+  double dt_s = 0.001;                   ///< sample period, s
+
+  /// c_board = c · factor(): the board counts e in pulses per 1 ms at 2048 pulses/rev and u in
+  /// 1/1000 duty, so factor = input_scale · (60000/2048) · (1000/duty_full_scale)
+  /// (the report's units: (512/2048) · (1000/922) = 0.27115).
+  double factor() const;
 };
 
-struct FixedPoint {
-  int frac_bits = 0;
-  std::vector<std::int64_t> b_q;
-  std::vector<std::int64_t> a_q;  ///< a_q[0] = 2^F
-  std::vector<double> b;          ///< b_q/2^F: the coefficients that really run
-  std::vector<double> a;
-  double acc_max = 0.0;           ///< worst-case |acc| over the stated ranges
-  /// "Q4.11": integer bits (sign excluded) and fraction bits of a coefficient word.
-  std::string q_format(int coef_bits) const;
+/// What the board holds and runs each 1 ms tick n (e in Q8 pulses per tick, -8191 <= e <= r):
+///   P:   U[n] = duty_bias·2^(F+8) + kp·e[n]
+///   PI:  U[n] = sat(U[n−1] + b0·e[n] + b1·e[n−1])
+///   PID: U[n] = sat(U[n−1] + b0·e[n] + b1·e[n−1] + b2·e[n−2])
+///   u[n] = (U[n] + 2^(F+7)) >> (F+8)   (1/1000 duty, rounded half up)
+/// with int16 coefficients c_q = round(c_board·2^F) and an int32 accumulator U.
+struct BoardFixedPoint {
+  int coef_frac = 0;                ///< F, fractional bits of the coefficients (0..12)
+  std::string mode;                 ///< "p", "pi" or "pid"
+  std::vector<std::int32_t> regs;   ///< kp (P) or b0, b1, b2 (PI, PID; b2 = 0 for PI): int16 values
+  double factor = 0.0;              ///< c_board = c_design · factor
+  std::vector<double> b;            ///< the coefficients the board runs, in the design's units: c_q 2^−F / factor
+  std::vector<double> a;            ///< (1) for P, (1, −1) for PI and PID
+  double acc_max = 0.0;             ///< worst-case |U[n−1] + Σ c_q e|: 1000·2^(F+8) + 8191·Σ|c_q|
 };
 
-/// Chooses the largest F for which every coefficient fits a signed coef_bits word and the
-/// worst-case accumulator Σ|b_q|·e_max + Σ_{k>=1}|a_q|·max(|out_min|, |out_max|) + 2^(F−1)
-/// fits a signed acc_bits word. Throws mcg::Error when no F >= 0 fits, or when a non-zero
-/// coefficient would round to 0 (the controller would change structure).
-FixedPoint quantise(const std::vector<double>& b, const std::vector<double>& a, const FixedPointSpec& spec);
+/// The registers for the difference equation Σ a_k y[n−k] = Σ b_k e[n−k] in `units`: F is the
+/// largest F <= 12 keeping every |c_q| <= 32767 (as mcg-serial chooses it). Returns nullopt
+/// for a form the board does not run (dt_s other than 1 ms; a other than (1) with one b, or
+/// (1, −1) with two or three b). Throws mcg::Error when a coefficient exceeds 16 bits even at
+/// F = 0, when a non-zero coefficient rounds to 0 (the controller would change structure),
+/// or when the worst-case accumulator exceeds 2^31 − 1.
+std::optional<BoardFixedPoint> board_fixed_point(const std::vector<double>& b, const std::vector<double>& a,
+                                                 const DesignUnits& units);
 
 }  // namespace mcg::design

@@ -419,33 +419,31 @@ void write_design(const Options& o, const Resolved& r, const Design& d, std::ost
     ini.set("controller", "input_scale", cpr / 60.0 * su.dt_s, "counts per sample per rpm");
     ini.set("controller", "output", "duty_counts");
     ini.set("controller", "duty_full_scale", full, "duty counts at 100 %");
-    ini.set("controller", "round_output", 1.0);
+    // The board keeps its accumulator exact: the output is rounded, the state is not.
+    ini.set("controller", "round_output", 0.0, "the board keeps an exact accumulator");
 
-    FixedPointSpec spec;
-    spec.coef_bits = o.coef_bits;
-    spec.acc_bits = o.acc_bits;
-    spec.e_max_counts = o.e_max_counts;
-    spec.out_min = std::isnan(o.out_min) ? -full : o.out_min;
-    spec.out_max = std::isnan(o.out_max) ? full : o.out_max;
-    const FixedPoint q = quantise(b, a, spec);
-    ini.set("fixed_point", "q_format", q.q_format(spec.coef_bits));
-    ini.set("fixed_point", "q_frac_bits", static_cast<double>(q.frac_bits), "c_q = round(c * 2^q_frac_bits)");
-    ini.set("fixed_point", "coef_bits", static_cast<double>(spec.coef_bits));
-    ini.set("fixed_point", "acc_bits", static_cast<double>(spec.acc_bits));
-    ini.set("fixed_point", "n_b", static_cast<double>(q.b_q.size()));
-    ini.set("fixed_point", "n_a", static_cast<double>(q.a_q.size() - 1));
-    for (std::size_t k = 0; k < q.b_q.size(); ++k) {
-      ini.set("fixed_point", fmt::format("b{}_q", k), static_cast<double>(q.b_q[k]), format_number(q.b[k]));
+    DesignUnits units;
+    units.input_scale = cpr / 60.0 * su.dt_s;
+    units.duty_full_scale = full;
+    units.dt_s = su.dt_s;
+    if (const auto q = board_fixed_point(b, a, units)) {
+      const double lsb = std::ldexp(1.0, -q->coef_frac);
+      ini.set("fixed_point", "mode", q->mode);
+      ini.set("fixed_point", "coef_frac", static_cast<double>(q->coef_frac),
+              fmt::format("F: c_q = round(c_board * 2^F), Q{}.{}", 15 - q->coef_frac, q->coef_frac));
+      ini.set("fixed_point", "unit_factor", q->factor,
+              fmt::format("c_board = c * ({}/2048) * (1000/{}) in 1/1000 duty per pulse/ms", format_number(cpr),
+                          format_number(full)));
+      static constexpr const char* k_names[] = {"b0", "b1", "b2"};
+      for (std::size_t k = 0; k < q->regs.size(); ++k) {
+        const double v = static_cast<double>(q->regs[k]);
+        const std::string note = fmt::format("{} /1000 per pulse/ms", format_number(v * lsb));
+        ini.set("fixed_point", q->mode == "p" ? std::string("kp") : std::string(k_names[k]), v, note);
+      }
+      ini.set("fixed_point", "acc_max", q->acc_max, "worst case 1000 * 2^(F+8) + 8191 * sum |c_q| <= 2^31 - 1");
+      const Tf cq = controller_from_coefficients(q->b, q->a, su.dt_s);
+      write_margins(ini, "margins_quantised", {cq, su.plant}, su.dt_s);
     }
-    for (std::size_t k = 1; k < q.a_q.size(); ++k) {
-      ini.set("fixed_point", fmt::format("a{}_q", k), static_cast<double>(q.a_q[k]), format_number(q.a[k]));
-    }
-    ini.set("fixed_point", "e_max_counts", spec.e_max_counts);
-    ini.set("fixed_point", "out_min", spec.out_min);
-    ini.set("fixed_point", "out_max", spec.out_max);
-    ini.set("fixed_point", "acc_max", q.acc_max, "worst-case |acc| over the stated ranges");
-    const Tf cq = controller_from_coefficients(q.b, q.a, su.dt_s);
-    write_margins(ini, "margins_quantised", {cq, su.plant}, su.dt_s);
   }
   echo_plant(ini, r);
   ini.write(out);

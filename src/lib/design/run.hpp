@@ -56,13 +56,6 @@ struct Options {
   std::string structure = "pi";
   TuneLimits limits;
 
-  // Fixed point.
-  int coef_bits = 16;
-  int acc_bits = 32;
-  double e_max_counts = 32767.0;
-  double out_min = NAN;
-  double out_max = NAN;
-
   // Series.
   double f_min_hz = NAN;
   double f_max_hz = NAN;
