@@ -42,7 +42,7 @@ TEST(LinkControllerIni, ReportPiMapsToBoardUnits) {
   EXPECT_NEAR(value_of(regs, "b0"), 11.645 * k, 1e-12);
   EXPECT_NEAR(value_of(regs, "b1"), -6.987 * k, 1e-12);
   EXPECT_EQ(value_of(regs, "b2"), 0.0);
-  EXPECT_EQ(value_of(regs, "coef_frac"), 12.0);  // 3.158 * 4096 = 12934 fits in 16 bits
+  EXPECT_EQ(value_of(regs, "coef_frac"), 12.0);  // 3.1575 * 4096 = 12933.3 fits in 16 bits
   EXPECT_EQ(value_of(regs, "mode"), 2.0);
   EXPECT_EQ(regs.front().first->name, "coef_frac");
 }
@@ -56,15 +56,23 @@ TEST(LinkControllerIni, LargeGainsGetFewerFractionalBits) {
   EXPECT_EQ(value_of(regs, "mode"), 1.0);
 }
 
-TEST(LinkControllerIni, FixedPointSectionGivesTheQuantisedCoefficients) {
-  // docs/formats.md: the report's PI in Q4.11, b0_q = 23849 (11.64502), b1_q = -14309, a1_q = -2048.
+TEST(LinkControllerIni, FixedPointSectionIsWrittenBitForBit) {
+  // mcg-design's [fixed_point] for the exact Tustin PI: the board's registers at F = 12.
   const auto regs = regs_of(
-      "[controller]\nb = 11.645 -6.987\na = 1 -1\n[fixed_point]\nq_frac_bits = 11\nn_b = 2\nn_a = 1\n"
-      "b0_q = 23849\nb1_q = -14309\na1_q = -2048\n");
-  const double k = 0.25 * 1000.0 / 922.0;
-  EXPECT_NEAR(value_of(regs, "b0"), 23849.0 / 2048.0 * k, 1e-12);
-  EXPECT_NEAR(value_of(regs, "b1"), -14309.0 / 2048.0 * k, 1e-12);
+      "[controller]\nb = 11.66983 -7.0019\na = 1 -1\n[fixed_point]\nmode = pi\ncoef_frac = 12\n"
+      "b0 = 12961\nb1 = -7777\nb2 = 0\n");
+  EXPECT_EQ(value_of(regs, "coef_frac"), 12.0);
+  EXPECT_EQ(value_of(regs, "b0"), 12961.0 / 4096.0);
+  EXPECT_EQ(value_of(regs, "b1"), -7777.0 / 4096.0);
+  EXPECT_EQ(value_of(regs, "b2"), 0.0);
   EXPECT_EQ(value_of(regs, "mode"), 2.0);
+  const auto p = regs_of("[controller]\nb = 644\na = 1\n[fixed_point]\nmode = p\ncoef_frac = 7\nkp = 22350\n");
+  EXPECT_EQ(value_of(p, "kp"), 22350.0 / 128.0);
+  EXPECT_EQ(value_of(p, "mode"), 1.0);
+  EXPECT_EQ(error_of("[controller]\nb = 1\n[fixed_point]\nmode = pi\ncoef_frac = 13\n"),
+            "c.ini:5: [fixed_point] coef_frac: not 0..12");
+  EXPECT_EQ(error_of("[controller]\nb = 1\n[fixed_point]\nmode = pi\ncoef_frac = 8\nb0 = 40000\n"),
+            "c.ini:6: [fixed_point] b0: not a 16-bit integer");
   // output = duty: y is the duty, so 1000 per unit instead of 1000/922.
   const auto duty = regs_of("[controller]\nb = 0.01\na = 1\noutput = duty\n");
   EXPECT_NEAR(value_of(duty, "kp"), 0.01 * 0.25 * 1000.0, 1e-12);

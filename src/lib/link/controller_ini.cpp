@@ -13,31 +13,33 @@ namespace mcg::link {
 std::vector<std::pair<const RegisterInfo*, double>> controller_registers(const config::Ini& ini) {
   std::vector<std::pair<const RegisterInfo*, double>> out;
   if (!ini.has_section("controller")) return out;
+  if (const auto frac = ini.number("fixed_point", "coef_frac")) {
+    // mcg-design's [fixed_point]: the board's registers themselves, the coefficients its
+    // [margins_quantised] analysed; written bit for bit.
+    if (*frac < 0 || *frac > MCG_COEF_FRAC_BITS_MAX || *frac != std::floor(*frac)) {
+      ini.reject("fixed_point", "coef_frac", fmt::format("not 0..{}", MCG_COEF_FRAC_BITS_MAX));
+    }
+    const std::string mode = ini.get("fixed_point", "mode").value_or("");
+    if (mode != "p" && mode != "pi" && mode != "pid") ini.reject("fixed_point", "mode", "not p, pi or pid");
+    const auto raw = [&](std::string_view key) {
+      const double v = ini.number_or("fixed_point", key, 0.0);
+      if (v != std::floor(v) || v < -32768.0 || v > 32767.0) ini.reject("fixed_point", key, "not a 16-bit integer");
+      return std::ldexp(v, -static_cast<int>(*frac));
+    };
+    out.emplace_back(&require_register("coef_frac"), *frac);
+    if (mode == "p") {
+      out.emplace_back(&require_register("kp"), raw("kp"));
+      out.emplace_back(&require_register("mode"), MCG_MODE_P);
+      return out;
+    }
+    for (const char* name : {"b0", "b1", "b2"}) out.emplace_back(&require_register(name), raw(name));
+    out.emplace_back(&require_register("mode"), mode == "pid" ? MCG_MODE_PID : MCG_MODE_PI);
+    return out;
+  }
   auto b = ini.numbers("controller", "b");
   if (!b) return out;
   std::vector<double> a = ini.numbers("controller", "a").value_or(std::vector<double>{1.0});
   if (a.empty() || a[0] == 0.0) ini.reject("controller", "a", "a_0 must not be 0");
-  if (const auto frac = ini.number("fixed_point", "q_frac_bits")) {
-    // The design's quantised coefficients, the ones its [margins_quantised] analysed.
-    if (*frac < 0 || *frac > 30 || *frac != std::floor(*frac)) ini.reject("fixed_point", "q_frac_bits", "not 0..30");
-    const double lsb = std::ldexp(1.0, -static_cast<int>(*frac));
-    const auto count = [&](std::string_view key) {
-      const double n = ini.number_or("fixed_point", key, 0.0);
-      if (n < 0 || n > 8 || n != std::floor(n)) ini.reject("fixed_point", key, "not a coefficient count");
-      return static_cast<int>(n);
-    };
-    const int n_b = count("n_b");
-    const int n_a = count("n_a");
-    const auto coef = [&](const std::string& key) {
-      const auto v = ini.number("fixed_point", key);
-      if (!v) ini.reject("fixed_point", "n_b", fmt::format("no {}", key));
-      return *v * lsb;
-    };
-    b->clear();
-    for (int k = 0; k < n_b; ++k) b->push_back(coef(fmt::format("b{}_q", k)));
-    a.assign(1, 1.0);
-    for (int k = 1; k <= n_a; ++k) a.push_back(coef(fmt::format("a{}_q", k)));
-  }
   const double dt_s = ini.number_or("controller", "dt_s", 1e-3);
   if (std::fabs(dt_s - MCG_TICK_US * 1e-6) > 1e-12) {
     ini.reject("controller", "dt_s", "the board's controller runs every 0.001 s");
