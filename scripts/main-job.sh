@@ -43,8 +43,8 @@ steady=$(awk -F, '!/^#/ && $1 != "t" { last = $0 } END { split(last, f, ","); pr
 echo "mcg main job on the built-in rig: files in $out"
 echo "  step.csv, step.png        coupled 12 V step: steady speed ${steady} rpm"
 echo "  bode.csv, bode.png        plant frequency response (chirp 0.5-200 Hz)"
-echo "  plant.ini                 fitted plant: $(sed -n 's/^tf = \([^;]*\).*/\1/p' plant.ini)"
-echo "  pi.ini                    PI for 50 deg: $(sed -n 's/^difference_equation = \([^;]*\).*/\1/p' pi.ini)"
+echo "  plant.ini                 fitted plant: $(sed -n 's/^tf = \([^;]*[^; ]\) *;.*/\1/p' plant.ini)"
+echo "  pi.ini                    PI for 50 deg: $(sed -n 's/^difference_equation = \([^;]*[^; ]\) *;.*/\1/p' pi.ini)"
 echo "  verify.csv, verify.png    the PI on the nonlinear model (420 -> 520 rpm)"
 echo "  gap.csv, gap.txt          diagnosis: $(awk -F, '!/^#/ && n++ == 1 { print $1 }' gap.csv)"
 sed 's/^/    /' gap.txt | head -12
