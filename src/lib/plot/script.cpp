@@ -17,7 +17,7 @@ namespace mcg::plot {
 namespace {
 
 // Units of the data contract's columns (man/mcg-csv.5).
-constexpr std::array<std::pair<std::string_view, std::string_view>, 17> k_labels = {{
+constexpr std::array<std::pair<std::string_view, std::string_view>, 20> k_labels = {{
     {"t", "t (s)"},
     {"v", "v (V)"},
     {"duty", "duty (1)"},
@@ -29,6 +29,9 @@ constexpr std::array<std::pair<std::string_view, std::string_view>, 17> k_labels
     {"i_gen", "i_gen (A)"},
     {"v_gen", "v_gen (V)"},
     {"rpm_cmd", "rpm_cmd (rev/min)"},
+    {"rpm_true", "rpm_true (rev/min)"},
+    {"theta", "theta (rad)"},
+    {"v_applied", "v_applied (V)"},
     {"counts", "counts (counts)"},
     {"f_hz", "frequency (Hz)"},
     {"mag_db", "magnitude (dB)"},
