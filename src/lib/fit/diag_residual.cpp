@@ -279,16 +279,4 @@ double chi_square_quantile(double dof, double z_p) {
   return dof * c * c * c;
 }
 
-double rms_finite(std::span<const double> x) {
-  double s = 0.0;
-  std::size_t count = 0;
-  for (double v : x) {
-    if (std::isfinite(v)) {
-      s += v * v;
-      ++count;
-    }
-  }
-  return count > 0 ? std::sqrt(s / static_cast<double>(count)) : k_nan;
-}
-
 }  // namespace mcg::fit

@@ -3,6 +3,7 @@
 // (the classic system-identification checks), and the noise floor of the measurement chain.
 #pragma once
 
+#include "fit/greybox.hpp"  // rms_finite
 #include "model/model.hpp"
 
 #include <cstddef>
@@ -113,8 +114,5 @@ NoiseFloor current_noise_floor(std::span<const double> i_measured, const std::ve
 /// The p-quantile of the chi-square distribution with `dof` degrees of freedom
 /// (Wilson-Hilferty: dof (1 - 2/(9 dof) + z_p sqrt(2/(9 dof)))^3, z_p the normal quantile).
 double chi_square_quantile(double dof, double z_p);
-
-/// RMS over the finite values of `x` (NaN when there are none).
-double rms_finite(std::span<const double> x);
 
 }  // namespace mcg::fit

@@ -265,20 +265,22 @@ FitResult fit_model(const FitProblem& problem) {
   for (const Run& run : problem.runs) {
     const RunResiduals res = residuals(result.model, run, problem.sim);
     RunFit fit{run.source, run.outputs, res.fit_percent, {}};
-    for (const auto& r : res.residual) {
-      double sq = 0.0;
-      std::size_t count = 0;
-      for (double e : r) {
-        if (std::isfinite(e)) {
-          sq += e * e;
-          ++count;
-        }
-      }
-      fit.rms.push_back(count > 0 ? std::sqrt(sq / static_cast<double>(count)) : k_nan);
-    }
+    for (const auto& r : res.residual) fit.rms.push_back(rms_finite(r));
     result.runs.push_back(std::move(fit));
   }
   return result;
+}
+
+double rms_finite(std::span<const double> x) {
+  double sq = 0.0;
+  std::size_t count = 0;
+  for (double v : x) {
+    if (std::isfinite(v)) {
+      sq += v * v;
+      ++count;
+    }
+  }
+  return count > 0 ? std::sqrt(sq / static_cast<double>(count)) : k_nan;
 }
 
 }  // namespace mcg::fit

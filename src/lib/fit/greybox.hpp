@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <span>
 #include <vector>
 
 namespace mcg::fit {
@@ -59,6 +60,9 @@ std::vector<std::vector<double>> simulate_as_measured(const model::Model& model,
 /// MATLAB compare's fit: 100 (1 - |y - y_sim| / |y - mean(y)|) over the finite samples of y.
 /// -inf when y is constant and y_sim differs from it, 100 when both agree.
 double fit_percent(const std::vector<double>& measured, const std::vector<double>& simulated);
+
+/// RMS over the finite values of `x` (NaN when there are none).
+double rms_finite(std::span<const double> x);
 
 /// The residual series of one run under a model: measured - simulated, per output.
 struct RunResiduals {
