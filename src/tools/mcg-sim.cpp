@@ -1,6 +1,4 @@
 // mcg-sim: the motor-clutch-generator rig simulated on a table of inputs.
-#include <iostream>
-
 #include "board/board.hpp"
 #include "common/tool.hpp"
 #include "sim/run.hpp"
@@ -51,6 +49,6 @@ int main(int argc, char** argv) {
       mcg::board::serve(board);
       return;
     }
-    mcg::sim::run(opt, std::cin, "<stdin>", std::cout);
+    mcg::sim::run_stdio(opt);
   });
 }

@@ -129,6 +129,51 @@ double WindowCounter::push(double t, double theta) {
          m_e.rpm_per_count();
 }
 
+ClosedLoop::ClosedLoop(const model::Model& model, const Controller& controller, const CountEstimator& estimator,
+                       const model::SimOptions& options, int initial_clutch)
+    : m_plant(model, options, initial_clutch),
+      m_ctl(controller),
+      m_counter(estimator),
+      m_dt_s(controller.dt_s),
+      m_tol_s(1e-9 * controller.dt_s),
+      m_supply_V(model.params.supply_V) {}
+
+void ClosedLoop::tick(double t_s, double rpm_cmd) {
+  const double rpm = m_counter.push(t_s, m_plant.state().theta_rad);
+  m_duty = m_ctl.step(rpm_cmd - rpm);
+  ++m_tick;
+}
+
+void ClosedLoop::row(double t_s, double rpm_cmd, int clutch, double r_load_ohm) {
+  if (!m_started) {
+    m_started = true;
+    m_t0_s = t_s;
+  } else {
+    assert(t_s > m_t_s);
+    // The previous row's interval: step to each tick inside it, tick there with its command.
+    double t = m_t_s;
+    bool first = true;
+    while (true) {
+      if (!first && std::abs(tick_time(m_tick) - t) <= m_tol_s) tick(t, m_rpm_cmd);
+      first = false;
+      const double t_next = std::min(t_s, tick_time(m_tick));
+      if (t_next - t <= m_tol_s) {
+        if (t_s - t <= m_tol_s) break;
+        continue;
+      }
+      model::Drive drive = m_drive;
+      drive.v_V = m_duty * m_supply_V;
+      m_plant.step(t_next - t, drive);
+      t = t_next;
+      if (t_s - t <= m_tol_s) break;
+    }
+  }
+  if (std::abs(tick_time(m_tick) - t_s) <= m_tol_s) tick(t_s, rpm_cmd);
+  m_t_s = t_s;
+  m_rpm_cmd = rpm_cmd;
+  m_drive = model::Drive{0.0, clutch, r_load_ohm};
+}
+
 ClosedLoopOutputs simulate_closed_loop(const model::Model& model, const Controller& controller,
                                        const CountEstimator& estimator, const ClosedLoopInputs& in,
                                        const model::SimOptions& options) {
@@ -139,46 +184,12 @@ ClosedLoopOutputs simulate_closed_loop(const model::Model& model, const Controll
   out.duty.assign(n, 0.0);
   out.v_V.assign(n, 0.0);
   if (n == 0) return out;
-  const double supply = model.params.supply_V;
-  model::Plant plant(model, options, static_cast<int>(in.clutch[0]));
-  ControllerState ctl(controller);
-  WindowCounter counter(estimator);
-  const double t0 = in.t_s[0];
-  // Ticks are counted, not accumulated, so that they stay exactly on t0 + k dt.
-  long tick = 0;
-  double duty = 0.0;
-  auto tick_time = [&](long k) { return t0 + static_cast<double>(k) * controller.dt_s; };
-  const double tol = 1e-9 * controller.dt_s;
+  ClosedLoop loop(model, controller, estimator, options, static_cast<int>(in.clutch[0]));
   for (std::size_t row = 0; row < n; ++row) {
-    const double t_row_end = row + 1 < n ? in.t_s[row + 1] : in.t_s[row];
-    const model::Drive base{0.0, static_cast<int>(in.clutch[row]), in.r_load_ohm[row]};
-    double t = in.t_s[row];
-    bool stored = false;
-    while (true) {
-      if (std::abs(tick_time(tick) - t) <= tol) {
-        const model::State s = plant.state();
-        const double rpm = counter.push(t, s.theta_rad);
-        duty = ctl.step(in.rpm_cmd[row] - rpm);
-        ++tick;
-      }
-      if (!stored) {
-        out.plant.store(row, plant.state());
-        out.duty[row] = duty;
-        out.v_V[row] = duty * supply;
-        stored = true;
-      }
-      if (row + 1 >= n) break;
-      const double t_next = std::min(t_row_end, tick_time(tick));
-      if (t_next - t <= tol) {
-        if (t_row_end - t <= tol) break;
-        continue;
-      }
-      model::Drive drive = base;
-      drive.v_V = duty * supply;
-      plant.step(t_next - t, drive);
-      t = t_next;
-      if (t_row_end - t <= tol) break;
-    }
+    loop.row(in.t_s[row], in.rpm_cmd[row], static_cast<int>(in.clutch[row]), in.r_load_ohm[row]);
+    out.plant.store(row, loop.state());
+    out.duty[row] = loop.duty();
+    out.v_V[row] = loop.duty() * model.params.supply_V;
   }
   return out;
 }

@@ -6,8 +6,13 @@
 #include <numbers>
 #include <ostream>
 #include <random>
+#include <iostream>
+#include <optional>
+
+#include <unistd.h>
 
 #include "common/error.hpp"
+#include "common/fd_input.hpp"
 #include "config/ini.hpp"
 #include "mcg/version.hpp"
 #include "model/model.hpp"
@@ -40,25 +45,21 @@ std::string coefficient_list(const std::vector<double>& v) {
   return join(parts, " ");
 }
 
-/// Column `name` of `tbl`, or a constant column of `fallback`.
-std::vector<double> column_or(const table::Table& tbl, std::string_view name, double fallback) {
-  if (tbl.has(name)) return tbl.col(name);
-  return std::vector<double>(tbl.rows(), fallback);
-}
-
-void check_states(const table::Table& tbl, const std::vector<double>& clutch, const std::vector<double>& r_load) {
-  for (std::size_t r = 0; r < clutch.size(); ++r) {
-    const double c = clutch[r];
-    if (!(c == 0.0 || c == 1.0 || c == 2.0)) {
-      fail("{}:{}: column 'clutch': {} is not a clutch state (0, 1 or 2)", tbl.source, tbl.line_of(r),
-           config::format_number(c));
-    }
-    if (std::isnan(r_load[r]) || r_load[r] < 0.0) {
-      fail("{}:{}: column 'r_load': {} is not a load (>= 0 ohm, inf = open circuit)", tbl.source,
-           tbl.line_of(r), config::format_number(r_load[r]));
-    }
+/// Throws the contract's message for a value that must be finite.
+void require_finite_value(double x, const table::Reader& in, std::string_view name) {
+  if (!std::isfinite(x)) {
+    fail("{}:{}: column '{}': {} is not allowed here", in.source(), in.line(), name,
+         std::isnan(x) ? "an unmeasured value (nan or empty)" : "an infinite value");
   }
 }
+
+/// Where each output column comes from: an input column, or one of the simulated values.
+enum class Out { Input, Clutch, RLoad, Duty, V, Omega, Rpm, RpmTrue, I, IGen, VGen, Theta };
+
+struct OutColumn {
+  Out what;
+  std::size_t input = 0;   ///< for Out::Input
+};
 
 }  // namespace
 
@@ -77,98 +78,72 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   }
   const std::optional<Controller> configured = controller_from_ini(ini);
 
-  table::Table tbl = table::read(in, source);
-  if (tbl.rows() == 0) fail("{}: no data rows", source);
-  const bool closed = tbl.has("rpm_cmd") && !opt.open_loop;
-  table::require_increasing(tbl, "t");
-  const double supply = model.params.supply_V;
-  std::vector<double> v_in;
-  if (!closed) {
-    if (tbl.has("v")) {
-      table::require_finite(tbl, "v");
-      v_in = tbl.col("v");
-    } else if (tbl.has("duty")) {
-      table::require_finite(tbl, "duty");
-      v_in = tbl.col("duty");
-      for (double& x : v_in) x *= supply;
-    } else {
-      tbl.col("v");  // throws the missing-column error naming the columns present
-    }
-  } else {
-    table::require_finite(tbl, "rpm_cmd");
-  }
-  if (tbl.has("clutch")) table::require_finite(tbl, "clutch");
-  const std::vector<double> clutch = column_or(tbl, "clutch", opt.clutch);
-  const std::vector<double> r_load = column_or(tbl, "r_load", opt.r_load_ohm);
-  check_states(tbl, clutch, r_load);
+  table::Reader reader(in, source);
+  table::Writer writer(out);
+  if (auto* live = dynamic_cast<FdInput*>(in.rdbuf())) live->before_wait([&writer] { writer.finish(); });
+  if (!reader.next()) fail("{}: no data rows", source);
 
-  model::SimOptions sim_opt;
-  sim_opt.max_step_s = opt.max_step_s;
-  const CountEstimator estimator{opt.window_s, opt.counts_per_rev};
-  const std::vector<double>& t = tbl.col("t");
-  model::Outputs o;
-  std::vector<double> duty;
-  std::vector<double> v_applied;
-  Controller controller = configured.value_or(report_pi());
+  // The columns are resolved at the first row, so that an input without rows says so first.
+  const bool closed = reader.find("rpm_cmd").has_value() && !opt.open_loop;
+  const std::size_t t_col = reader.require("t");
+  std::optional<std::size_t> drive_col;
+  bool drive_is_duty = false;
   if (closed) {
-    ClosedLoopOutputs cl =
-        simulate_closed_loop(model, controller, estimator, {t, tbl.col("rpm_cmd"), clutch, r_load}, sim_opt);
-    o = std::move(cl.plant);
-    duty = std::move(cl.duty);
-    v_applied = std::move(cl.v_V);
+    drive_col = reader.require("rpm_cmd");
+  } else if (auto v = reader.find("v")) {
+    drive_col = v;
+  } else if (auto d = reader.find("duty")) {
+    drive_col = d;
+    drive_is_duty = true;
   } else {
-    o = model::simulate(model, {t, v_in, clutch, r_load}, sim_opt);
+    reader.require("v");  // throws the missing-column error naming the columns present
   }
-
-  std::vector<double> rpm = o.rpm;
-  if (opt.encoder) rpm = estimate_rpm(t, o.theta_rad, estimator);
-  std::vector<double> i_meas = o.i_A;
-  std::vector<double> v_gen = o.v_gen_V;
-  const bool noisy = opt.noise_i_A > 0.0 || opt.noise_v_gen_V > 0.0;
-  if (noisy) {
-    std::mt19937_64 rng(opt.seed);
-    std::normal_distribution<double> unit(0.0, 1.0);
-    for (std::size_t r = 0; r < i_meas.size(); ++r) {
-      if (opt.noise_i_A > 0.0) i_meas[r] += opt.noise_i_A * unit(rng);
-      if (opt.noise_v_gen_V > 0.0) v_gen[r] += opt.noise_v_gen_V * unit(rng);
-    }
-  }
-  if (opt.adc) {
-    for (double& x : i_meas) x = adc_current(x);
-  }
+  const std::optional<std::size_t> clutch_col = reader.find("clutch");
+  const std::optional<std::size_t> r_load_col = reader.find("r_load");
 
   // The output: the input columns (replaced where the simulation writes the same name),
   // then the new ones.
-  table::Table result;
-  result.source = source;
-  result.meta = tbl.meta;
-  result.names = tbl.names;
-  result.columns = tbl.columns;
-  if (!tbl.has("clutch")) result.set("clutch", clutch);
-  if (!tbl.has("r_load")) result.set("r_load", r_load);
+  std::vector<std::string> names = reader.columns();
+  std::vector<OutColumn> plan;
+  for (std::size_t c = 0; c < names.size(); ++c) plan.push_back({Out::Input, c});
+  const auto put = [&](std::string_view name, Out what) {
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it != names.end()) {
+      plan[static_cast<std::size_t>(it - names.begin())] = {what, 0};
+    } else {
+      names.emplace_back(name);
+      plan.push_back({what, 0});
+    }
+  };
+  if (!clutch_col) put("clutch", Out::Clutch);
+  if (!r_load_col) put("r_load", Out::RLoad);
   if (closed) {
-    result.set("duty", duty);
-    result.set("v", v_applied);
+    put("duty", Out::Duty);
+    put("v", Out::V);
   }
-  result.set("omega", o.omega_rad_s);
-  result.set("rpm", rpm);
-  if (opt.encoder) result.set("rpm_true", o.rpm);
-  result.set("i", i_meas);
-  result.set("i_gen", o.i_gen_A);
-  result.set("v_gen", v_gen);
-  result.set("theta", o.theta_rad);
+  put("omega", Out::Omega);
+  put("rpm", Out::Rpm);
+  if (opt.encoder) put("rpm_true", Out::RpmTrue);
+  put("i", Out::I);
+  put("i_gen", Out::IGen);
+  put("v_gen", Out::VGen);
+  put("theta", Out::Theta);
 
-  auto& meta = result.meta;
+  table::Metadata meta = reader.metadata();
+  const double t_first = reader[t_col];
+  const Controller controller = configured.value_or(report_pi());
+  const CountEstimator estimator{opt.window_s, opt.counts_per_rev};
+  const bool noisy = opt.noise_i_A > 0.0 || opt.noise_v_gen_V > 0.0;
   meta.set("source", fmt::format("mcg-sim {}", k_version));
   meta.set("model", opt.configs.empty() ? std::string("built-in rig (the report's, tuned friction)")
                                         : join(opt.configs, " + "));
   std::vector<std::string> effect_texts;
   for (const auto& e : model.effects) effect_texts.push_back(model::format_effect(e));
   meta.set("effects", effect_texts.empty() ? std::string("none") : join(effect_texts, "; "));
-  const std::string drive_name = closed ? "rpm_cmd" : (tbl.has("v") ? "v" : "duty");
+  const std::string drive_name = closed ? "rpm_cmd" : (drive_is_duty ? "duty" : "v");
   meta.set("timing", fmt::format("{}, clutch, r_load of row n act over [t(n), t(n+1)); rpm, i, v_gen sampled at t(n){}",
                                  drive_name, closed ? "; duty, v: the controller's output at t(n), held to t(n+1)" : ""));
-  meta.set("initial_state", fmt::format("at rest, t = {}", config::format_number(t.front())));
+  meta.set("initial_state", fmt::format("at rest, t = {}", config::format_number(t_first)));
   meta.erase("rpm_estimator");
   meta.erase("encoder");
   meta.erase("i_measurement");
@@ -201,7 +176,94 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
                          config::format_number(controller.duty_full_scale),
                          config::format_number(controller.duty_resolution), format_rpm_estimator(estimator)));
   }
-  table::write(out, result);
+  writer.metadata(meta);
+  writer.header(names);
+
+  model::SimOptions sim_opt;
+  sim_opt.max_step_s = opt.max_step_s;
+  StreamingRpmEstimator rpm_estimator(estimator);
+  std::mt19937_64 rng(opt.seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const double supply = model.params.supply_V;
+  std::optional<ClosedLoop> loop;
+  std::optional<model::Plant> plant;
+  model::Drive drive;
+  std::vector<double> row(names.size());
+  double t_prev = 0.0;
+  bool first = true;
+  do {
+    // The checks of one row, in the order a whole-table check reports them.
+    const double t = reader[t_col];
+    require_finite_value(t, reader, "t");
+    if (!first && !(t > t_prev)) {
+      fail("{}:{}: column 't': {} does not increase (previous row: {})", source, reader.line(),
+           fmt::format("{:.10g}", t), fmt::format("{:.10g}", t_prev));
+    }
+    const double drive_value = reader[*drive_col];
+    require_finite_value(drive_value, reader, reader.columns()[*drive_col]);
+    const double clutch = clutch_col ? reader[*clutch_col] : static_cast<double>(opt.clutch);
+    if (clutch_col) require_finite_value(clutch, reader, "clutch");
+    const double r_load = r_load_col ? reader[*r_load_col] : opt.r_load_ohm;
+    if (!(clutch == 0.0 || clutch == 1.0 || clutch == 2.0)) {
+      fail("{}:{}: column 'clutch': {} is not a clutch state (0, 1 or 2)", source, reader.line(),
+           config::format_number(clutch));
+    }
+    if (std::isnan(r_load) || r_load < 0.0) {
+      fail("{}:{}: column 'r_load': {} is not a load (>= 0 ohm, inf = open circuit)", source, reader.line(),
+           config::format_number(r_load));
+    }
+    const int clutch_state = static_cast<int>(clutch);
+
+    // Row n's output is the state at t_n, just before row n's inputs (and a clutch or relay
+    // switch at t_n) act.
+    model::State s;
+    double duty = 0.0;
+    if (closed) {
+      if (!loop) loop.emplace(model, controller, estimator, sim_opt, clutch_state);
+      loop->row(t, drive_value, clutch_state, r_load);
+      s = loop->state();
+      duty = loop->duty();
+    } else {
+      if (!plant) plant.emplace(model, sim_opt, clutch_state);
+      if (!first) plant->step(t - t_prev, drive);
+      s = plant->state();
+      drive = model::Drive{drive_is_duty ? drive_value * supply : drive_value, clutch_state, r_load};
+    }
+    const double rpm_true = s.omega_rad_s * 30.0 / std::numbers::pi;
+    const double rpm = opt.encoder ? rpm_estimator.push(t, s.theta_rad) : rpm_true;
+    double i_meas = s.i_A;
+    double v_gen = s.v_gen_V;
+    if (opt.noise_i_A > 0.0) i_meas += opt.noise_i_A * unit(rng);
+    if (opt.noise_v_gen_V > 0.0) v_gen += opt.noise_v_gen_V * unit(rng);
+    if (opt.adc) i_meas = adc_current(i_meas);
+
+    for (std::size_t c = 0; c < plan.size(); ++c) {
+      switch (plan[c].what) {
+        case Out::Input: row[c] = reader[plan[c].input]; break;
+        case Out::Clutch: row[c] = clutch; break;
+        case Out::RLoad: row[c] = r_load; break;
+        case Out::Duty: row[c] = duty; break;
+        case Out::V: row[c] = duty * supply; break;
+        case Out::Omega: row[c] = s.omega_rad_s; break;
+        case Out::Rpm: row[c] = rpm; break;
+        case Out::RpmTrue: row[c] = rpm_true; break;
+        case Out::I: row[c] = i_meas; break;
+        case Out::IGen: row[c] = s.i_gen_A; break;
+        case Out::VGen: row[c] = v_gen; break;
+        case Out::Theta: row[c] = s.theta_rad; break;
+      }
+    }
+    writer.row(row);
+    t_prev = t;
+    first = false;
+  } while (reader.next());
+  writer.finish();
+}
+
+void run_stdio(const RunOptions& options) {
+  FdInput input(STDIN_FILENO, "<stdin>");
+  std::istream in(&input);
+  run(options, in, "<stdin>", std::cout);
 }
 
 }  // namespace mcg::sim

@@ -26,7 +26,13 @@ struct RunOptions {
 };
 
 /// Reads the input table from `in` (named `source` in messages), simulates, writes the
-/// output table to `out`. Throws mcg::Error for bad input.
+/// output table to `out`, row by row: each output row is written as soon as its input row is
+/// in, in memory that does not grow with the run. When `in` reads through an FdInput, the
+/// output is flushed whenever the input pauses (a live pipe sees each row at once). Throws
+/// mcg::Error for bad input, after writing the rows before it.
 void run(const RunOptions& options, std::istream& in, const std::string& source, std::ostream& out);
+
+/// run() on the standard input and output, live.
+void run_stdio(const RunOptions& options);
 
 }  // namespace mcg::sim
