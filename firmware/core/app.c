@@ -1,9 +1,8 @@
-/* app.c: the service loop, command dispatch, stream blocks and the RAM log dump. */
+/* app.c: the service loop, command dispatch, stream blocks and sending the RAM log dump. */
 #include "core.h"
 #include "hal.h" /* hal_ticks_take, hal_uart_rx, hal_uart_tx_free, hal_board_id */
 
 uint8_t MCG_XDATA g_stream_seq;
-uint8_t MCG_XDATA g_dump_next;
 
 static MCG_XDATA uint8_t s_service_ms;   /* ticks since the last keypad service */
 static MCG_XDATA uint16_t s_lcd_ms;      /* ticks since the last LCD refresh */
@@ -21,12 +20,11 @@ static void put16(uint8_t MCG_XDATA* p, int16_t v) {
 void core_init(void) {
   frame_init();
   control_init();
-  regs_init();
   logger_init();
   seq_init();
+  regs_init(); /* last: the register defaults go through regs_write into the modules above */
   menu_init();
   g_stream_seq = 0;
-  g_dump_next = MCG_LOG_DUMP_FRAMES;
   s_service_ms = 0;
   s_lcd_ms = 0;
   s_stream_phase = 0;
@@ -79,21 +77,13 @@ static void tick(uint8_t pulses) {
   }
 }
 
-uint8_t app_dump_start(void) {
-  if (g_log_running) {
-    return MCG_ST_BUSY;
-  }
-  g_dump_next = 0;
-  return MCG_ST_OK;
-}
-
 /* Sends the next chunks of the log while the transmit buffer has room for a whole one. */
 static void dump_pump(void) {
   /* While streaming, leave room for a stream block and a short answer: the dump takes only the
    * spare bytes of the line, and no block is dropped for it. */
   MCG_SLOW uint8_t need = (uint8_t)(MCG_FRAME_OVERHEAD + sizeof s_data);
   if (g_stream_on) {
-    need = (uint8_t)(need + MCG_FRAME_OVERHEAD + sizeof s_block + MCG_FRAME_OVERHEAD + 4u);
+    need = (uint8_t)(need + MCG_FRAME_OVERHEAD + sizeof s_block + MCG_FRAME_OVERHEAD + 1u + sizeof(McgRegisterAnswer));
   }
   while (g_dump_next < MCG_LOG_DUMP_FRAMES && hal_uart_tx_free() >= need) {
     MCG_SLOW uint8_t first = (uint8_t)(g_dump_next * MCG_LOG_DUMP_CHUNK);
@@ -132,7 +122,8 @@ void core_poll(void) {
   dump_pump();
 }
 
-static uint8_t MCG_XDATA s_ans[6];
+/* Room for the largest answer struct. */
+static uint8_t MCG_XDATA s_ans[sizeof(McgVersionAnswer)];
 
 void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA* payload, uint8_t len) {
   MCG_SLOW uint8_t st;
@@ -147,11 +138,11 @@ void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA* payload, uint8_t len) {
       s_ans[2] = MCG_FW_VERSION_MINOR;
       s_ans[3] = MCG_FW_VERSION_PATCH;
       s_ans[4] = hal_board_id();
-      frame_reply(cmd, MCG_ST_OK, s_ans, 5);
+      frame_reply(cmd, MCG_ST_OK, s_ans, (uint8_t)sizeof(McgVersionAnswer));
       return;
     case MCG_CMD_READ:
     case MCG_CMD_WRITE:
-      if (len != (cmd == MCG_CMD_READ ? 1u : 3u)) {
+      if (len != (cmd == MCG_CMD_READ ? sizeof(McgReadRequest) : sizeof(McgWriteRequest))) {
         break;
       }
       st = MCG_ST_OK;
@@ -167,7 +158,7 @@ void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA* payload, uint8_t len) {
       }
       s_ans[0] = payload[0];
       put16(s_ans + 1, value);
-      frame_reply(cmd, MCG_ST_OK, s_ans, 3);
+      frame_reply(cmd, MCG_ST_OK, s_ans, (uint8_t)sizeof(McgRegisterAnswer));
       return;
     case MCG_CMD_LOG_START:
       if (len != 0) {
@@ -179,10 +170,10 @@ void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA* payload, uint8_t len) {
       if (len != 0) {
         break;
       }
-      st = app_dump_start();
+      st = logger_dump_start();
       s_ans[0] = g_log_count;
       s_ans[1] = g_log_interval;
-      frame_reply(cmd, st, s_ans, st == MCG_ST_OK ? 2u : 0u);
+      frame_reply(cmd, st, s_ans, st == MCG_ST_OK ? (uint8_t)sizeof(McgDumpAnswer) : 0u);
       return;
     case MCG_CMD_SEQ_WRITE:
       if (len < 1u + MCG_SEQ_ENTRY_BYTES || (len - 1u) % MCG_SEQ_ENTRY_BYTES != 0 ||
@@ -192,7 +183,7 @@ void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA* payload, uint8_t len) {
       value = (int16_t)((len - 1u) / MCG_SEQ_ENTRY_BYTES);
       st = seq_write(payload[0], payload + 1, (uint8_t)value);
       s_ans[0] = (uint8_t)(payload[0] + value);
-      frame_reply(cmd, st, s_ans, st == MCG_ST_OK ? 1u : 0u);
+      frame_reply(cmd, st, s_ans, st == MCG_ST_OK ? (uint8_t)sizeof(McgSeqWriteAnswer) : 0u);
       return;
     case MCG_CMD_SEQ_CLEAR:
       if (len != 0) {

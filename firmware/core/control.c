@@ -81,9 +81,10 @@ void control_init(void) {
   g_b0 = 0;
   g_b1 = 0;
   g_b2 = 0;
-  g_coef_frac = 8;
+  /* Neutral until regs_init writes the registers' power-on values. */
+  g_coef_frac = 0;
   g_duty_min = 0;
-  g_duty_max = MCG_DUTY_FULL;
+  g_duty_max = 0;
   g_duty_bias = 0;
   g_duty_out = 0;
   g_saturated = 0;

@@ -105,6 +105,11 @@ extern uint16_t MCG_XDATA MCG_AT(MCG_LOG_XADDR) g_log[MCG_LOG_POINTS];
 extern uint8_t MCG_XDATA g_log_count;    /* points recorded */
 extern uint8_t MCG_XDATA g_log_interval; /* ms between points */
 extern uint8_t MCG_XDATA g_log_running;
+/* Starts a dump: app.c's service loop sends the log as MCG_MSG_LOG_DATA frames, chunk g_dump_next
+ * onwards. MCG_ST_BUSY while recording. The logger owns both states, so that recording and dumping
+ * exclude each other without the logger calling up into app.c. */
+uint8_t logger_dump_start(void);
+extern uint8_t MCG_XDATA g_dump_next; /* next chunk index, MCG_LOG_DUMP_FRAMES when idle */
 
 /* seq.c: command sequence playback (the report's Simulink mode) ------------------------------- */
 void seq_init(void);
@@ -127,9 +132,6 @@ extern char MCG_XDATA g_lcd[2][17]; /* last text sent to the LCD, NUL-terminated
 
 /* app.c: streaming and the log dump ---------------------------------------------------------- */
 extern uint8_t MCG_XDATA g_stream_seq;
-/* Starts sending the RAM log as MCG_MSG_LOG_DATA frames; MCG_ST_BUSY while recording. */
-uint8_t app_dump_start(void);
-extern uint8_t MCG_XDATA g_dump_next; /* next chunk index, MCG_LOG_DUMP_FRAMES when idle */
 
 #ifdef __cplusplus
 }

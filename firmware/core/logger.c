@@ -10,15 +10,17 @@ uint16_t MCG_XDATA MCG_AT(MCG_LOG_XADDR) g_log[MCG_LOG_POINTS];
 uint8_t MCG_XDATA g_log_count;
 uint8_t MCG_XDATA g_log_interval;
 uint8_t MCG_XDATA g_log_running;
+uint8_t MCG_XDATA g_dump_next;
 static MCG_XDATA uint8_t s_elapsed_ms;
 static MCG_XDATA uint16_t s_pulses;
 
 void logger_init(void) {
   g_log_count = 0;
-  g_log_interval = 4;
+  g_log_interval = 1; /* the register's power-on value comes with regs_init */
   g_log_running = 0;
   s_elapsed_ms = 0;
   s_pulses = 0;
+  g_dump_next = MCG_LOG_DUMP_FRAMES;
 }
 
 uint8_t logger_start(void) {
@@ -29,6 +31,14 @@ uint8_t logger_start(void) {
   s_elapsed_ms = 0;
   s_pulses = 0;
   g_log_running = 1;
+  return MCG_ST_OK;
+}
+
+uint8_t logger_dump_start(void) {
+  if (g_log_running) {
+    return MCG_ST_BUSY;
+  }
+  g_dump_next = 0;
   return MCG_ST_OK;
 }
 

@@ -324,7 +324,7 @@ static void main_key(uint8_t key, uint8_t repeat) {
       s_status = MCG_ST_OK;
       break;
     case KEY_D:
-      app_dump_start();
+      logger_dump_start();
       break;
     case KEY_E:
       regs_write(MCG_REG_STREAM, (int16_t)!g_stream_on);

@@ -11,21 +11,29 @@ uint8_t MCG_XDATA g_stream_on;
 uint8_t MCG_XDATA g_clutch_on;
 uint8_t MCG_XDATA g_load_on;
 
-#define RPM_CMD_MIN 120 /* 420 - 300 */
-#define RPM_CMD_MAX 720 /* 420 + 300 */
+/* The columns of MCG_REGISTERS the firmware needs, indexed by id - 1, in code memory. */
+#define REG_ACCESS(NAME, name, access, lo, hi, def, unit, doc) access,
+#define REG_MIN(NAME, name, access, lo, hi, def, unit, doc) lo,
+#define REG_MAX(NAME, name, access, lo, hi, def, unit, doc) hi,
+#define REG_DEFAULT(NAME, name, access, lo, hi, def, unit, doc) def,
+static MCG_CODE uint8_t k_access[] = {MCG_REGISTERS(REG_ACCESS)};
+static MCG_CODE int16_t k_min[] = {MCG_REGISTERS(REG_MIN)};
+static MCG_CODE int16_t k_max[] = {MCG_REGISTERS(REG_MAX)};
+static MCG_CODE int16_t k_default[] = {MCG_REGISTERS(REG_DEFAULT)};
+/* One row per id 0x01..MCG_REG_COUNT-1 (the host checks the order): a compile error otherwise. */
+typedef char regs_one_row_per_id[sizeof k_access == MCG_REG_COUNT - 1u ? 1 : -1];
 
+/* Power-on values: each writable register gets its table default through regs_write, in id order,
+ * with the write's side effects (outputs, controller). */
 void regs_init(void) {
+  MCG_SLOW uint8_t reg;
   g_mode = MCG_MODE_OPEN;
-  g_rpm_cmd = 420;
-  control_set_rpm_cmd(g_rpm_cmd);
   g_duty_set = 0;
-  g_duty_step = 10;
-  g_service_ms = 40;
-  g_stream_on = 0;
-  g_clutch_on = 0;
-  g_load_on = 0;
-  hal_clutch_write(0);
-  hal_load_write(0);
+  for (reg = MCG_REG_MODE; reg < MCG_REG_COUNT; ++reg) {
+    if (k_access[reg - 1u] == MCG_RW) {
+      regs_write(reg, k_default[reg - 1u]);
+    }
+  }
 }
 
 static uint8_t flags(void) {
@@ -134,17 +142,7 @@ uint8_t regs_read(uint8_t reg, int16_t* value) MCG_REENTRANT {
 }
 
 uint8_t regs_writable(uint8_t reg) {
-  switch (reg) {
-    case MCG_REG_LOG_COUNT:
-    case MCG_REG_RPM:
-    case MCG_REG_COUNTS_16MS:
-    case MCG_REG_SEQ_LEN:
-    case MCG_REG_FLAGS:
-    case MCG_REG_STREAM_SEQ:
-      return 0;
-    default:
-      return reg >= MCG_REG_MODE && reg < MCG_REG_COUNT;
-  }
+  return reg >= MCG_REG_MODE && reg < MCG_REG_COUNT && k_access[reg - 1u] == MCG_RW;
 }
 
 static uint8_t in_range(int16_t v, int16_t lo, int16_t hi) { return v >= lo && v <= hi; }
@@ -167,11 +165,11 @@ uint8_t regs_write(uint8_t reg, int16_t v) {
   if (!regs_writable(reg)) {
     return MCG_ST_READ_ONLY;
   }
+  if (!in_range(v, k_min[reg - 1u], k_max[reg - 1u])) {
+    return MCG_ST_RANGE;
+  }
   switch (reg) {
     case MCG_REG_MODE:
-      if (!in_range(v, 0, MCG_MODE_COUNT - 1)) {
-        return MCG_ST_RANGE;
-      }
       if (v == MCG_MODE_OPEN) {
         g_duty_set = g_duty_out;
       }
@@ -179,9 +177,6 @@ uint8_t regs_write(uint8_t reg, int16_t v) {
       control_set_mode(g_mode);
       break;
     case MCG_REG_RPM_CMD:
-      if (!in_range(v, RPM_CMD_MIN, RPM_CMD_MAX)) {
-        return MCG_ST_RANGE;
-      }
       g_rpm_cmd = v;
       control_set_rpm_cmd(v);
       break;
@@ -195,15 +190,9 @@ uint8_t regs_write(uint8_t reg, int16_t v) {
       g_duty_set = v;
       break;
     case MCG_REG_DUTY_STEP:
-      if (!in_range(v, 1, MCG_DUTY_FULL)) {
-        return MCG_ST_RANGE;
-      }
       g_duty_step = v;
       break;
     case MCG_REG_DUTY_BIAS:
-      if (!in_range(v, -MCG_DUTY_FULL, MCG_DUTY_FULL)) {
-        return MCG_ST_RANGE;
-      }
       control_set_bias(v);
       break;
     case MCG_REG_KP:
@@ -223,69 +212,42 @@ uint8_t regs_write(uint8_t reg, int16_t v) {
       control_refresh();
       break;
     case MCG_REG_COEF_FRAC:
-      if (!in_range(v, 0, MCG_COEF_FRAC_BITS_MAX)) {
-        return MCG_ST_RANGE;
-      }
       control_set_coef_frac((uint8_t)v);
       break;
     case MCG_REG_DUTY_MIN:
-      if (!in_range(v, -MCG_DUTY_FULL, g_duty_max)) {
+      if (v > g_duty_max) {
         return MCG_ST_RANGE;
       }
       set_limits(v, g_duty_max);
       break;
     case MCG_REG_DUTY_MAX:
-      if (!in_range(v, g_duty_min, MCG_DUTY_FULL)) {
+      if (v < g_duty_min) {
         return MCG_ST_RANGE;
       }
       set_limits(g_duty_min, v);
       break;
     case MCG_REG_SERVICE_MS:
-      if (!in_range(v, 5, 250)) {
-        return MCG_ST_RANGE;
-      }
       g_service_ms = (uint8_t)v;
       break;
     case MCG_REG_LOG_INTERVAL:
-      if (!in_range(v, 1, 255)) {
-        return MCG_ST_RANGE;
-      }
       return logger_set_interval((uint8_t)v);
     case MCG_REG_STREAM:
-      if (!in_range(v, 0, 1)) {
-        return MCG_ST_RANGE;
-      }
       g_stream_on = (uint8_t)v;
       break;
     case MCG_REG_CLUTCH:
-      if (!in_range(v, 0, 1)) {
-        return MCG_ST_RANGE;
-      }
       g_clutch_on = (uint8_t)v;
       hal_clutch_write(g_clutch_on);
       break;
     case MCG_REG_LOAD:
-      if (!in_range(v, 0, 1)) {
-        return MCG_ST_RANGE;
-      }
       g_load_on = (uint8_t)v;
       hal_load_write(g_load_on);
       break;
     case MCG_REG_SEQ_STATE:
-      if (!in_range(v, MCG_SEQ_STOP, MCG_SEQ_LOOP)) {
-        return MCG_ST_RANGE;
-      }
       return seq_set_state((uint8_t)v);
     case MCG_REG_RX_ERRORS:
-      if (v != 0) {
-        return MCG_ST_RANGE;
-      }
       g_rx_errors = 0;
       break;
     default: /* MCG_REG_TX_DROPS, the last writable one */
-      if (v != 0) {
-        return MCG_ST_RANGE;
-      }
       g_tx_drops = 0;
       break;
   }

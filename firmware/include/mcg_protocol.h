@@ -1,9 +1,9 @@
 /* mcg_protocol.h: the wire contract between the SAB 80C515 board and the host (see mcg-protocol(7)).
  *
  * One header for both sides: the firmware (SDCC, C99) and the host tools (C++20) include it, so every
- * constant below is defined exactly once. It holds only macros, one enum-free set of ids and a
- * conversion-clean inline CRC, so it compiles warning-free as C99 and as C++ (-Wold-style-cast,
- * -Wconversion).
+ * constant below is defined exactly once. It holds macros, the register table (MCG_REGISTERS), byte
+ * structs of the payloads and a conversion-clean inline CRC, so it compiles warning-free as C99 and
+ * as C++ (-Wold-style-cast, -Wconversion).
  *
  * Frame (both directions), all multi-byte fields little-endian:
  *
@@ -22,6 +22,8 @@
 #define MCG_PROTOCOL_VERSION 1u
 
 /* Firmware version reported by MCG_CMD_VERSION. */
+#include <stdint.h> /* uint8_t */
+
 #define MCG_FW_VERSION_MAJOR 0u
 #define MCG_FW_VERSION_MINOR 1u
 #define MCG_FW_VERSION_PATCH 0u
@@ -48,6 +50,50 @@
 #define MCG_CMD_LOG_DUMP 0x05u  /* ()                       -> st, points u8, interval_ms u8 */
 #define MCG_CMD_SEQ_WRITE 0x06u /* (index u8, n x entry)    -> st, next index u8 */
 #define MCG_CMD_SEQ_CLEAR 0x07u /* ()                       -> st */
+
+/* ---- Payloads as byte structs ------------------------------------------------------------------
+ * Every member is a uint8_t (multi-byte fields as [lo, hi]), so no compiler pads them and sizeof
+ * is the length on the wire: both sides check and build payloads with sizeof, never a number. An
+ * answer's payload is the status byte, then (when MCG_ST_OK) the answer struct. */
+typedef struct {
+  uint8_t reg;
+} McgReadRequest;
+typedef struct {
+  uint8_t reg;
+  uint8_t value[2];
+} McgWriteRequest;
+typedef struct {
+  uint8_t reg;
+  uint8_t value[2];
+} McgRegisterAnswer; /* MCG_CMD_READ and MCG_CMD_WRITE: the register and the value it holds */
+typedef struct {
+  uint8_t protocol;
+  uint8_t major;
+  uint8_t minor;
+  uint8_t patch;
+  uint8_t board;
+} McgVersionAnswer;
+typedef struct {
+  uint8_t points;
+  uint8_t interval_ms;
+} McgDumpAnswer;
+typedef struct {
+  uint8_t next_index;
+} McgSeqWriteAnswer;
+typedef struct {
+  uint8_t first; /* index of the first point */
+  uint8_t n;     /* points that follow, u16 each */
+} McgLogDataHeader;
+typedef struct {
+  uint8_t seq;
+  uint8_t duty[2];    /* i16, 1/1000, at the last sample */
+  uint8_t rpm_cmd[2]; /* i16 */
+} McgStreamHeader;
+typedef struct {
+  uint8_t delay_ms[2]; /* u16, after the previous entry */
+  uint8_t reg;
+  uint8_t value[2]; /* i16 */
+} McgSeqEntry;
 
 /* ---- Frames the board sends on its own -------------------------------------------------------- */
 #define MCG_MSG_STREAM 0xF0u   /* stream block, see MCG_STREAM_* */
@@ -79,34 +125,92 @@
 #define MCG_RPM_PER_WINDOW_NUM 1875u /* 60000 / (2048 * 16) = 1875 / 1024 rpm per count */
 #define MCG_RPM_PER_WINDOW_DEN 1024u
 
-/* ---- Registers: id, type, unit, range, default (all travel as i16 little-endian) -------------- */
-#define MCG_REG_MODE 0x01u         /* rw  enum  MCG_MODE_*                        default 0 */
-#define MCG_REG_RPM_CMD 0x02u      /* rw  rpm   120..720 (420 +- 300)             default 420 */
-#define MCG_REG_DUTY 0x03u         /* rw  1/1000 duty_min..duty_max; read = output; write only in open loop */
-#define MCG_REG_DUTY_STEP 0x04u    /* rw  1/1000 1..1000 keypad up/down step     default 10 */
-#define MCG_REG_DUTY_BIAS 0x05u    /* rw  1/1000 -1000..1000 P mode: u = bias + Kp e   default 0 */
-#define MCG_REG_KP 0x06u           /* rw  Q(F)  1/1000 per count/ms, P mode gain  default 0 */
-#define MCG_REG_B0 0x07u           /* rw  Q(F)  PI/PID: u[n] = u[n-1] + b0 e[n] + b1 e[n-1] + b2 e[n-2] */
-#define MCG_REG_B1 0x08u           /* rw  Q(F) */
-#define MCG_REG_B2 0x09u           /* rw  Q(F)  (ignored in PI mode) */
-#define MCG_REG_COEF_FRAC 0x0Au    /* rw  bits  F = 0..12, fractional bits of KP, B0..B2   default 8 */
-#define MCG_REG_DUTY_MIN 0x0Bu     /* rw  1/1000 -1000..duty_max, saturation       default 0 */
-#define MCG_REG_DUTY_MAX 0x0Cu     /* rw  1/1000 duty_min..1000, saturation        default 1000 */
-#define MCG_REG_SERVICE_MS 0x0Du   /* rw  ms    5..250 keypad/duty service period default 40 */
-#define MCG_REG_LOG_INTERVAL 0x0Eu /* rw  ms    1..255 RAM log point spacing      default 4 */
-#define MCG_REG_LOG_COUNT 0x0Fu    /* ro  points recorded so far, 0..255 */
-#define MCG_REG_STREAM 0x10u       /* rw  0/1   stream blocks on                  default 0 */
-#define MCG_REG_CLUTCH 0x11u       /* rw  0/1   clutch engaged                    default 0 */
-#define MCG_REG_LOAD 0x12u         /* rw  0/1   generator load relay closed       default 0 */
-#define MCG_REG_RPM 0x13u          /* ro  rpm   measured over MCG_SPEED_WINDOW_MS */
-#define MCG_REG_COUNTS_16MS 0x14u  /* ro  counts in the last 16 ms (rpm = c * 1875 / 1024) */
-#define MCG_REG_SEQ_LEN 0x15u      /* ro  entries stored, 0..MCG_SEQ_MAX */
-#define MCG_REG_SEQ_STATE 0x16u    /* rw  MCG_SEQ_*                               default 0 */
-#define MCG_REG_FLAGS 0x17u        /* ro  MCG_FLAG_* bits */
-#define MCG_REG_RX_ERRORS 0x18u    /* rw  frames dropped (CRC, length, timeout, overrun); write 0 clears */
-#define MCG_REG_TX_DROPS 0x19u     /* rw  frames not sent for lack of transmit room; write 0 clears */
-#define MCG_REG_STREAM_SEQ 0x1Au   /* ro  sequence number of the next stream block */
-#define MCG_REG_COUNT 0x1Bu        /* ids 0x01..MCG_REG_COUNT-1 exist */
+/* ---- Registers ------------------------------------------------------------------------------
+ * Every register travels as i16 little-endian. Its id is MCG_REG_<NAME>; everything else about it
+ * is its row in MCG_REGISTERS below, the one table that the firmware (core/regs.c: access, range,
+ * power-on value), the host (src/lib/link/registers.cpp: names, units, range checks before
+ * sending) and the register table of mcg-protocol(7) (checked by tests/firmware/test_fw_regs.cpp)
+ * are expanded from. */
+#define MCG_REG_MODE 0x01u
+#define MCG_REG_RPM_CMD 0x02u
+#define MCG_REG_DUTY 0x03u
+#define MCG_REG_DUTY_STEP 0x04u
+#define MCG_REG_DUTY_BIAS 0x05u
+#define MCG_REG_KP 0x06u
+#define MCG_REG_B0 0x07u
+#define MCG_REG_B1 0x08u
+#define MCG_REG_B2 0x09u
+#define MCG_REG_COEF_FRAC 0x0Au
+#define MCG_REG_DUTY_MIN 0x0Bu
+#define MCG_REG_DUTY_MAX 0x0Cu
+#define MCG_REG_SERVICE_MS 0x0Du
+#define MCG_REG_LOG_INTERVAL 0x0Eu
+#define MCG_REG_LOG_COUNT 0x0Fu
+#define MCG_REG_STREAM 0x10u
+#define MCG_REG_CLUTCH 0x11u
+#define MCG_REG_LOAD 0x12u
+#define MCG_REG_RPM 0x13u
+#define MCG_REG_COUNTS_16MS 0x14u
+#define MCG_REG_SEQ_LEN 0x15u
+#define MCG_REG_SEQ_STATE 0x16u
+#define MCG_REG_FLAGS 0x17u
+#define MCG_REG_RX_ERRORS 0x18u
+#define MCG_REG_TX_DROPS 0x19u
+#define MCG_REG_STREAM_SEQ 0x1Au
+#define MCG_REG_COUNT 0x1Bu /* ids 0x01..MCG_REG_COUNT-1 exist, in the order of MCG_REGISTERS */
+
+/* Access column. */
+#define MCG_RO 0u /* read only: a write is refused with MCG_ST_READ_ONLY */
+#define MCG_RW 1u /* every write is range-checked, from the link, the keypad and playback alike */
+
+/* Unit column: what the raw i16 counts (the host shows duty in %, gains as raw / 2^F). */
+#define MCG_UNIT_MODE 0u     /* MCG_MODE_* */
+#define MCG_UNIT_SEQ 1u      /* MCG_SEQ_* */
+#define MCG_UNIT_RPM 2u      /* rev/min */
+#define MCG_UNIT_PERMILLE 3u /* 1/1000 of full-scale duty */
+#define MCG_UNIT_GAIN 4u     /* Q(F): 1/1000 duty per pulse/ms, times 2^F, F = coef_frac */
+#define MCG_UNIT_BITS 5u     /* bits */
+#define MCG_UNIT_MS 6u       /* milliseconds */
+#define MCG_UNIT_COUNT 7u    /* a count (counters read as u16) */
+#define MCG_UNIT_SWITCH 8u   /* 0 off, 1 on */
+#define MCG_UNIT_FLAGS 9u    /* MCG_FLAG_* bits */
+
+#define MCG_I16_MIN (-32767 - 1)
+#define MCG_I16_MAX 32767
+
+/* X(NAME, name, access, min, max, power-on value, unit, doc), one row per register in id order.
+ * min..max is the static range a write must meet (for MCG_RO: the range a read can show); the
+ * firmware checks the dynamic parts the doc names (duty within duty_min..duty_max, duty_min <=
+ * duty_max). Plain C89 tokens and literals: SDCC expands it into code-memory tables. */
+#define MCG_REGISTERS(X) \
+  X(MODE, "mode", MCG_RW, 0, MCG_MODE_COUNT - 1, MCG_MODE_OPEN, MCG_UNIT_MODE, "controller: open, p, pi, pid") \
+  X(RPM_CMD, "rpm_cmd", MCG_RW, 120, 720, 420, MCG_UNIT_RPM, "speed command, rpm") \
+  X(DUTY, "duty", MCG_RW, -MCG_DUTY_FULL, MCG_DUTY_FULL, 0, MCG_UNIT_PERMILLE, \
+    "motor duty, % (read: the output; write: open loop only, within duty_min..duty_max)") \
+  X(DUTY_STEP, "duty_step", MCG_RW, 1, MCG_DUTY_FULL, 10, MCG_UNIT_PERMILLE, "keypad up/down duty step, %") \
+  X(DUTY_BIAS, "duty_bias", MCG_RW, -MCG_DUTY_FULL, MCG_DUTY_FULL, 0, MCG_UNIT_PERMILLE, "P mode: u = bias + kp e, %") \
+  X(KP, "kp", MCG_RW, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, "P gain, 1/1000 duty per pulse/ms") \
+  X(B0, "b0", MCG_RW, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, \
+    "PI/PID: u[n] = u[n-1] + b0 e[n] + b1 e[n-1] + b2 e[n-2], 1/1000 duty per pulse/ms") \
+  X(B1, "b1", MCG_RW, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, "PI/PID coefficient of e[n-1]") \
+  X(B2, "b2", MCG_RW, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, "PID coefficient of e[n-2]") \
+  X(COEF_FRAC, "coef_frac", MCG_RW, 0, MCG_COEF_FRAC_BITS_MAX, 8, MCG_UNIT_BITS, "fractional bits F of kp, b0, b1, b2") \
+  X(DUTY_MIN, "duty_min", MCG_RW, -MCG_DUTY_FULL, MCG_DUTY_FULL, 0, MCG_UNIT_PERMILLE, "controller output floor, %") \
+  X(DUTY_MAX, "duty_max", MCG_RW, -MCG_DUTY_FULL, MCG_DUTY_FULL, MCG_DUTY_FULL, MCG_UNIT_PERMILLE, "controller output ceiling, %") \
+  X(SERVICE_MS, "service_ms", MCG_RW, 5, 250, 40, MCG_UNIT_MS, "keypad and duty service period, ms") \
+  X(LOG_INTERVAL, "log_interval", MCG_RW, 1, 255, 4, MCG_UNIT_MS, "RAM log point spacing, ms") \
+  X(LOG_COUNT, "log_count", MCG_RO, 0, MCG_LOG_POINTS, 0, MCG_UNIT_COUNT, "RAM log points recorded") \
+  X(STREAM, "stream", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, "stream blocks on") \
+  X(CLUTCH, "clutch", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, "clutch engaged") \
+  X(LOAD, "load", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, "generator load relay closed") \
+  X(RPM, "rpm", MCG_RO, 0, 7471, 0, MCG_UNIT_RPM, "measured speed over 16 ms, rpm") \
+  X(COUNTS_16MS, "counts_16ms", MCG_RO, 0, 4080, 0, MCG_UNIT_COUNT, "encoder pulses in the last 16 ms") \
+  X(SEQ_LEN, "seq_len", MCG_RO, 0, MCG_SEQ_MAX, 0, MCG_UNIT_COUNT, "command sequence entries stored") \
+  X(SEQ_STATE, "seq_state", MCG_RW, MCG_SEQ_STOP, MCG_SEQ_LOOP, MCG_SEQ_STOP, MCG_UNIT_SEQ, "sequence playback: stop, play, loop") \
+  X(FLAGS, "flags", MCG_RO, 0, 15, 0, MCG_UNIT_FLAGS, "saturated, logging, log_full, seq") \
+  X(RX_ERRORS, "rx_errors", MCG_RW, 0, 0, 0, MCG_UNIT_COUNT, "frames the board dropped; write 0 clears") \
+  X(TX_DROPS, "tx_drops", MCG_RW, 0, 0, 0, MCG_UNIT_COUNT, "frames the board could not send; write 0 clears") \
+  X(STREAM_SEQ, "stream_seq", MCG_RO, 0, 255, 0, MCG_UNIT_COUNT, "sequence number of the next stream block")
 
 #define MCG_MODE_OPEN 0u /* duty from MCG_REG_DUTY (keypad up/down) */
 #define MCG_MODE_P 1u    /* u = bias + Kp e */
@@ -129,7 +233,7 @@
 #define MCG_LOG_DUMP_CHUNK 16u /* points per MCG_MSG_LOG_DATA frame */
 #define MCG_LOG_DUMP_FRAMES 16u
 /* MCG_MSG_LOG_DATA payload: index u8 of the first point, n u8, then n x u16 points */
-#define MCG_LOGDATA_HEADER 2u
+#define MCG_LOGDATA_HEADER sizeof(McgLogDataHeader)
 
 /* ---- Stream blocks ---------------------------------------------------------------------------- */
 /* Payload: seq u8, duty i16 (1/1000, at the last sample), rpm_cmd i16, then MCG_STREAM_SAMPLES x u8:
@@ -137,13 +241,13 @@
  * 5 + 5 + 16 = 26 bytes per 32 ms = 812.5 B/s of the 960 B/s at 9600 8N1. */
 #define MCG_STREAM_PERIOD_MS 2u
 #define MCG_STREAM_SAMPLES 16u
-#define MCG_STREAM_HEADER 5u
+#define MCG_STREAM_HEADER sizeof(McgStreamHeader)
 
 /* ---- Command sequence (played back from RAM) -------------------------------------------------- */
 /* Entry (5 bytes): delay_ms u16 after the previous entry, reg u8, value i16. Played as a register
  * write through the same checks as MCG_CMD_WRITE. MCG_CMD_SEQ_WRITE carries up to 12 entries. */
 #define MCG_SEQ_MAX 128u
-#define MCG_SEQ_ENTRY_BYTES 5u
+#define MCG_SEQ_ENTRY_BYTES sizeof(McgSeqEntry)
 #define MCG_SEQ_WRITE_MAX 12u
 #define MCG_SEQ_XADDR 0x9700u /* external RAM address of the sequence table */
 

@@ -76,6 +76,58 @@ TEST(BoardBoard, AnswersAsTheHostBoard) {
   }
 }
 
+/// The status text a refused write reports (empty when the board took the value).
+std::string refusal(link::Session& session, const link::RegisterInfo& r, std::int32_t raw) {
+  try {
+    session.write(r, static_cast<std::int16_t>(raw));
+  } catch (const Error& e) {
+    const std::string text = e.what();
+    return text.substr(text.rfind(": ") + 2);
+  }
+  return "";
+}
+
+// The one register table (MCG_REGISTERS) against the linked firmware core, through the host's
+// session: every register at its power-on value, every writable one accepting both ends of its
+// range and refusing one step beyond (the host refusing it too, before sending).
+TEST(BoardBoard, EveryRegisterAtItsRangeEdges) {
+  Rig rig;
+  rig.session.hello();
+  for (const auto& r : link::registers()) {
+    if (r.writable) {
+      EXPECT_EQ(rig.session.read(r), r.raw_default) << r.name;
+    }
+  }
+  // seq_state may leave stop only with a sequence stored.
+  const link::SeqEntry entry{1000, MCG_REG_DUTY_STEP, 10};
+  rig.session.write_sequence(std::span<const link::SeqEntry>(&entry, 1));
+  const std::string out_of_range = "value outside the register's range";
+  for (const auto& r : link::registers()) {
+    if (!r.writable) {
+      EXPECT_EQ(refusal(rig.session, r, r.raw_default), "register is read-only") << r.name;
+      continue;
+    }
+    for (const std::int32_t edge : {r.raw_min, r.raw_max}) {
+      // The dynamic parts of the ranges (duty within duty_min..duty_max) opened wide, open loop.
+      rig.session.write(reg("mode"), MCG_MODE_OPEN);
+      rig.session.write(reg("duty_min"), -MCG_DUTY_FULL);
+      rig.session.write(reg("duty_max"), MCG_DUTY_FULL);
+      EXPECT_EQ(refusal(rig.session, r, edge), "") << r.name << " = " << edge;
+      if (r.id != MCG_REG_SEQ_STATE) {
+        EXPECT_EQ(rig.session.read(r), edge) << r.name;
+      }
+    }
+    rig.session.write(reg("seq_state"), MCG_SEQ_STOP);
+    rig.session.write(reg("mode"), MCG_MODE_OPEN);
+    for (const std::int32_t beyond : {r.raw_min - 1, r.raw_max + 1}) {
+      if (beyond < MCG_I16_MIN || beyond > MCG_I16_MAX) continue;
+      EXPECT_EQ(refusal(rig.session, r, beyond), out_of_range) << r.name << " = " << beyond;
+      const double value = link::to_engineering(r, static_cast<std::int16_t>(beyond), 0);
+      EXPECT_THROW(link::to_raw(r, value, 0), Error) << r.name << " = " << beyond;
+    }
+  }
+}
+
 TEST(BoardBoard, OpenLoopDutyDrivesThePlant) {
   Rig rig;
   rig.session.write(reg("clutch"), 1);

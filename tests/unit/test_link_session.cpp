@@ -102,7 +102,6 @@ TEST(LinkSession, BoardErrorReportMeansSendAgain) {
   Session s(line, quick());
   EXPECT_EQ(s.hello().board, MCG_BOARD_C515);
   EXPECT_EQ(line.requests(), 2);
-  EXPECT_EQ(s.board_errors(), 1u);
 }
 
 TEST(LinkSession, StaleAnswerForAnotherRegisterIsIgnored) {
@@ -114,7 +113,7 @@ TEST(LinkSession, StaleAnswerForAnotherRegisterIsIgnored) {
     return out;
   });
   Session s(line, quick());
-  RegisterInfo rpm_cmd{"rpm_cmd", MCG_REG_RPM_CMD, Unit::Rpm, true, 120, 720, ""};
+  RegisterInfo rpm_cmd{"rpm_cmd", MCG_REG_RPM_CMD, Unit::Rpm, true, 120, 720, 420, ""};
   EXPECT_EQ(s.read(rpm_cmd), 420);
 }
 

@@ -15,40 +15,18 @@ namespace mcg::link {
 
 namespace {
 
-constexpr std::int32_t k_i16_min = -32768;
-constexpr std::int32_t k_i16_max = 32767;
+#define MCG_HOST_REGISTER(NAME, name, access, lo, hi, def, unit, doc) \
+  RegisterInfo{name, MCG_REG_##NAME, static_cast<Unit>(unit), (access) == MCG_RW, lo, hi, def, doc},
+constexpr std::array<RegisterInfo, MCG_REG_COUNT - 1> k_registers{{MCG_REGISTERS(MCG_HOST_REGISTER)}};
+#undef MCG_HOST_REGISTER
 
-constexpr std::array<RegisterInfo, MCG_REG_COUNT - 1> k_registers{{
-    {"mode", MCG_REG_MODE, Unit::Mode, true, 0, MCG_MODE_COUNT - 1, "controller: open, p, pi, pid"},
-    {"rpm_cmd", MCG_REG_RPM_CMD, Unit::Rpm, true, 120, 720, "speed command, rpm"},
-    {"duty", MCG_REG_DUTY, Unit::Percent, true, -1000, 1000,
-     "motor duty, % (read: the output; write: open loop only, within duty_min..duty_max)"},
-    {"duty_step", MCG_REG_DUTY_STEP, Unit::Percent, true, 1, 1000, "keypad up/down duty step, %"},
-    {"duty_bias", MCG_REG_DUTY_BIAS, Unit::Percent, true, -1000, 1000, "P mode: u = bias + kp e, %"},
-    {"kp", MCG_REG_KP, Unit::Gain, true, k_i16_min, k_i16_max, "P gain, 1/1000 duty per pulse/ms"},
-    {"b0", MCG_REG_B0, Unit::Gain, true, k_i16_min, k_i16_max,
-     "PI/PID: u[n] = u[n-1] + b0 e[n] + b1 e[n-1] + b2 e[n-2], 1/1000 duty per pulse/ms"},
-    {"b1", MCG_REG_B1, Unit::Gain, true, k_i16_min, k_i16_max, "PI/PID coefficient of e[n-1]"},
-    {"b2", MCG_REG_B2, Unit::Gain, true, k_i16_min, k_i16_max, "PID coefficient of e[n-2]"},
-    {"coef_frac", MCG_REG_COEF_FRAC, Unit::Bits, true, 0, MCG_COEF_FRAC_BITS_MAX,
-     "fractional bits F of kp, b0, b1, b2"},
-    {"duty_min", MCG_REG_DUTY_MIN, Unit::Percent, true, -1000, 1000, "controller output floor, %"},
-    {"duty_max", MCG_REG_DUTY_MAX, Unit::Percent, true, -1000, 1000, "controller output ceiling, %"},
-    {"service_ms", MCG_REG_SERVICE_MS, Unit::Ms, true, 5, 250, "keypad and duty service period, ms"},
-    {"log_interval", MCG_REG_LOG_INTERVAL, Unit::Ms, true, 1, 255, "RAM log point spacing, ms"},
-    {"log_count", MCG_REG_LOG_COUNT, Unit::Count, false, 0, MCG_LOG_POINTS, "RAM log points recorded"},
-    {"stream", MCG_REG_STREAM, Unit::Switch, true, 0, 1, "stream blocks on"},
-    {"clutch", MCG_REG_CLUTCH, Unit::Switch, true, 0, 1, "clutch engaged"},
-    {"load", MCG_REG_LOAD, Unit::Switch, true, 0, 1, "generator load relay closed"},
-    {"rpm", MCG_REG_RPM, Unit::Rpm, false, k_i16_min, k_i16_max, "measured speed over 16 ms, rpm"},
-    {"counts_16ms", MCG_REG_COUNTS_16MS, Unit::Count, false, 0, 65535, "encoder pulses in the last 16 ms"},
-    {"seq_len", MCG_REG_SEQ_LEN, Unit::Count, false, 0, MCG_SEQ_MAX, "command sequence entries stored"},
-    {"seq_state", MCG_REG_SEQ_STATE, Unit::SeqState, true, 0, 2, "sequence playback: stop, play, loop"},
-    {"flags", MCG_REG_FLAGS, Unit::Flags, false, 0, 255, "saturated, logging, log_full, seq"},
-    {"rx_errors", MCG_REG_RX_ERRORS, Unit::Count, true, 0, 0, "frames the board dropped; write 0 clears"},
-    {"tx_drops", MCG_REG_TX_DROPS, Unit::Count, true, 0, 0, "frames the board could not send; write 0 clears"},
-    {"stream_seq", MCG_REG_STREAM_SEQ, Unit::Count, false, 0, 255, "sequence number of the next stream block"},
-}};
+constexpr bool ids_in_table_order() {
+  for (std::size_t k = 0; k < k_registers.size(); ++k) {
+    if (k_registers[k].id != k + 1 || k_registers[k].name.empty()) return false;
+  }
+  return true;
+}
+static_assert(ids_in_table_order(), "MCG_REGISTERS: one row per id 0x01..MCG_REG_COUNT-1, in id order");
 
 constexpr std::array<std::string_view, MCG_MODE_COUNT> k_modes{"open", "p", "pi", "pid"};
 constexpr std::array<std::string_view, 3> k_seq_states{"stop", "play", "loop"};

@@ -7,20 +7,23 @@
 #include <string>
 #include <string_view>
 
+#include "mcg_protocol.h"  // MCG_UNIT_*, MCG_REGISTERS
+
 namespace mcg::link {
 
-/// How a register's raw i16 maps to the value a user types and reads.
-enum class Unit {
-  Mode,      ///< MCG_MODE_*: open, p, pi, pid (or 0..3)
-  SeqState,  ///< MCG_SEQ_*: stop, play, loop (or 0..2)
-  Rpm,       ///< rev/min, raw = value
-  Percent,   ///< duty in %, raw = 10 x value (the board counts 1/1000 of full scale)
-  Gain,      ///< coefficient, raw = value x 2^F (F = coef_frac): 1/1000 duty per (pulse/ms)
-  Bits,      ///< fractional bits, raw = value
-  Ms,        ///< milliseconds, raw = value
-  Count,     ///< a count, raw = value (counters read as unsigned 16 bit)
-  Switch,    ///< 0/1 (also off/on)
-  Flags,     ///< MCG_FLAG_* bits, read only
+/// How a register's raw i16 maps to the value a user types and reads (the unit column of
+/// MCG_REGISTERS in mcg_protocol.h).
+enum class Unit : std::uint8_t {
+  Mode = MCG_UNIT_MODE,          ///< MCG_MODE_*: open, p, pi, pid (or 0..3)
+  SeqState = MCG_UNIT_SEQ,       ///< MCG_SEQ_*: stop, play, loop (or 0..2)
+  Rpm = MCG_UNIT_RPM,            ///< rev/min, raw = value
+  Percent = MCG_UNIT_PERMILLE,   ///< duty in %, raw = 10 x value (the board counts 1/1000 of full scale)
+  Gain = MCG_UNIT_GAIN,          ///< coefficient, raw = value x 2^F (F = coef_frac): 1/1000 duty per (pulse/ms)
+  Bits = MCG_UNIT_BITS,          ///< fractional bits, raw = value
+  Ms = MCG_UNIT_MS,              ///< milliseconds, raw = value
+  Count = MCG_UNIT_COUNT,        ///< a count, raw = value (counters read as unsigned 16 bit)
+  Switch = MCG_UNIT_SWITCH,      ///< 0/1 (also off/on)
+  Flags = MCG_UNIT_FLAGS,        ///< MCG_FLAG_* bits, read only
 };
 
 struct RegisterInfo {
@@ -30,10 +33,11 @@ struct RegisterInfo {
   bool writable;
   std::int32_t raw_min;  ///< the range the board accepts (static part; the board checks the rest)
   std::int32_t raw_max;
+  std::int16_t raw_default;  ///< the board's power-on value
   std::string_view doc;  ///< unit and meaning, one line
 };
 
-/// Every register of the protocol, in id order.
+/// Every register of the protocol, in id order (MCG_REGISTERS expanded).
 std::span<const RegisterInfo> registers();
 /// The register called `name` (case-insensitive; '-' may stand for '_'), or nullptr.
 const RegisterInfo* find_register(std::string_view name);

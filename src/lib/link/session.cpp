@@ -84,7 +84,6 @@ std::vector<std::uint8_t> Session::request(std::uint8_t cmd, std::span<const std
           return std::vector<std::uint8_t>(f.payload.begin() + 1, f.payload.end());
         }
         if (f.cmd == MCG_MSG_ERROR) {
-          ++m_board_errors;
           resend = true;
         } else if (f.cmd >= MCG_MSG_STREAM && m_unsolicited.size() < k_max_unsolicited) {
           m_unsolicited.push_back(std::move(f));
@@ -104,7 +103,7 @@ Version Session::hello() {
   m_decoder.reset();
   m_frames.clear();
   const auto data = request(MCG_CMD_VERSION, {}, "the version request");
-  if (data.size() < 5) fail("{}: wrong firmware: malformed version answer ({} bytes)", m_port.name(), data.size());
+  if (data.size() < sizeof(McgVersionAnswer)) fail("{}: wrong firmware: malformed version answer ({} bytes)", m_port.name(), data.size());
   Version v{data[0], data[1], data[2], data[3], data[4]};
   if (v.protocol != MCG_PROTOCOL_VERSION) {
     fail("{}: wrong firmware: it speaks protocol {} (firmware {}.{}.{} on {}), mcg-serial speaks protocol {}",
@@ -116,7 +115,7 @@ Version Session::hello() {
 std::int16_t Session::read(const RegisterInfo& reg) {
   const std::uint8_t req[1] = {reg.id};
   const auto data = request(MCG_CMD_READ, req, fmt::format("reading {}", reg.name));
-  if (data.size() < 3) fail("{}: reading {}: malformed answer", m_port.name(), reg.name);
+  if (data.size() < sizeof(McgRegisterAnswer)) fail("{}: reading {}: malformed answer", m_port.name(), reg.name);
   return get_i16(data, 1);
 }
 
@@ -124,7 +123,7 @@ std::int16_t Session::write(const RegisterInfo& reg, std::int16_t raw) {
   std::vector<std::uint8_t> req{reg.id};
   put_i16(req, raw);
   const auto data = request(MCG_CMD_WRITE, req, fmt::format("writing {}", reg.name));
-  if (data.size() < 3) fail("{}: writing {}: malformed answer", m_port.name(), reg.name);
+  if (data.size() < sizeof(McgRegisterAnswer)) fail("{}: writing {}: malformed answer", m_port.name(), reg.name);
   return get_i16(data, 1);
 }
 
@@ -134,11 +133,7 @@ std::optional<Frame> Session::receive(double timeout_s) {
     while (!m_frames.empty()) {
       Frame f = std::move(m_frames.front());
       m_frames.pop_front();
-      if (f.cmd == MCG_MSG_ERROR) {
-        ++m_board_errors;
-      } else if (f.cmd >= MCG_MSG_STREAM) {
-        m_unsolicited.push_back(std::move(f));
-      }
+      if (f.cmd >= MCG_MSG_STREAM && f.cmd != MCG_MSG_ERROR) m_unsolicited.push_back(std::move(f));
     }
     if (!m_unsolicited.empty()) {
       Frame f = std::move(m_unsolicited.front());
@@ -162,7 +157,7 @@ LogDump Session::dump_log() {
                                        [](const Frame& f) { return f.cmd == MCG_MSG_LOG_DATA; }),
                         m_unsolicited.end());
     const auto data = request(MCG_CMD_LOG_DUMP, {}, "the log dump");
-    if (data.size() < 2) fail("{}: the log dump: malformed answer", m_port.name());
+    if (data.size() < sizeof(McgDumpAnswer)) fail("{}: the log dump: malformed answer", m_port.name());
     LogDump dump;
     const std::size_t points = data[0];
     dump.interval_ms = data[1];
@@ -203,7 +198,7 @@ void Session::write_sequence(std::span<const SeqEntry> entries) {
       put_i16(req, e.raw);
     }
     const auto data = request(MCG_CMD_SEQ_WRITE, req, fmt::format("writing sequence entries {}..{}", index, index + n - 1));
-    if (data.empty() || data[0] != index + n) {
+    if (data.size() < sizeof(McgSeqWriteAnswer) || data[0] != index + n) {
       fail("{}: writing sequence entries {}..{}: the board reports next index {}, expected {}", m_port.name(), index,
            index + n - 1, data.empty() ? -1 : int{data[0]}, index + n);
     }

@@ -85,8 +85,6 @@ class Session {
 
   Port& port() { return m_port; }
   const DecoderStats& stats() const { return m_decoder.stats(); }
-  /// Board frame-error reports (MCG_MSG_ERROR) seen so far.
-  std::uint64_t board_errors() const { return m_board_errors; }
 
  private:
   /// Reads what arrives within `timeout_s` into m_frames.
@@ -98,7 +96,6 @@ class Session {
   Decoder m_decoder;
   std::deque<Frame> m_frames;    ///< decoded, not yet consumed
   std::deque<Frame> m_unsolicited;
-  std::uint64_t m_board_errors = 0;
 };
 
 }  // namespace mcg::link

@@ -179,13 +179,6 @@ double LoopEval::delay_s() const {
   return acc;
 }
 
-bool LoopEval::all_discrete() const {
-  for (const FreqEval& f : m_factors) {
-    if (!f.tf().discrete()) return false;
-  }
-  return true;
-}
-
 void LoopEval::range(double& lo, double& hi) const {
   lo = INFINITY;
   hi = 0.0;

@@ -49,7 +49,6 @@ class LoopEval {
   /// Sample period of the discrete factors (0 if none).
   double dt_s() const { return m_dt_s; }
   double delay_s() const;
-  bool all_discrete() const;
   /// Scan range holding every crossover.
   void range(double& lo_rad_s, double& hi_rad_s) const;
 
