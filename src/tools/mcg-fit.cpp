@@ -45,9 +45,23 @@ int main(int argc, char** argv) {
   CLI::App* md = app.add_subcommand("model", "grey-box fit of the nonlinear model to time series");
   md->add_option("--config", model.config, "INI parameter set: initial and fixed values (repeatable, later files win)")
       ->allow_extra_args(false);
-  md->add_option("--free", model.free, "parameters to fit, comma separated (default: J, R, Kt, Ke, Tc of the motor)")
+  md->add_option("--free", model.free,
+                 "parameters to fit, comma separated (default from the data: J, R, Kt, Ke, Tc with a current, "
+                 "else J, Kt = Ke, Tc)")
       ->allow_extra_args(false)
       ->delimiter(',');
+  md->add_option("--fix", model.fix, "measured parameters pinned, NAME=VALUE, comma separated")
+      ->allow_extra_args(false)
+      ->delimiter(',');
+  md->add_option("--tie", model.tie, "FOLLOWER=LEADER: the follower takes the leader's fitted value")
+      ->allow_extra_args(false)
+      ->delimiter(',');
+  md->add_flag("--evaluate", model.evaluate, "no fit: fit % and RMS of the given model on the runs");
+  md->add_option("--from", model.from_s, "use the rows of each run from this time on, s");
+  md->add_option("--to", model.to_s, "use the rows of each run up to this time, s");
+  md->add_option("--gear-ratio", model.gear_ratio, "motor turns per turn of the shaft whose speed was measured")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   md->add_option("--outputs", model.outputs, "measured columns compared (default: rpm and each varying i, i_gen, v_gen)")
       ->allow_extra_args(false)
       ->delimiter(',');
@@ -76,6 +90,14 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"csv", "text"}))
       ->capture_default_str();
   gp->add_option("--residuals", gap.residuals, "write the validation residual series (CSV) to this file");
+  gp->add_option("--fix", gap.fix, "measured parameters pinned, NAME=VALUE, comma separated (not rescaled)")
+      ->allow_extra_args(false)
+      ->delimiter(',');
+  gp->add_option("--from", gap.from_s, "use the rows of each run from this time on, s");
+  gp->add_option("--to", gap.to_s, "use the rows of each run up to this time, s");
+  gp->add_option("--gear-ratio", gap.gear_ratio, "motor turns per turn of the shaft whose speed was measured")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   gp->add_option("--threads", gap.threads, "candidates fitted at once (0 = every core)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();

@@ -2,11 +2,14 @@
 #include "fit/greybox.hpp"
 
 #include "common/error.hpp"
+#include "config/ini.hpp"
 #include "test_fit_support.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <functional>
 
 namespace mcg::fit {
@@ -131,6 +134,141 @@ TEST(FitGreybox, BadProblemsAreNamed) {
   auto no_v = table;
   no_v.names[1] = "u";
   EXPECT_EQ(error_of([&] { make_run(no_v, {}, rig.params); }), "sim.csv: missing column 'v' (has: t,u,clutch,r_load,rpm,i)");
+}
+
+/// Speed-only runs of a motor alone: steps up and down, a reversal, rests in between.
+model::Inputs speed_only_run() {
+  Program p;
+  p.hold(0.0, 0.1, 0).hold(5.0, 0.4, 0).hold(12.0, 0.4, 0).hold(2.0, 0.4, 0).hold(0.0, 0.3, 0);
+  p.hold(-8.0, 0.4, 0).hold(-3.0, 0.4, 0).hold(9.0, 0.5, 0);
+  return p.inputs;
+}
+
+model::Model speed_only_truth() {
+  model::Model truth;
+  truth.params.motor.J_kg_m2 *= 1.3;
+  truth.params.motor.Kt_Nm_A *= 0.9;
+  truth.params.motor.Ke_V_s_rad *= 0.9;
+  truth.params.motor.friction.Tc_Nm *= 1.4;
+  return truth;
+}
+
+// Speed alone fixes R/Kt, Tc R/Kt and J R/(Kt Ke): the default frees J, Kt (Ke tied) and Tc,
+// leaves the measured R alone, and recovers the truth within 2 % with no warning.
+TEST(FitGreybox, SpeedOnlyDefaultTiesKeToKtAndLeavesRAlone) {
+  const model::Model truth = speed_only_truth();
+  FitProblem problem;
+  problem.runs.push_back(make_run(measure(truth, speed_only_run(), 31, false), {}, problem.model.params));
+  problem.free = default_free(problem.runs, {}, problem.ties);
+  EXPECT_EQ(problem.free, (std::vector<std::string>{"motor.J_kg_m2", "motor.Kt_Nm_A", "motor.Tc_Nm"}));
+  ASSERT_EQ(problem.ties.size(), 1U);
+  EXPECT_EQ(problem.ties[0], (std::pair<std::string, std::string>{"motor.Ke_V_s_rad", "motor.Kt_Nm_A"}));
+  problem.sim.max_step_s = 2.5e-4;
+  const FitResult r = fit_model(problem);
+  EXPECT_TRUE(r.trustworthy()) << r.nls.reason << (r.warnings.empty() ? "" : ": " + r.warnings[0]);
+  const auto& m = r.model.params.motor;
+  EXPECT_NEAR(m.J_kg_m2, truth.params.motor.J_kg_m2, 0.02 * truth.params.motor.J_kg_m2);
+  EXPECT_NEAR(m.Kt_Nm_A, truth.params.motor.Kt_Nm_A, 0.02 * truth.params.motor.Kt_Nm_A);
+  EXPECT_EQ(m.Ke_V_s_rad, m.Kt_Nm_A);
+  EXPECT_NEAR(m.friction.Tc_Nm, truth.params.motor.friction.Tc_Nm, 0.05 * truth.params.motor.friction.Tc_Nm);
+  EXPECT_EQ(m.R_ohm, model::Model{}.params.motor.R_ohm);
+  // With a current the default frees R and Ke as well.
+  FitProblem with_i;
+  with_i.runs.push_back(make_run(measure(truth, speed_only_run(), 31), {}, with_i.model.params));
+  EXPECT_EQ(default_free(with_i.runs, {"motor.R_ohm"}, with_i.ties),
+            (std::vector<std::string>{"motor.J_kg_m2", "motor.Kt_Nm_A", "motor.Ke_V_s_rad", "motor.Tc_Nm"}));
+  EXPECT_TRUE(with_i.ties.empty());
+}
+
+// The degenerate set on speed-only data (R and Kt free together) is not reported as converged.
+TEST(FitGreybox, DegenerateFreeSetIsFlagged) {
+  FitProblem problem;
+  problem.runs.push_back(make_run(measure(speed_only_truth(), speed_only_run(), 32, false), {}, problem.model.params));
+  problem.free = {"motor.J_kg_m2", "motor.R_ohm", "motor.Kt_Nm_A", "motor.Ke_V_s_rad", "motor.Tc_Nm"};
+  problem.sim.max_step_s = 2.5e-4;
+  const FitResult r = fit_model(problem);
+  EXPECT_FALSE(r.trustworthy());
+  ASSERT_FALSE(r.warnings.empty());
+  const bool correlated = std::any_of(r.warnings.begin(), r.warnings.end(), [](const std::string& w) {
+    return w.find("correlated") != std::string::npos || w.find("not determined") != std::string::npos;
+  });
+  EXPECT_TRUE(correlated) << r.warnings[0];
+}
+
+TEST(FitGreybox, AParameterAtItsBoundIsFlagged) {
+  FitProblem problem;
+  model::Model truth;
+  truth.params.motor.J_kg_m2 *= 3.0;
+  problem.runs.push_back(make_run(measure(truth, speed_only_run(), 34, false), {}, problem.model.params));
+  problem.free = {"motor.J_kg_m2"};
+  problem.bounds["motor.J_kg_m2"] = {1e-6, 1.2e-5};
+  const FitResult r = fit_model(problem);
+  ASSERT_EQ(r.warnings.size(), 1U) << r.warnings[1];
+  EXPECT_EQ(r.warnings[0], "motor.J_kg_m2 = 1.2e-05 kg m^2 is at its upper bound");
+}
+
+// Bounds follow the given model: a motor 1000 times the rig's inertia can be fitted.
+TEST(FitGreybox, BoundsAreRelativeToTheGivenModel) {
+  model::Model big;
+  big.params.motor.J_kg_m2 = 7e-3;
+  big.params.motor.R_ohm = 0.5;
+  const auto infos = model::parameters(big);
+  const auto find = [&](const std::string& name) {
+    return *std::find_if(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; });
+  };
+  EXPECT_DOUBLE_EQ(find("motor.J_kg_m2").upper, 7e-2);
+  EXPECT_DOUBLE_EQ(find("motor.J_kg_m2").lower, 7e-4);
+  // Friction up to the stall torque Kt supply / R; viscous c1 up to stall torque / no-load speed.
+  const double stall = big.params.motor.Kt_Nm_A * big.params.supply_V / 0.5;
+  EXPECT_DOUBLE_EQ(find("motor.Tc_Nm").upper, stall);
+  EXPECT_DOUBLE_EQ(find("motor.visc1_Nm_s_rad").upper, stall / (big.params.supply_V / big.params.motor.Ke_V_s_rad));
+
+  std::istringstream text("[bounds]\nmotor.J_kg_m2 = 1e-3 1\nparam_mismatch.R_scale = 0.2 5\n");
+  const auto ini = config::Ini::parse(text, "b.ini");
+  const auto b = read_bounds(ini, big);
+  EXPECT_EQ(b.at("motor.J_kg_m2"), (std::pair<double, double>{1e-3, 1.0}));
+  EXPECT_EQ(b.at("param_mismatch.R_scale"), (std::pair<double, double>{0.2, 5.0}));
+  std::istringstream bad("[bounds]\nmotor.J_kg_m2 = 1 0.1\nmotor.Q = 1 2\n");
+  EXPECT_EQ(error_of([&] { read_bounds(config::Ini::parse(bad, "b.ini"), big); }),
+            "b.ini:2: [bounds] motor.J_kg_m2: lower bound must be below the upper");
+}
+
+// Speed measured behind a 5:1 gearbox: fitted back with the gear ratio.
+TEST(FitGreybox, GearRatioDividesTheMeasuredSpeed) {
+  const model::Model truth = speed_only_truth();
+  auto table = measure(truth, speed_only_run(), 35, false);
+  for (double& x : table.col("rpm")) x /= 5.0;
+  FitProblem problem;
+  problem.runs.push_back(make_run(table, {}, problem.model.params));
+  problem.runs[0].gear_ratio = 5.0;
+  problem.free = default_free(problem.runs, {}, problem.ties);
+  const FitResult r = fit_model(problem);
+  EXPECT_TRUE(r.trustworthy());
+  EXPECT_NEAR(r.model.params.motor.Kt_Nm_A, truth.params.motor.Kt_Nm_A, 0.02 * truth.params.motor.Kt_Nm_A);
+  EXPECT_GT(r.runs[0].fit_percent[0], 95.0);
+}
+
+TEST(FitGreybox, TimeRangeOmegaAndFixedValues) {
+  const auto table = measure(model::Model{}, speed_only_run(), 36, false);
+  const auto part = select_time(table, 0.5, 1.0);
+  EXPECT_EQ(part.rows(), 501U);
+  EXPECT_EQ(part.col("t").front(), 0.5);
+  EXPECT_EQ(part.first_line, table.first_line + 500);
+  EXPECT_EQ(error_of([&] { select_time(table, 10.0, 11.0); }), "sim.csv: no rows between --from 10 s and --to 11 s");
+
+  table::Table omega = table;
+  omega.names[4] = "omega";
+  const auto converted = with_rpm(omega);
+  EXPECT_NEAR(converted.col("rpm")[600], table.col("rpm")[600] * 30.0 / M_PI, 1e-9);
+
+  model::Model m;
+  EXPECT_EQ(fix_parameters(m, {"motor.R_ohm=2.5", "motor.L_H=1e-3"}),
+            (std::vector<std::string>{"motor.R_ohm", "motor.L_H"}));
+  EXPECT_EQ(m.params.motor.R_ohm, 2.5);
+  EXPECT_EQ(error_of([&] { fix_parameters(m, {"motor.R_ohm"}); }), "--fix: expected NAME=VALUE: 'motor.R_ohm'");
+  EXPECT_EQ(error_of([&] { fix_parameters(m, {"motor.R=1"}); }),
+            "--fix: unknown parameter 'motor.R' (see mcg-fit model --list)");
+  EXPECT_EQ(error_of([&] { fix_parameters(m, {"motor.R_ohm=x"}); }), "--fix: motor.R_ohm: invalid number 'x'");
 }
 
 }  // namespace

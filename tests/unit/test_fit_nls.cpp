@@ -99,5 +99,25 @@ TEST(FitNls, UndeterminedDirectionGivesInfiniteStandardErrors) {
   EXPECT_TRUE(std::isfinite(result.std_errors[2]));
 }
 
+// The residual jumps just above the optimum: a finite-difference Jacobian sees the jump
+// over its step and gives an absurdly small standard error; the check at 100 times the
+// step finds that the residual is not smooth there.
+TEST(FitNls, JumpAtTheOptimumIsRough) {
+  const ResidualFunction f = [](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
+    for (Eigen::Index k = 0; k < r.size(); ++k) {
+      r[k] = (p[0] - 2.0) + 0.01 * static_cast<double>(k % 7 - 3) + (p[0] > 2.0 + 1e-7 ? 1.0 : 0.0);
+    }
+  };
+  const NlsResult r = least_squares({{"a", 2.0, Transform::linear, 0.0}}, 50, f);
+  ASSERT_EQ(r.rough.size(), 1U);
+  EXPECT_TRUE(r.rough[0]);
+  EXPECT_LT(r.std_errors[0], 1e-6);
+  // A smooth residual is not rough.
+  const ResidualFunction g = [](const Eigen::VectorXd& p, Eigen::VectorXd& out) {
+    for (Eigen::Index k = 0; k < out.size(); ++k) out[k] = (p[0] - 2.0) * (1.0 + 0.1 * static_cast<double>(k)) + 0.01 * static_cast<double>(k % 7 - 3);
+  };
+  EXPECT_FALSE(least_squares({{"a", 1.0, Transform::linear, 0.0}}, 50, g).rough[0]);
+}
+
 }  // namespace
 }  // namespace mcg::fit

@@ -319,9 +319,25 @@ void add_effect(model::Model& m, std::string_view name) {
   if (m.effect(name) == nullptr) m.effects.push_back(model::default_effect(name));
 }
 
-std::vector<std::string> mismatch_free() {
+/// The scale of param_mismatch that moves a nominal parameter (empty: none does).
+std::string scale_of(std::string_view name) {
+  if (name == "motor.R_ohm") return "R_scale";
+  if (name == "motor.J_kg_m2") return "J_scale";
+  if (name == "motor.Kt_Nm_A" || name == "motor.Ke_V_s_rad") return "Kt_scale";
+  if (name.ends_with(".Tc_Nm")) return "coulomb_scale";
+  if (name.ends_with(".Ts_Nm")) return "static_scale";
+  if (name.find(".visc") != std::string_view::npos) return "viscous_scale";
+  return {};
+}
+
+std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed) {
   std::vector<std::string> free;
-  for (const auto& s : mismatch_scales()) free.push_back("param_mismatch." + s);
+  for (const auto& s : mismatch_scales()) {
+    if (std::none_of(fixed.begin(), fixed.end(), [&](const std::string& f) { return scale_of(f) == s; })) {
+      free.push_back("param_mismatch." + s);
+    }
+  }
+  if (free.empty()) fail("--fix pins every parameter the refit moves");
   return free;
 }
 
@@ -390,6 +406,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   problem.nls.threads = jacobian_threads;
   problem.nls.xtol = 1e-4;
   problem.nls.ftol = 1e-5;
+  problem.nls.check_smoothness = false;
+  problem.bounds = settings.bounds;
   auto budget = [&](std::size_t free) {
     return settings.max_evaluations > 0 ? settings.max_evaluations
                                         : job.evaluations_per_parameter * static_cast<int>(free + 1);
@@ -619,7 +637,8 @@ GapData prepare_gap_data(const std::vector<table::Table>& train, const std::vect
                          const model::Params& params, double split_fraction) {
   if (train.empty()) fail("--train: no training file");
   GapData data;
-  auto make = [&](const table::Table& t) {
+  auto make = [&](const table::Table& measured) {
+    const table::Table t = with_rpm(measured);
     Run run = make_run(t, compared_outputs(t), params);
     drop_saturated_current(run, parse_current_chain(t.meta));
     return run;
@@ -734,7 +753,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   // The refit of the nominal parameters, warm start of every effect candidate.
   model::Model base = model;
   add_effect(base, "param_mismatch");
-  Job pm_job{"param_mismatch", {}, base, mismatch_free(), {}, 20, {}, {}};
+  Job pm_job{"param_mismatch", {}, base, mismatch_free(settings.fixed), {}, 20, {}, {}};
   if (settings.progress) settings.progress("fitting param_mismatch (nominal parameters)");
   std::vector<GapCandidate> pm_result = run_jobs({pm_job}, data, report.floors, settings, threads, {}, done, total);
   GapCandidate pm = std::move(pm_result.front());
@@ -760,7 +779,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
       ++done;
       continue;
     }
-    Job job{plan.name, {plan.name}, pm.model, mismatch_free(), {plan.name}, 15, {}, {base}};
+    Job job{plan.name, {plan.name}, pm.model, mismatch_free(settings.fixed), {plan.name}, 15, {}, {base}};
     add_effect(job.start, plan.name);
     for (const auto& key : plan.free) {
       job.free.push_back(plan.name + "." + key);
@@ -790,7 +809,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
     if (best < pm_cost) {
       if (settings.progress) settings.progress("refitting param_mismatch from a better start");
       ++total;
-      Job again{"param_mismatch", {}, start, mismatch_free(), {}, 10, {}, {}};
+      Job again{"param_mismatch", {}, start, mismatch_free(settings.fixed), {}, 10, {}, {}};
       GapCandidate refit = std::move(run_jobs({again}, data, report.floors, settings, threads, {}, done, total).front());
       refit.fpe = fpe(refit.score, refit.free.size());
       if (refit.evaluated && training_cost(refit.model, data.train) < pm_cost) pm = std::move(refit);
@@ -1084,16 +1103,26 @@ void write_gap_residuals(std::ostream& out, const GapReport& report, const GapDa
 
 void run_gap(const GapOptions& options, std::ostream& out, std::ostream& err) {
   model::Model model;
-  if (!options.config.empty()) model = model::model_from_ini(config::Ini::load_all(options.config));
-  auto load = [](const std::vector<std::string>& paths) {
+  GapSettings settings;
+  if (!options.config.empty()) {
+    const config::Ini ini = config::Ini::load_all(options.config);
+    model = model::model_from_ini(ini);
+    settings.bounds = read_bounds(ini, model);
+  }
+  settings.fixed = fix_parameters(model, options.fix);
+  if (!(options.from_s < options.to_s)) fail("--from {} s is not before --to {} s", options.from_s, options.to_s);
+  auto load = [&](const std::vector<std::string>& paths) {
     std::vector<table::Table> tables;
-    for (const auto& p : paths) tables.push_back(table::read(open_input(p), input_name(p)));
+    for (const auto& p : paths) {
+      tables.push_back(select_time(table::read(open_input(p), input_name(p)), options.from_s, options.to_s));
+    }
     return tables;
   };
   const std::vector<table::Table> train = load(options.train);
   const std::vector<table::Table> validate = load(options.validate);
-  const GapData data = prepare_gap_data(train, validate, model.params, options.split_fraction);
-  GapSettings settings;
+  GapData data = prepare_gap_data(train, validate, model.params, options.split_fraction);
+  for (auto& run : data.train) run.gear_ratio = options.gear_ratio;
+  for (auto& sr : data.validate) sr.run.gear_ratio = options.gear_ratio;
   settings.threads = options.threads;
   if (stderr_is_terminal()) {
     settings.progress = [&err](const std::string& line) { err << "mcg-fit gap: " << line << std::endl; };

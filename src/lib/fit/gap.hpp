@@ -31,6 +31,7 @@
 
 #include <functional>
 #include <iosfwd>
+#include <map>
 #include <limits>
 #include <optional>
 #include <string>
@@ -49,6 +50,11 @@ struct GapSettings {
   unsigned threads = 0;                ///< candidates fitted at once; 0 = all cores
   std::size_t pair_effects = 3;        ///< pairs are formed among this many strongest effects
   int max_evaluations = 0;             ///< simulation budget per candidate fit; 0 = by size
+  /// Nominal parameters pinned at measured values (--fix): the refit leaves the scale that
+  /// would move them at 1 (motor.R_ohm: R_scale, motor.J_kg_m2: J_scale, Kt/Ke: Kt_scale,
+  /// Tc: coulomb_scale, Ts: static_scale, visc*: viscous_scale).
+  std::vector<std::string> fixed;
+  std::map<std::string, std::pair<double, double>> bounds;  ///< [bounds] of the INI
   std::function<void(const std::string&)> progress;  ///< progress lines (none when empty)
 };
 
@@ -153,6 +159,10 @@ struct GapOptions {
   std::string residuals;        ///< path of the residual series, empty = none
   unsigned threads = 0;
   double split_fraction = 0.6;
+  std::vector<std::string> fix;  ///< "NAME=VALUE": measured, so never rescaled by a refit
+  double from_s = -std::numeric_limits<double>::infinity();  ///< time range of each run
+  double to_s = std::numeric_limits<double>::infinity();
+  double gear_ratio = 1.0;       ///< motor turns per turn of the measured shaft
 };
 
 /// The whole subcommand: reads the files, diagnoses, writes stdout/stderr (and residuals).

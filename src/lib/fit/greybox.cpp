@@ -11,6 +11,7 @@
 #include <limits>
 #include <numbers>
 #include <set>
+#include <tuple>
 
 namespace mcg::fit {
 
@@ -144,16 +145,68 @@ Run make_run(const table::Table& table, const std::vector<std::string>& outputs,
   return run;
 }
 
+table::Table select_time(const table::Table& table, double from_s, double to_s) {
+  table::require_increasing(table, "t");
+  const auto& t = table.col("t");
+  const auto first = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), from_s) - t.begin());
+  const auto last = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), to_s) - t.begin());
+  if (first >= last) fail("{}: no rows between --from {} s and --to {} s", table.source, from_s, to_s);
+  if (first == 0 && last == t.size()) return table;
+  table::Table out;
+  out.source = table.source;
+  out.meta = table.meta;
+  out.names = table.names;
+  out.first_line = table.first_line + first;
+  for (const auto& c : table.columns) {
+    out.columns.emplace_back(c.begin() + static_cast<std::ptrdiff_t>(first), c.begin() + static_cast<std::ptrdiff_t>(last));
+  }
+  return out;
+}
+
+table::Table with_rpm(table::Table table) {
+  if (table.has("rpm") || !table.has("omega")) return table;
+  std::vector<double> rpm = table.col("omega");
+  for (double& x : rpm) x *= 30.0 / std::numbers::pi;
+  table.set("rpm", std::move(rpm));
+  return table;
+}
+
+std::vector<std::string> fix_parameters(model::Model& model, const std::vector<std::string>& items) {
+  std::vector<std::string> names;
+  const auto infos = model::parameters(model);
+  for (const auto& item : items) {
+    const auto eq = item.find('=');
+    if (eq == std::string::npos || eq == 0) fail("--fix: expected NAME=VALUE: '{}'", item);
+    const std::string name = item.substr(0, eq);
+    const std::string text = item.substr(eq + 1);
+    double value = 0.0;
+    if (!table::parse_number(text, value) || !std::isfinite(value)) fail("--fix: {}: invalid number '{}'", name, text);
+    if (std::none_of(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; })) {
+      fail("--fix: unknown parameter '{}' (see mcg-fit model --list)", name);
+    }
+    model::set_parameter(model, name, value);
+    names.push_back(name);
+  }
+  return names;
+}
+
 std::vector<std::vector<double>> simulate_as_measured(const model::Model& model, const Run& run,
                                                       const model::SimOptions& options) {
   const model::Outputs out = model::simulate(model, run.inputs, options);
   std::vector<std::vector<double>> series;
   series.reserve(run.outputs.size());
+  const double g = run.gear_ratio;
   for (const auto& name : run.outputs) {
+    const bool speed = name == "rpm" || name == "omega";
     if (name == "rpm" && run.rpm_estimator) {
-      series.push_back(window_average_rpm(run.inputs.t_s, out.theta_rad, *run.rpm_estimator));
+      std::vector<double> theta_out = out.theta_rad;
+      for (double& x : theta_out) x /= g;
+      series.push_back(window_average_rpm(run.inputs.t_s, theta_out, *run.rpm_estimator));
     } else {
       series.push_back(pick(out, name));
+      if (speed && g != 1.0) {
+        for (double& x : series.back()) x /= g;
+      }
     }
   }
   return series;
@@ -186,9 +239,131 @@ RunResiduals residuals(const model::Model& model, const Run& run, const model::S
   return res;
 }
 
+std::map<std::string, std::pair<double, double>> read_bounds(const config::Ini& ini, const model::Model& model) {
+  std::map<std::string, std::pair<double, double>> out;
+  const auto infos = model::parameters(model);
+  const auto catalog_param = [](std::string_view name) {
+    const auto dot = name.find('.');
+    const model::EffectSpec* spec = dot == std::string_view::npos ? nullptr : model::find_effect(name.substr(0, dot));
+    return spec != nullptr && std::any_of(spec->params.begin(), spec->params.end(),
+                                          [&](const auto& p) { return p.name == name.substr(dot + 1); });
+  };
+  for (const auto* entry : ini.entries("bounds")) {
+    if (!catalog_param(entry->key) &&
+        std::none_of(infos.begin(), infos.end(), [&](const auto& p) { return p.name == entry->key; })) {
+      ini.reject("bounds", entry->key, "unknown parameter (see mcg-fit model --list)");
+    }
+    const auto v = *ini.numbers("bounds", entry->key);
+    if (v.size() != 2) ini.reject("bounds", entry->key, "expected 'LOWER UPPER'");
+    if (!(v[0] < v[1])) ini.reject("bounds", entry->key, "lower bound must be below the upper");
+    out[entry->key] = {v[0], v[1]};
+  }
+  return out;
+}
+
+std::vector<std::string> default_free(const std::vector<Run>& runs, const std::vector<std::string>& fixed,
+                                      std::vector<std::pair<std::string, std::string>>& ties) {
+  const bool current = std::any_of(runs.begin(), runs.end(), [](const Run& r) {
+    return std::find(r.outputs.begin(), r.outputs.end(), "i") != r.outputs.end();
+  });
+  std::vector<std::string> wanted;
+  if (current) {
+    wanted = {"motor.J_kg_m2", "motor.R_ohm", "motor.Kt_Nm_A", "motor.Ke_V_s_rad", "motor.Tc_Nm"};
+  } else {
+    wanted = {"motor.J_kg_m2", "motor.Kt_Nm_A", "motor.Tc_Nm"};
+  }
+  const auto is_fixed = [&](const std::string& n) { return std::find(fixed.begin(), fixed.end(), n) != fixed.end(); };
+  std::vector<std::string> free;
+  for (const auto& n : wanted) {
+    if (!is_fixed(n)) free.push_back(n);
+  }
+  const bool kt_free = std::find(free.begin(), free.end(), "motor.Kt_Nm_A") != free.end();
+  if (!current && kt_free && !is_fixed("motor.Ke_V_s_rad")) ties.emplace_back("motor.Ke_V_s_rad", "motor.Kt_Nm_A");
+  return free;
+}
+
+std::vector<RunFit> evaluate_model(const model::Model& model, const std::vector<Run>& runs,
+                                   const model::SimOptions& options) {
+  std::vector<RunFit> out;
+  for (const Run& run : runs) {
+    const RunResiduals res = residuals(model, run, options);
+    RunFit fit{run.source, run.outputs, res.fit_percent, {}};
+    for (const auto& r : res.residual) fit.rms.push_back(rms_finite(r));
+    out.push_back(std::move(fit));
+  }
+  return out;
+}
+
+namespace {
+
+/// The honest-numbers checks of FitResult::warnings.
+std::vector<std::string> fit_warnings(const NlsResult& n, const std::vector<std::pair<double, double>>& bounds,
+                                      const std::vector<std::string>& units) {
+  std::vector<std::string> out;
+  const auto count = static_cast<Eigen::Index>(n.names.size());
+  for (Eigen::Index i = 0; i < count; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const double v = n.values[i];
+    const auto [lo, hi] = bounds[k];
+    const std::string unit = units[k].empty() ? "" : " " + units[k];
+    const bool logs = lo > 0.0 && std::isfinite(hi);
+    const double span = logs ? std::log(hi / lo) : hi - lo;
+    const double from_lo = logs ? std::log(v / lo) : v - lo;
+    const double from_hi = logs ? std::log(hi / v) : hi - v;
+    // At a bound the Jacobian steps out of the range: its standard error says nothing more.
+    if (std::isfinite(span) && from_lo <= k_at_bound * span) {
+      out.push_back(fmt::format("{} = {:.6g}{} is at its lower bound", n.names[k], v, unit));
+      continue;
+    }
+    if (std::isfinite(span) && from_hi <= k_at_bound * span) {
+      out.push_back(fmt::format("{} = {:.6g}{} is at its upper bound", n.names[k], v, unit));
+      continue;
+    }
+    const double se = n.std_errors[i];
+    if (!std::isfinite(se)) {
+      out.push_back(fmt::format("{}: not determined by the data (infinite standard error)", n.names[k]));
+    } else if ((k < n.rough.size() && n.rough[k]) || se <= 1e-9 * std::abs(v)) {
+      out.push_back(fmt::format("{}: standard error {:.3g}{} is too small to be true: the residual is not smooth "
+                                "in it (it sits on a discontinuity of the data)",
+                                n.names[k], se, unit));
+    }
+  }
+  for (Eigen::Index i = 0; i < count; ++i) {
+    for (Eigen::Index j = i + 1; j < count; ++j) {
+      const double c = n.correlation(i, j);
+      if (std::isfinite(c) && std::abs(c) > k_max_correlation) {
+        out.push_back(fmt::format("{} and {} are correlated {:.4f}: the data do not tell them apart",
+                                  n.names[static_cast<std::size_t>(i)], n.names[static_cast<std::size_t>(j)], c));
+      }
+    }
+  }
+  return out;
+}
+
+void apply_ties(model::Model& m, const std::vector<std::pair<std::string, std::string>>& ties) {
+  for (const auto& [follower, leader] : ties) model::set_parameter(m, follower, model::get_parameter(m, leader));
+}
+
+}  // namespace
+
 FitResult fit_model(const FitProblem& problem) {
   if (problem.runs.empty()) fail("nothing to fit: no runs");
-  const std::vector<model::ParamInfo> infos = model::parameters(problem.model);
+  std::vector<model::ParamInfo> infos = model::parameters(problem.model);
+  for (auto& info : infos) {
+    const auto it = problem.bounds.find(info.name);
+    if (it != problem.bounds.end()) std::tie(info.lower, info.upper) = it->second;
+  }
+  for (const auto& [follower, leader] : problem.ties) {
+    for (const auto& name : {follower, leader}) {
+      if (std::none_of(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; })) {
+        fail("unknown parameter '{}' (see mcg-fit model --list)", name);
+      }
+    }
+    if (std::find(problem.free.begin(), problem.free.end(), follower) != problem.free.end()) {
+      fail("parameter '{}' is tied to '{}' and cannot be free too", follower, leader);
+    }
+  }
+  std::vector<std::string> units;
   std::vector<ParameterSpec> specs;
   std::vector<std::pair<double, double>> bounds;
   std::set<std::string> seen;
@@ -211,6 +386,7 @@ FitResult fit_model(const FitProblem& problem) {
     }
     specs.push_back(spec);
     bounds.emplace_back(it->lower, it->upper);
+    units.push_back(it->unit);
   }
 
   // Per (run, output): the normalisation std(y) sqrt(N) and the offset of its block.
@@ -243,6 +419,7 @@ FitResult fit_model(const FitProblem& problem) {
       }
       model::set_parameter(m, specs[i].name, v);
     }
+    apply_ties(m, problem.ties);
     Eigen::Index k = 0;
     for (std::size_t r = 0; r < problem.runs.size(); ++r) {
       const Run& run = problem.runs[r];
@@ -262,12 +439,9 @@ FitResult fit_model(const FitProblem& problem) {
   for (std::size_t i = 0; i < specs.size(); ++i) {
     model::set_parameter(result.model, specs[i].name, result.nls.values[static_cast<Eigen::Index>(i)]);
   }
-  for (const Run& run : problem.runs) {
-    const RunResiduals res = residuals(result.model, run, problem.sim);
-    RunFit fit{run.source, run.outputs, res.fit_percent, {}};
-    for (const auto& r : res.residual) fit.rms.push_back(rms_finite(r));
-    result.runs.push_back(std::move(fit));
-  }
+  apply_ties(result.model, problem.ties);
+  result.runs = evaluate_model(result.model, problem.runs, problem.sim);
+  result.warnings = fit_warnings(result.nls, bounds, units);
   return result;
 }
 

@@ -3,12 +3,15 @@
 // was measured, residual series and the NRMSE fit percentage.
 #pragma once
 
+#include "config/ini.hpp"
 #include "fit/nls.hpp"
 #include "model/model.hpp"
 #include "sim/encoder.hpp"
 #include "table/table.hpp"
 
 #include <cstddef>
+#include <map>
+#include <utility>
 #include <optional>
 #include <string>
 #include <span>
@@ -40,6 +43,9 @@ struct Run {
   std::vector<std::string> outputs;             ///< measured columns compared, e.g. {"rpm", "i"}
   std::vector<std::vector<double>> measured;    ///< per output, one value per row (NaN = not measured)
   std::optional<RpmEstimator> rpm_estimator;    ///< from `# rpm_estimator:`, if present
+  /// Motor shaft turns per turn of the shaft whose speed was measured (a gearbox between
+  /// them): the measured rpm/omega = motor speed / gear_ratio.
+  double gear_ratio = 1.0;
 };
 
 /// Builds a run from a table with columns t, v (or duty, then v = duty * supply_V), clutch,
@@ -51,6 +57,19 @@ struct Run {
 /// input value, or fewer than `min_rows` rows ("too short").
 Run make_run(const table::Table& table, const std::vector<std::string>& outputs, const model::Params& params,
              std::size_t min_rows = 50);
+
+/// The rows of `table` with from_s <= t <= to_s (a time range of a run: start-up rows
+/// skipped, a window taken). Throws mcg::Error naming the file when no row is left.
+table::Table select_time(const table::Table& table, double from_s, double to_s);
+
+/// A table with a speed column `rpm`: as it is, or converted from `omega` (rad/s) when it has
+/// no rpm, so that every consumer of measured speed accepts either.
+table::Table with_rpm(table::Table table);
+
+/// Pins parameters at measured values: each "NAME=VALUE" (names as model::parameters()
+/// spells them) is set in `model`; returns the names. Throws mcg::Error "--fix: ..." for a
+/// malformed item, an unknown name or a value that is not a finite number.
+std::vector<std::string> fix_parameters(model::Model& model, const std::vector<std::string>& items);
 
 /// Simulates `model` on the run's inputs and returns, per output of the run, the series as
 /// it was measured (rpm through the run's estimator when it has one).
@@ -82,7 +101,25 @@ struct FitProblem {
   std::vector<std::string> free;
   NlsOptions nls;
   model::SimOptions sim;
+  /// Parameters tied to a free one, {follower, leader}: the follower takes the leader's
+  /// value (Ke = Kt in SI units: one constant of the machine).
+  std::vector<std::pair<std::string, std::string>> ties;
+  /// Bounds that replace model::parameters()' (relative to the given model) for a name.
+  std::map<std::string, std::pair<double, double>> bounds;
 };
+
+/// The [bounds] section of an INI: "NAME = LOWER UPPER" per parameter name as
+/// model::parameters() spells it (or any catalog effect's "EFFECT.key"). Throws mcg::Error naming the file and line for an unknown
+/// name, not two numbers, or lower >= upper.
+std::map<std::string, std::pair<double, double>> read_bounds(const config::Ini& ini, const model::Model& model);
+
+/// The parameters a fit frees by default, chosen from what the runs excite:
+///   a measured current: J, R, Kt, Ke and Tc of the motor (the current separates R from Kt);
+///   speed only: J, Kt and Tc with Ke tied to Kt (speed alone fixes only the ratios R/Kt and
+///   J R/(Kt Ke): freeing R and Kt together is degenerate, so R stays at its given value).
+/// Names in `fixed` are left out. `ties` receives the ties the set needs.
+std::vector<std::string> default_free(const std::vector<Run>& runs, const std::vector<std::string>& fixed,
+                                      std::vector<std::pair<std::string, std::string>>& ties);
 
 /// Per-run quality of a fit.
 struct RunFit {
@@ -99,7 +136,23 @@ struct FitResult {
   model::Model model;
   NlsResult nls;
   std::vector<RunFit> runs;
+  /// What makes the numbers untrustworthy, one sentence each: a parameter at a bound, a
+  /// correlation beyond k_max_correlation, a standard error that is infinite or too small to
+  /// be true (the residual is not smooth in the parameter: it sits on a discontinuity of the
+  /// data, e.g. a static friction level at a breakaway).
+  std::vector<std::string> warnings;
+  /// The solver met a convergence test and nothing above was found.
+  bool trustworthy() const { return nls.converged && warnings.empty(); }
 };
+
+/// |correlation| beyond which two parameters are reported as not told apart by the data.
+inline constexpr double k_max_correlation = 0.99;
+/// A parameter within this fraction of its range (log range for positive ones) of a bound is at it.
+inline constexpr double k_at_bound = 1e-3;
+
+/// The runs' fit % and RMS under `model` without fitting (an evaluate-only score).
+std::vector<RunFit> evaluate_model(const model::Model& model, const std::vector<Run>& runs,
+                                   const model::SimOptions& options = {});
 
 /// Minimises the simulation error. The residual vector stacks, for every run and output,
 ///   r = (y_sim - y) / (std(y) sqrt(N_finite)),

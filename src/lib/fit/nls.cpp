@@ -235,6 +235,23 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
 
   Eigen::MatrixXd jac_u;
   functor.df(u, jac_u);
+  // A discontinuity (a friction level at a breakaway) makes a small finite-difference step
+  // see a jump: the column then shrinks in proportion to a larger step.
+  result.rough.assign(specs.size(), false);
+  if (options.check_smoothness) {
+    NlsOptions wide = options;
+    wide.fd_step = 100.0 * options.fd_step;
+    wide.central_differences = false;
+    const Functor coarse(coords, residuals, wide, n, m);
+    Eigen::MatrixXd jac_wide;
+    coarse.df(u, jac_wide);
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double a = jac_u.col(j).norm();
+      const double b = jac_wide.col(j).norm();
+      const double d = (jac_u.col(j) - jac_wide.col(j)).norm();
+      result.rough[static_cast<std::size_t>(j)] = std::isfinite(a) && std::isfinite(b) && d > 0.5 * std::max(a, b);
+    }
+  }
   const Eigen::MatrixXd jac_p = jac_u * coords.derivative(result.values).cwiseInverse().asDiagonal();
   covariance_statistics(jac_p, result.residuals, result.std_errors, result.correlation, result.sigma);
   return result;

@@ -40,6 +40,9 @@ struct NlsOptions {
   /// Threads evaluating Jacobian columns at once (1 = in the caller's thread). The
   /// residual function must then be safe to call concurrently.
   unsigned threads = 1;
+  /// Check at the optimum whether the residual is smooth in each parameter (NlsResult::rough),
+  /// at the cost of one more Jacobian.
+  bool check_smoothness = true;
 };
 
 /// The optimum and its statistics. With J the Jacobian of the residuals r with respect to
@@ -56,6 +59,10 @@ struct NlsResult {
   Eigen::VectorXd residuals;  ///< at the optimum
   double cost = 0.0;          ///< |r|^2
   double sigma = 0.0;         ///< sqrt(|r|^2 / (m - n)), NaN if m == n
+  /// Per parameter: the residual is not smooth at the optimum (the Jacobian column at the
+  /// finite-difference step and at 100 times it differ by more than half their size), so a
+  /// standard error from the local Jacobian means nothing.
+  std::vector<bool> rough;
   bool converged = false;
   std::string reason;  ///< why the solver stopped, in words
   int iterations = 0;

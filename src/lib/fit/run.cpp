@@ -18,11 +18,9 @@
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <tuple>
 
 namespace mcg::fit {
-
-const std::vector<std::string> k_default_free{"motor.J_kg_m2", "motor.R_ohm", "motor.Kt_Nm_A", "motor.Ke_V_s_rad",
-                                              "motor.Tc_Nm"};
 
 namespace {
 
@@ -83,7 +81,7 @@ unsigned worker_count(unsigned requested, std::size_t jobs) {
   return static_cast<unsigned>(std::min<std::size_t>(n, std::max<std::size_t>(jobs, 1)));
 }
 
-void write_model_ini(const FitResult& r, std::ostream& out) {
+void write_model_ini(const FitResult& r, const FitProblem& problem, std::ostream& out) {
   config::Ini ini;
   model::model_to_ini(r.model, ini);
   const auto infos = model::parameters(r.model);
@@ -93,15 +91,24 @@ void write_model_ini(const FitResult& r, std::ostream& out) {
     const auto k = static_cast<Eigen::Index>(i);
     if (place) ini.set(place->first, place->second, num6(n.values[k]), "fitted, " + se_comment(n.std_errors[k], unit_of(infos, n.names[i])));
   }
+  for (const auto& [follower, leader] : problem.ties) {
+    if (const auto place = ini_place(ini, follower)) {
+      ini.set(place->first, place->second, num6(model::get_parameter(r.model, follower)), "tied to " + leader);
+    }
+  }
   const std::string sec = "fit.model";
   ini.set(sec, "source", fmt::format("mcg-fit {}", k_version));
-  ini.set(sec, "converged", n.converged ? "yes" : "no");
-  ini.set(sec, "reason", n.reason);
+  ini.set(sec, "converged", r.trustworthy() ? "yes" : "no");
+  ini.set(sec, "reason", n.converged && !r.warnings.empty()
+                             ? fmt::format("{}, but the numbers are not trustworthy (see the warnings)", n.reason)
+                             : n.reason);
+  for (std::size_t w = 0; w < r.warnings.size(); ++w) ini.set(sec, fmt::format("warning{}", w + 1), r.warnings[w]);
   ini.set(sec, "iterations", static_cast<double>(n.iterations));
   ini.set(sec, "evaluations", static_cast<double>(n.evaluations));
   std::string free;
   for (const auto& name : n.names) free += (free.empty() ? "" : " ") + name;
   ini.set(sec, "free", free);
+  for (const auto& [follower, leader] : problem.ties) ini.set(sec, "tie." + follower, leader);
   for (std::size_t i = 0; i < n.names.size(); ++i) {
     const auto k = static_cast<Eigen::Index>(i);
     ini.set(sec, n.names[i], num6(n.values[k]));
@@ -193,36 +200,102 @@ void run_tf(const TfRunOptions& options, std::ostream& out) {
   ini.write(out);
 }
 
+namespace {
+
+/// One measured run of `mcg-fit model` as the options shape it.
+Run load_model_run(const std::string& path, const ModelRunOptions& options, const model::Params& params) {
+  Run run = make_run(select_time(table::read_path(path), options.from_s, options.to_s), options.outputs, params);
+  run.gear_ratio = options.gear_ratio;
+  return run;
+}
+
+std::vector<std::pair<std::string, std::string>> parse_ties(const std::vector<std::string>& items) {
+  std::vector<std::pair<std::string, std::string>> ties;
+  for (const auto& item : items) {
+    const auto eq = item.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size()) fail("--tie: expected FOLLOWER=LEADER: '{}'", item);
+    ties.emplace_back(item.substr(0, eq), item.substr(eq + 1));
+  }
+  return ties;
+}
+
+void report_untrustworthy(const FitResult& r, const std::string& what, std::ostream& err) {
+  for (const auto& w : r.warnings) err << fmt::format("mcg-fit: warning: {}{}\n", what, w);
+}
+
+}  // namespace
+
 int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& err) {
-  const model::Model base = model::model_from_ini(config::Ini::load_all(options.config));
+  const config::Ini ini = config::Ini::load_all(options.config);
+  model::Model base = model::model_from_ini(ini);
+  const std::vector<std::string> fixed = fix_parameters(base, options.fix);
+  FitProblem problem;
+  problem.bounds = read_bounds(ini, base);
   if (options.list) {
-    for (const auto& p : model::parameters(base)) {
+    for (auto p : model::parameters(base)) {
+      if (const auto it = problem.bounds.find(p.name); it != problem.bounds.end()) std::tie(p.lower, p.upper) = it->second;
       out << fmt::format("{} = {} ; {}, {}..{}\n", p.name, config::format_number(p.value), p.unit,
-                         config::format_number(p.lower), config::format_number(p.upper));
+                         num6(p.lower), num6(p.upper));
     }
     return 0;
   }
   if (options.files.empty()) fail("model: no input files");
-  FitProblem problem;
+  if (!(options.from_s < options.to_s)) fail("--from {} s is not before --to {} s", options.from_s, options.to_s);
   problem.model = base;
-  problem.free = options.free.empty() ? k_default_free : options.free;
-  const auto infos = model::parameters(base);
-  for (const auto& name : problem.free) {
-    if (std::none_of(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; })) {
-      fail("unknown parameter '{}' (see mcg-fit model --list)", name);
-    }
-  }
+  problem.ties = parse_ties(options.tie);
   problem.sim.max_step_s = options.max_step_s;
   problem.nls.max_evaluations = options.max_evaluations;
+  const auto infos = model::parameters(base);
+  const auto check_names = [&](const std::vector<std::string>& names) {
+    for (const auto& name : names) {
+      if (std::none_of(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; })) {
+        fail("unknown parameter '{}' (see mcg-fit model --list)", name);
+      }
+      if (std::find(fixed.begin(), fixed.end(), name) != fixed.end()) fail("parameter '{}' is fixed (--fix) and free", name);
+    }
+  };
+  check_names(options.free);
+
+  if (options.evaluate) {
+    std::vector<Run> runs;
+    for (const auto& f : options.files) runs.push_back(load_model_run(f, options, base.params));
+    model::Model m = base;
+    for (const auto& [follower, leader] : problem.ties) model::set_parameter(m, follower, model::get_parameter(m, leader));
+    const auto fits = evaluate_model(m, runs, problem.sim);
+    config::Ini res;
+    const std::string sec = "fit.evaluate";
+    res.set(sec, "source", fmt::format("mcg-fit {}", k_version));
+    for (std::size_t f = 0; f < fits.size(); ++f) {
+      res.set(sec, fmt::format("file{}", f + 1), fits[f].source);
+      for (std::size_t k = 0; k < fits[f].outputs.size(); ++k) {
+        res.set(sec, fmt::format("file{}.fit_{}", f + 1, fits[f].outputs[k]), fmt::format("{:.2f}", fits[f].fit_percent[k]),
+                "% (NRMSE, as MATLAB compare)");
+        res.set(sec, fmt::format("file{}.rms_{}", f + 1, fits[f].outputs[k]), num6(fits[f].rms[k]));
+      }
+    }
+    res.write(out);
+    return 0;
+  }
 
   if (!options.batch) {
-    for (const auto& f : options.files) problem.runs.push_back(make_run(table::read_path(f), options.outputs, base.params));
+    for (const auto& f : options.files) problem.runs.push_back(load_model_run(f, options, base.params));
+    if (options.free.empty()) {
+      problem.free = default_free(problem.runs, fixed, problem.ties);
+    } else {
+      problem.free = options.free;
+    }
     problem.nls.threads = worker_count(options.threads, problem.free.size());
     const FitResult result = fit_model(problem);
-    write_model_ini(result, out);
+    write_model_ini(result, problem, out);
+    report_untrustworthy(result, "", err);
     if (!result.nls.converged) {
       err << fmt::format("mcg-fit: error: the fit did not converge: {} (after {} iterations)\n", result.nls.reason,
                          result.nls.iterations);
+      return 3;
+    }
+    if (!result.trustworthy()) {
+      err << fmt::format("mcg-fit: error: the fit converged but its numbers are not trustworthy ({} warnings)\n",
+                         result.warnings.size());
       return 3;
     }
     return 0;
@@ -239,12 +312,26 @@ int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& e
   std::atomic<std::size_t> done{0};
   std::mutex progress_mutex;
   const bool progress = stderr_is_terminal() && &err == &std::cerr;
+  // The runs first: the default free set depends on what all of them measure.
+  std::vector<std::optional<Run>> runs(count);
+  std::vector<Run> loaded;
+  for (std::size_t k = 0; k < count; ++k) {
+    try {
+      runs[k] = load_model_run(options.files[k], options, base.params);
+      loaded.push_back(*runs[k]);
+    } catch (const Error& e) {
+      outcomes[k].error = e.what();
+    }
+  }
+  problem.free = options.free.empty() ? default_free(loaded, fixed, problem.ties) : options.free;
   const auto work = [&] {
     for (std::size_t k = next++; k < count; k = next++) {
       try {
-        FitProblem p = problem;
-        p.runs.push_back(make_run(table::read_path(options.files[k]), options.outputs, base.params));
-        outcomes[k].result = fit_model(p);
+        if (runs[k]) {
+          FitProblem p = problem;
+          p.runs.push_back(*runs[k]);
+          outcomes[k].result = fit_model(p);
+        }
       } catch (const Error& e) {
         outcomes[k].error = e.what();
       }
@@ -302,7 +389,7 @@ int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& e
       }
       row.push_back(fit);
     }
-    row.push_back(o.result && o.result->nls.converged ? 1.0 : 0.0);
+    row.push_back(o.result && o.result->trustworthy() ? 1.0 : 0.0);
     row.push_back(o.result ? static_cast<double>(o.result->nls.iterations) : nan);
     w.row(row);
   }
@@ -314,6 +401,10 @@ int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& e
       status = 1;
     } else if (!o.result->nls.converged) {
       err << fmt::format("mcg-fit: error: {}: the fit did not converge: {}\n", options.files[k], o.result->nls.reason);
+      if (status == 0) status = 3;
+    } else if (!o.result->trustworthy()) {
+      report_untrustworthy(*o.result, options.files[k] + ": ", err);
+      err << fmt::format("mcg-fit: error: {}: the fit converged but its numbers are not trustworthy\n", options.files[k]);
       if (status == 0) status = 3;
     }
   }

@@ -5,6 +5,7 @@
 #include "fit/tf.hpp"
 
 #include <iosfwd>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -36,24 +37,31 @@ void run_tf(const TfRunOptions& options, std::ostream& out);
 struct ModelRunOptions {
   std::vector<std::string> config;
   std::vector<std::string> files;
-  std::vector<std::string> free;     ///< empty: k_default_free
+  std::vector<std::string> free;     ///< empty: default_free() of the runs
+  std::vector<std::string> fix;      ///< "NAME=VALUE": measured values, never fitted
+  std::vector<std::string> tie;      ///< "FOLLOWER=LEADER": the follower takes the leader's value
   std::vector<std::string> outputs;  ///< empty: every measured column present
   bool batch = false;                ///< one fit per file, one CSV row each
   bool list = false;                 ///< print the parameter names and stop
+  bool evaluate = false;             ///< score the given model on the runs, no fit
+  double from_s = -std::numeric_limits<double>::infinity();  ///< rows with t >= from_s ...
+  double to_s = std::numeric_limits<double>::infinity();     ///< ... and t <= to_s of each run
+  double gear_ratio = 1.0;           ///< motor turns per turn of the measured shaft
   unsigned threads = 0;              ///< 0: every core
   double max_step_s = 2.5e-4;        ///< integrator step bound during the fit
   int max_evaluations = 4000;
 };
 
-/// The parameters fitted when --free is not given.
-extern const std::vector<std::string> k_default_free;
-
 /// Joint fit: the fitted model as INI (every parameter, the free ones with their standard
-/// errors as comments) plus [fit.model] (convergence, correlations, fit % per file). Batch:
+/// errors as comments) plus [fit.model] (convergence, correlations, fit % per file, the
+/// warnings of FitResult, each also on `err` as "mcg-fit: warning: ..."; converged = yes
+/// only when FitResult::trustworthy()). Evaluate: [fit.evaluate] with fit % and RMS per
+/// file and output of the model as given, no fit. Batch:
 /// a CSV with one row per file (file index, each free parameter and its standard error,
 /// fit % per output, converged, iterations), files fitted in parallel, rows in input order,
 /// progress on `err` when it is a terminal. Returns the exit status: 0, or 3 when a fit did
-/// not converge (the result is still written, marked converged = 0/no, and `err` says why).
+/// not converge or is not trustworthy (the result is still written, marked converged =
+/// 0/no, and `err` says why).
 int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& err);
 
 }  // namespace mcg::fit

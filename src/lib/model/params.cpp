@@ -1,6 +1,7 @@
 // The rig's parameters: the report's values, the INI form, and named access for fitting.
 #include "model/model.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "common/error.hpp"
@@ -41,35 +42,46 @@ struct NominalParam {
   const char* section;
   const char* key;
   const char* unit;
-  double lower;   ///< plausible range for fitting
+  /// The fitting range, relative to the model's own values so that any motor can be fitted:
+  ///   relative      v / k_bound_factor .. v * k_bound_factor (machine constants, supply)
+  ///   torque        0 .. T_stall = Kt supply_V / R of the machine (the motor's for a clutch):
+  ///                 a friction above the stall torque would hold the shaft at every voltage
+  ///   viscous_k     |c_k| <= T_stall / w_free^k, w_free = supply_V / Ke (the no-load speed):
+  ///                 no viscous term alone exceeds the stall torque inside the speed range
+  ///   absolute      [lower, upper] as given (a dead time is not relative to anything)
+  enum class Bound { relative, torque, viscous1, viscous2, viscous3, absolute } bound;
+  double lower;  ///< absolute bounds only
   double upper;
   enum class Check { positive, non_negative, finite } check;
   Ref ref;
 };
 
+/// Factor either way a machine constant may move from the given model's value in a fit.
+constexpr double k_bound_factor = 10.0;
+
 #define MCG_MACHINE_PARAMS(SEC, M)                                                                            \
-  NominalParam{SEC, "R_ohm", "ohm", 0.5, 50.0, NominalParam::Check::positive,                                \
+  NominalParam{SEC, "R_ohm", "ohm", NominalParam::Bound::relative, 0, 0, NominalParam::Check::positive,                                \
                [](Params& p) -> double& { return p.M.R_ohm; }},                                                \
-      NominalParam{SEC, "L_H", "H", 1e-4, 0.05, NominalParam::Check::positive,                               \
+      NominalParam{SEC, "L_H", "H", NominalParam::Bound::relative, 0, 0, NominalParam::Check::positive,                               \
                    [](Params& p) -> double& { return p.M.L_H; }},                                              \
-      NominalParam{SEC, "Kt_Nm_A", "N m/A", 0.005, 0.5, NominalParam::Check::positive,                       \
+      NominalParam{SEC, "Kt_Nm_A", "N m/A", NominalParam::Bound::relative, 0, 0, NominalParam::Check::positive,                       \
                    [](Params& p) -> double& { return p.M.Kt_Nm_A; }},                                          \
-      NominalParam{SEC, "Ke_V_s_rad", "V s/rad", 0.005, 0.5, NominalParam::Check::positive,                  \
+      NominalParam{SEC, "Ke_V_s_rad", "V s/rad", NominalParam::Bound::relative, 0, 0, NominalParam::Check::positive,                  \
                    [](Params& p) -> double& { return p.M.Ke_V_s_rad; }},                                       \
-      NominalParam{SEC, "J_kg_m2", "kg m^2", 1e-7, 1e-3, NominalParam::Check::positive,                      \
+      NominalParam{SEC, "J_kg_m2", "kg m^2", NominalParam::Bound::relative, 0, 0, NominalParam::Check::positive,                      \
                    [](Params& p) -> double& { return p.M.J_kg_m2; }},                                          \
       MCG_FRICTION_PARAMS(SEC, M.friction)
 
 #define MCG_FRICTION_PARAMS(SEC, F)                                                                           \
-  NominalParam{SEC, "Ts_Nm", "N m", 0.0, 0.05, NominalParam::Check::non_negative,                            \
+  NominalParam{SEC, "Ts_Nm", "N m", NominalParam::Bound::torque, 0, 0, NominalParam::Check::non_negative,                            \
                [](Params& p) -> double& { return p.F.Ts_Nm; }},                                                \
-      NominalParam{SEC, "Tc_Nm", "N m", 0.0, 0.05, NominalParam::Check::non_negative,                        \
+      NominalParam{SEC, "Tc_Nm", "N m", NominalParam::Bound::torque, 0, 0, NominalParam::Check::non_negative,                        \
                    [](Params& p) -> double& { return p.F.Tc_Nm; }},                                            \
-      NominalParam{SEC, "visc1_Nm_s_rad", "N m s/rad", -1e-3, 1e-3, NominalParam::Check::finite,             \
+      NominalParam{SEC, "visc1_Nm_s_rad", "N m s/rad", NominalParam::Bound::viscous1, 0, 0, NominalParam::Check::finite,             \
                    [](Params& p) -> double& { return p.F.viscous[0]; }},                                       \
-      NominalParam{SEC, "visc2_Nm_s2_rad2", "N m s^2/rad^2", -1e-5, 1e-5, NominalParam::Check::finite,       \
+      NominalParam{SEC, "visc2_Nm_s2_rad2", "N m s^2/rad^2", NominalParam::Bound::viscous2, 0, 0, NominalParam::Check::finite,       \
                    [](Params& p) -> double& { return p.F.viscous[1]; }},                                       \
-      NominalParam{SEC, "visc3_Nm_s3_rad3", "N m s^3/rad^3", -1e-7, 1e-7, NominalParam::Check::finite,       \
+      NominalParam{SEC, "visc3_Nm_s3_rad3", "N m s^3/rad^3", NominalParam::Bound::viscous3, 0, 0, NominalParam::Check::finite,       \
                    [](Params& p) -> double& { return p.F.viscous[2]; }}
 
 const std::vector<NominalParam>& nominal_params() {
@@ -78,9 +90,9 @@ const std::vector<NominalParam>& nominal_params() {
       MCG_MACHINE_PARAMS("generator", generator),
       MCG_FRICTION_PARAMS("clutch_disengaged", clutch_disengaged),
       MCG_FRICTION_PARAMS("clutch_engaged", clutch_engaged),
-      NominalParam{"drive", "supply_V", "V", 1.0, 100.0, NominalParam::Check::positive,
+      NominalParam{"drive", "supply_V", "V", NominalParam::Bound::relative, 0, 0, NominalParam::Check::positive,
                    [](Params& p) -> double& { return p.supply_V; }},
-      NominalParam{"drive", "dead_time_s", "s", 0.0, 0.05, NominalParam::Check::non_negative,
+      NominalParam{"drive", "dead_time_s", "s", NominalParam::Bound::absolute, 0.0, 0.05, NominalParam::Check::non_negative,
                    [](Params& p) -> double& { return p.dead_time_s; }},
   };
   return table;
@@ -249,7 +261,34 @@ std::vector<ParamInfo> parameters(const Model& model) {
   std::vector<ParamInfo> out;
   Params copy = model.params;
   for (const auto& np : nominal_params()) {
-    out.push_back({std::string(np.section) + "." + np.key, np.ref(copy), np.lower, np.upper, np.unit});
+    const double v = np.ref(copy);
+    const std::string_view section = np.section;
+    const Machine& machine = section == "generator" ? copy.generator : copy.motor;
+    const double stall_Nm = machine.Kt_Nm_A * copy.supply_V / machine.R_ohm;
+    const double free_rad_s = copy.supply_V / machine.Ke_V_s_rad;
+    double lower = np.lower;
+    double upper = np.upper;
+    switch (np.bound) {
+      case NominalParam::Bound::relative:
+        lower = v / k_bound_factor;
+        upper = v * k_bound_factor;
+        break;
+      case NominalParam::Bound::torque:
+        lower = 0.0;
+        upper = std::max(stall_Nm, v);
+        break;
+      case NominalParam::Bound::viscous1:
+      case NominalParam::Bound::viscous2:
+      case NominalParam::Bound::viscous3: {
+        const int k = static_cast<int>(np.bound) - static_cast<int>(NominalParam::Bound::viscous1) + 1;
+        upper = std::max(stall_Nm / std::pow(free_rad_s, k), std::abs(v));
+        lower = -upper;
+        break;
+      }
+      case NominalParam::Bound::absolute:
+        break;
+    }
+    out.push_back({std::string(section) + "." + np.key, v, lower, upper, np.unit});
   }
   for (const auto& effect : model.effects) {
     const EffectSpec* spec = find_effect(effect.name);
