@@ -54,11 +54,43 @@ TEST(LinsysParse, ErrorsPointAtTheCharacter) {
   EXPECT_EQ(error_of("1/0"), "--plant: division by zero at character 2");
   EXPECT_EQ(error_of("s^1.5"), "--plant: expected a whole-number exponent at character 3");
   EXPECT_EQ(error_of("1/(s+)"), "--plant: unexpected ')' at character 6");
-  EXPECT_EQ(error_of("2 s"), "--plant: unexpected 's' at character 3");
+  EXPECT_EQ(error_of("2 3"), "--plant: unexpected '3' at character 3");
+  EXPECT_EQ(error_of("s 2"), "--plant: unexpected '2' at character 3");
+  EXPECT_EQ(error_of("s^2 3"), "--plant: unexpected '3' at character 5");
+  EXPECT_EQ(error_of("(s+1)2"), "--plant: unexpected '2' at character 6");
   EXPECT_EQ(error_of(""), "--plant: empty expression at character 1");
   EXPECT_EQ(error_of("exp(-0.002*s)/(s+1) + 1"), "--plant: terms with different delays added at character 21");
   EXPECT_EQ(error_of("exp(s^2)"), "--plant: exp() takes c - tau*s (a delay) at character 1");
   EXPECT_EQ(error_of("exp(0.1*s)"), "--plant: negative delay 0.1 s (a prediction) is not causal");
+}
+
+TEST(LinsysParse, ImplicitMultiplicationWhereUnambiguous) {
+  const Complex s(3.0, 40.0);
+  const auto near = [&](const char* text, Complex want) {
+    const ParsedTf g = parse_tf(text, "t");
+    EXPECT_NEAR(std::abs(g.tf.eval(s) - want), 0.0, 1e-12 * std::abs(want)) << text;
+  };
+  near("16.557/((s/65+1)(s/950+1))", 16.557 / ((s / 65.0 + 1.0) * (s / 950.0 + 1.0)));
+  near("2(s+1)", 2.0 * (s + 1.0));
+  near("2s", 2.0 * s);
+  near("2 s", 2.0 * s);
+  near("-2s^2", -2.0 * s * s);
+  near("s(s+1)(s+2)", s * (s + 1.0) * (s + 2.0));
+  near("(s+1)s", (s + 1.0) * s);
+  near("0.5exp(-0.01s)/(s+1)", 0.5 / (s + 1.0));
+  near("1e-3s", 1e-3 * s);
+  near("4658(s/500+1)/s", 4658.0 * (s / 500.0 + 1.0) / s);
+  EXPECT_DOUBLE_EQ(parse_tf("0.5exp(-0.01s)/(s+1)", "t").tf.delay_s, 0.01);
+  const ParsedTf z = parse_tf("(11.645 - 6.987z^-1)/(1 - z^-1)", "t");
+  EXPECT_EQ(trim(z.tf.num), (Poly{11.645, -6.987}));
+}
+
+TEST(LinsysParse, JuxtapositionAfterDivisionIsRefused) {
+  EXPECT_EQ(error_of("1/2s"),
+            "--plant: implicit multiplication after '/' is ambiguous (write '*' or parentheses) at character 4");
+  EXPECT_EQ(error_of("1/(s+1)(s+2)"),
+            "--plant: implicit multiplication after '/' is ambiguous (write '*' or parentheses) at character 8");
+  EXPECT_EQ(error_of("2x(s+1)"), "--plant: unknown symbol 'x' at character 2");
 }
 
 }  // namespace

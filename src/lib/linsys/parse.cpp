@@ -105,8 +105,18 @@ class Parser {
     return r;
   }
 
+  /// A factor written right after another without '*' (`2s`, `2(s+1)`, `(s+1)(s+2)`) starts with
+  /// '(' or a letter. A number never does: `2 3` or `s 2` would be a guess, so they stay errors.
+  bool juxtaposed_factor_follows() {
+    skip_blanks();
+    if (m_pos >= m_text.size()) return false;
+    const char c = m_text[m_pos];
+    return c == '(' || std::isalpha(static_cast<unsigned char>(c)) || c == '_';
+  }
+
   Value term() {
     Value acc = factor();
+    bool divided = false;
     for (;;) {
       skip_blanks();
       const std::size_t at = m_pos;
@@ -121,6 +131,14 @@ class Parser {
         acc.num = mul(acc.num, b.den);
         acc.den = mul(acc.den, b.num);
         acc.delay_s -= b.delay_s;
+        divided = true;
+      } else if (juxtaposed_factor_follows()) {
+        // `1/2s` reads as 1/(2s) to some and (1/2)s to others: refuse rather than pick one.
+        if (divided) error_at(at, "implicit multiplication after '/' is ambiguous (write '*' or parentheses)");
+        const Value b = power();
+        acc.num = mul(acc.num, b.num);
+        acc.den = mul(acc.den, b.den);
+        acc.delay_s += b.delay_s;
       } else {
         return reduce(acc);
       }
