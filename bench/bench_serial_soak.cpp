@@ -66,7 +66,7 @@ int main(int argc, char** argv) {
     session.write(mcg::link::require_register("clutch"), 1);
     session.write(mcg::link::require_register("duty"), 350);
     session.write(stream, 1);
-    mcg::link::StreamAssembler assembler(8);
+    mcg::link::StreamAssembler assembler(4);
     const auto want_blocks = static_cast<std::uint64_t>(seconds / (MCG_STREAM_SAMPLES * MCG_STREAM_PERIOD_MS * 1e-3));
     const auto start = std::chrono::steady_clock::now();
     auto last = start;
@@ -93,10 +93,10 @@ int main(int argc, char** argv) {
                            "samples lost:     {}\n"
                            "damaged frames:   {} (noise bytes {})\n"
                            "achieved rate:    {:.2f} samples/s ({:.1f} B/s of the line's 960 B/s; nominal 500 samples/s)\n"
-                           "longest gap between blocks: {:.1f} ms (nominal 32 ms)\n",
+                           "longest gap between blocks: {:.1f} ms (nominal 64 ms)\n",
                            seconds, speed, received, assembler.lost_samples(), st.bad_crc + st.too_long + st.timeouts,
                            st.skipped_bytes, static_cast<double>(received) / wall_s,
-                           static_cast<double>(assembler.blocks()) * (MCG_STREAM_HEADER + MCG_STREAM_SAMPLES + MCG_FRAME_OVERHEAD) / wall_s,
+                           static_cast<double>(assembler.blocks()) * (MCG_STREAM_PAYLOAD + MCG_FRAME_OVERHEAD) / wall_s,
                            longest_gap_s * 1e3)
                    .c_str(),
                stdout);

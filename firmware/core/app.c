@@ -6,10 +6,14 @@ uint8_t MCG_XDATA g_stream_seq;
 
 static MCG_XDATA uint8_t s_service_ms;   /* ticks since the last keypad service */
 static MCG_XDATA uint16_t s_lcd_ms;      /* ticks since the last LCD refresh */
-static MCG_XDATA uint8_t s_stream_phase; /* ticks into the present 2 ms sample */
+static MCG_XDATA uint8_t s_stream_phase; /* ticks recorded into the present sample */
 static MCG_XDATA uint8_t s_stream_count; /* samples in the present block */
-static MCG_XDATA uint16_t s_stream_pulses;
-static uint8_t MCG_XDATA s_block[MCG_STREAM_HEADER + MCG_STREAM_SAMPLES];
+static MCG_XDATA int16_t s_stream_pulses; /* signed pulses of the present sample */
+static MCG_XDATA int16_t s_stream_duty;   /* sum of the duty over the present sample's ticks */
+static MCG_XDATA uint8_t s_stream_flags;  /* MCG_STREAM_BIT_CMD if rpm_cmd changed in the sample */
+static MCG_XDATA int16_t s_stream_cmd;    /* rpm_cmd seen by the last tick */
+static MCG_XDATA uint8_t s_stream_neg;    /* 1 if the last non-zero drive was negative */
+static uint8_t MCG_XDATA s_block[MCG_STREAM_PAYLOAD];
 static uint8_t MCG_XDATA s_data[MCG_LOGDATA_HEADER + 2u * MCG_LOG_DUMP_CHUNK];
 
 static void put16(uint8_t MCG_XDATA* p, int16_t v) {
@@ -30,41 +34,83 @@ void core_init(void) {
   s_stream_phase = 0;
   s_stream_count = 0;
   s_stream_pulses = 0;
+  s_stream_duty = 0;
+  s_stream_flags = 0;
+  s_stream_cmd = g_rpm_cmd;
+  s_stream_neg = 0;
   hal_pwm_write(0);
   menu_refresh();
 }
 
-/* One sample every MCG_STREAM_PERIOD_MS, one block every MCG_STREAM_SAMPLES samples. A block that
- * finds no transmit room is dropped, and its sequence number with it, so the host counts the loss. */
+/* Records the tick that just ended: the outputs still set are those that acted during it, and
+ * `pulses` were counted during it. One sample every MCG_STREAM_PERIOD_MS ticks, one block every
+ * MCG_STREAM_SAMPLES samples. A block that finds no transmit room is dropped, and its sequence number
+ * with it, so the host counts the loss. */
 static void stream_tick(uint8_t pulses) {
+  uint8_t MCG_XDATA* MCG_SLOW p;
+  MCG_SLOW int16_t v;
+  if (g_duty_out > 0) {
+    s_stream_neg = 0;
+  } else if (g_duty_out < 0) {
+    s_stream_neg = 1;
+  }
+  if (g_rpm_cmd != s_stream_cmd) {
+    s_stream_cmd = g_rpm_cmd;
+    s_stream_flags = MCG_STREAM_BIT_CMD;
+  }
   if (!g_stream_on) {
     s_stream_phase = 0;
     s_stream_count = 0;
     s_stream_pulses = 0;
+    s_stream_duty = 0;
+    s_stream_flags = 0;
     return;
   }
-  s_stream_pulses = (uint16_t)(s_stream_pulses + pulses);
+  s_stream_pulses = (int16_t)(s_stream_neg ? s_stream_pulses - pulses : s_stream_pulses + pulses);
+  s_stream_duty = (int16_t)(s_stream_duty + g_duty_out);
   if (++s_stream_phase < MCG_STREAM_PERIOD_MS) {
     return;
   }
   s_stream_phase = 0;
-  s_block[MCG_STREAM_HEADER + s_stream_count] = s_stream_pulses > 255u ? 255u : (uint8_t)s_stream_pulses;
+  p = s_block + MCG_STREAM_HEADER + MCG_STREAM_SAMPLE_BYTES * s_stream_count;
+  v = s_stream_duty;
+  v = (int16_t)(v >= 0 ? (v + (int16_t)(MCG_STREAM_PERIOD_MS / 2u)) / (int16_t)MCG_STREAM_PERIOD_MS
+                       : -((-v + (int16_t)(MCG_STREAM_PERIOD_MS / 2u)) / (int16_t)MCG_STREAM_PERIOD_MS));
+  p[0] = (uint8_t)((uint16_t)v & 0xFFu);
+  p[1] = (uint8_t)(((uint16_t)v >> 8) & 0x07u);
+  v = s_stream_pulses;
+  if (v > MCG_STREAM_COUNTS_MAX) {
+    v = MCG_STREAM_COUNTS_MAX;
+  } else if (v < -MCG_STREAM_COUNTS_MAX) {
+    v = -MCG_STREAM_COUNTS_MAX;
+  }
+  p[1] = (uint8_t)(p[1] | (uint8_t)(((uint16_t)v & 0x1Fu) << 3));
+  p[2] = (uint8_t)((((uint16_t)v >> 5) & 0x1Fu) | s_stream_flags);
+  if (g_clutch_on) {
+    p[2] |= MCG_STREAM_BIT_CLUTCH;
+  }
+  if (g_load_on) {
+    p[2] |= MCG_STREAM_BIT_LOAD;
+  }
   s_stream_pulses = 0;
+  s_stream_duty = 0;
+  s_stream_flags = 0;
   if (++s_stream_count < MCG_STREAM_SAMPLES) {
     return;
   }
   s_stream_count = 0;
   s_block[0] = g_stream_seq++;
-  put16(s_block + 1, g_duty_out);
-  put16(s_block + 3, g_rpm_cmd);
+  put16(s_block + 1, g_rpm_cmd);
   frame_send(MCG_MSG_STREAM, s_block, (uint8_t)sizeof s_block);
 }
 
+uint8_t app_stream_sample_opens(void) { return (uint8_t)(!g_stream_on || s_stream_phase == 0); }
+
 static void tick(uint8_t pulses) {
+  stream_tick(pulses);
   control_tick(pulses);
   speed_tick(pulses);
   logger_tick(pulses);
-  stream_tick(pulses);
   seq_tick();
   frame_rx_tick();
   if (++s_service_ms >= g_service_ms) {

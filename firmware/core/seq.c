@@ -3,6 +3,9 @@
  * An entry is (delay_ms u16, reg u8, value i16). Counting the first tick after the start as tick 1,
  * entry k is written, through regs_write and its checks, on tick 1 + delay_0 + ... + delay_k
  * (after that tick's control update: a new duty or command acts from the next update).
+ * While the stream is on, tick 1 is the first tick that opens a stream sample (at most
+ * MCG_STREAM_PERIOD_MS - 1 ticks later), so entries whose delays are multiples of MCG_STREAM_PERIOD_MS
+ * fall on sample boundaries of the capture.
  * MCG_SEQ_LOOP restarts as if started on the tick of the last entry: one period lasts
  * 1 + sum(delay) ms, so a loop of zero delays still advances with time. */
 #include "core.h"
@@ -12,6 +15,7 @@ uint8_t MCG_XDATA g_seq_len;
 uint8_t MCG_XDATA g_seq_state;
 static MCG_XDATA uint8_t s_index;
 static MCG_XDATA uint16_t s_wait_ms;
+static MCG_XDATA uint8_t s_starting; /* started, waiting for a tick that opens a stream sample */
 
 static uint16_t entry_delay(uint8_t k) {
   const uint8_t MCG_XDATA* e = s_table + (uint16_t)k * MCG_SEQ_ENTRY_BYTES;
@@ -23,6 +27,7 @@ void seq_init(void) {
   g_seq_state = MCG_SEQ_STOP;
   s_index = 0;
   s_wait_ms = 0;
+  s_starting = 0;
 }
 
 uint8_t seq_write(uint8_t index, const uint8_t MCG_XDATA* entries, uint8_t n) {
@@ -68,12 +73,19 @@ uint8_t seq_set_state(uint8_t state) {
   g_seq_state = state;
   s_index = 0;
   s_wait_ms = state != MCG_SEQ_STOP ? entry_delay(0) : 0;
+  s_starting = (uint8_t)(state != MCG_SEQ_STOP);
   return MCG_ST_OK;
 }
 
 void seq_tick(void) {
   if (g_seq_state == MCG_SEQ_STOP) {
     return;
+  }
+  if (s_starting) {
+    if (!app_stream_sample_opens()) {
+      return;
+    }
+    s_starting = 0;
   }
   while (s_wait_ms == 0) {
     const uint8_t MCG_XDATA* e = s_table + (uint16_t)s_index * MCG_SEQ_ENTRY_BYTES;

@@ -19,13 +19,13 @@
 #define MCG_FIRMWARE_INCLUDE_MCG_PROTOCOL_H
 
 /* Protocol revision: bumped on any incompatible change of this header. */
-#define MCG_PROTOCOL_VERSION 1u
+#define MCG_PROTOCOL_VERSION 2u
 
 /* Firmware version reported by MCG_CMD_VERSION. */
 #include <stdint.h> /* uint8_t */
 
 #define MCG_FW_VERSION_MAJOR 0u
-#define MCG_FW_VERSION_MINOR 1u
+#define MCG_FW_VERSION_MINOR 2u
 #define MCG_FW_VERSION_PATCH 0u
 
 /* Board ids reported by MCG_CMD_VERSION. */
@@ -86,8 +86,7 @@ typedef struct {
 } McgLogDataHeader;
 typedef struct {
   uint8_t seq;
-  uint8_t duty[2];    /* i16, 1/1000, at the last sample */
-  uint8_t rpm_cmd[2]; /* i16 */
+  uint8_t rpm_cmd[2]; /* i16, at the block's last sample (protocol 2, see "Stream blocks") */
 } McgStreamHeader;
 typedef struct {
   uint8_t delay_ms[2]; /* u16, after the previous entry */
@@ -235,13 +234,28 @@ typedef struct {
 /* MCG_MSG_LOG_DATA payload: index u8 of the first point, n u8, then n x u16 points */
 #define MCG_LOGDATA_HEADER sizeof(McgLogDataHeader)
 
-/* ---- Stream blocks ---------------------------------------------------------------------------- */
-/* Payload: seq u8, duty i16 (1/1000, at the last sample), rpm_cmd i16, then MCG_STREAM_SAMPLES x u8:
- * encoder counts during each 2 ms sample period (saturated at 255). 16 samples = 32 ms per block:
- * 5 + 5 + 16 = 26 bytes per 32 ms = 812.5 B/s of the 960 B/s at 9600 8N1. */
-#define MCG_STREAM_PERIOD_MS 2u
+/* ---- Stream blocks (protocol 2) --------------------------------------------------------------- */
+/* Payload: seq u8, rpm_cmd i16 (at the block's last sample), then MCG_STREAM_SAMPLES samples of
+ * MCG_STREAM_SAMPLE_BYTES bytes. Sample k describes one MCG_STREAM_PERIOD_MS interval of 1 ms ticks,
+ * the samples of a block back to back; its 24 bits, little-endian:
+ *   bits  0..10  duty, i11, 1/1000: the mean of the PWM duty over the interval's ticks, rounded half
+ *                away from zero (what drove the motor: v = duty / 1000 * supply)
+ *   bits 11..20  counts, i10: encoder pulses during the interval, signed with the direction of the
+ *                last non-zero drive (the counter input has no direction); +-MCG_STREAM_COUNTS_MAX
+ *                means saturated
+ *   bit  21      clutch engaged, bit 22 load relay closed (both as at the interval's last tick)
+ *   bit  23      rpm_cmd written during the interval (the value in force from then on is the
+ *                header's if no later sample of the block has this bit)
+ * Budget at 9600 8N1 (960 B/s): 3 + 16 x 3 = 51 payload + 5 frame bytes per 64 ms = 875 B/s, 91 %. */
+#define MCG_STREAM_PERIOD_MS 4u
 #define MCG_STREAM_SAMPLES 16u
 #define MCG_STREAM_HEADER sizeof(McgStreamHeader)
+#define MCG_STREAM_SAMPLE_BYTES 3u
+#define MCG_STREAM_PAYLOAD (MCG_STREAM_HEADER + MCG_STREAM_SAMPLES * MCG_STREAM_SAMPLE_BYTES)
+#define MCG_STREAM_COUNTS_MAX 511
+#define MCG_STREAM_BIT_CLUTCH 0x20u /* in the sample's third byte */
+#define MCG_STREAM_BIT_LOAD 0x40u
+#define MCG_STREAM_BIT_CMD 0x80u
 
 /* ---- Command sequence (played back from RAM) -------------------------------------------------- */
 /* Entry (5 bytes): delay_ms u16 after the previous entry, reg u8, value i16. Played as a register

@@ -36,18 +36,23 @@ int main(int argc, char** argv) {
   load->add_option("FILE", load_path, "INI file (mcg-design output, or mcg-serial get)")->required()->check(CLI::ExistingFile);
 
   mcg::link::StreamOptions stream_opt;
-  auto* stream = app.add_subcommand("stream", "write live samples as CSV (t, rpm, counts, duty, rpm_cmd) until done");
+  auto* stream = app.add_subcommand("stream", "write live samples as CSV (t, rpm, counts, duty, v, rpm_cmd, clutch, r_load) until done");
   auto* seconds = stream->add_option("--seconds", stream_opt.seconds, "capture this much stream time, s")
                       ->check(CLI::Range(0.002, 1e6));
-  stream->add_option("--samples", stream_opt.samples, "capture this many 2 ms samples")
+  stream->add_option("--samples", stream_opt.samples, "capture this many 4 ms samples")
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 40))
       ->excludes(seconds);
   stream->add_flag("--allow-loss", stream_opt.allow_loss, "exit 0 even when samples were lost");
-  stream->add_option("--window", stream_opt.window_ms, "rpm estimator window, ms (even)")
-      ->check(CLI::Range(2, 256) & CLI::Validator([](std::string& s) {
-                return std::stoi(s) % 2 == 0 ? std::string() : std::string("must be a multiple of 2 ms");
-              }, "EVEN"))
+  stream->add_option("--window", stream_opt.window_s, "rpm estimator window, s (a multiple of the 0.004 s sample)")
+      ->check(CLI::Range(0.004, 1.0))
       ->capture_default_str();
+  stream->add_option("--config", stream_opt.rig.configs, "the rig's INI (as mcg-sim's): supply_V turns duty into v (repeatable)")
+      ->check(CLI::ExistingFile);
+  stream->add_option("--r-load", stream_opt.rig.r_load_ohm, "resistor the load relay switches in, ohm (r_load when closed)")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
+  stream->add_option("--then", stream_opt.then, "start the loaded sequence once the stream is on (it starts on a sample)")
+      ->check(CLI::IsMember({"play", "loop"}));
   stream->add_option("--idle-timeout", stream_opt.idle_timeout_s, "no stream data for this long is an error, s")
       ->check(CLI::Range(0.05, 60.0))
       ->capture_default_str();

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <tuple>
 
 #include "fw_harness.hpp"
 
@@ -153,7 +154,32 @@ TEST(FwLogger, RegressionRecordingLeavesControlAlone) {
   EXPECT_EQ(host_board_log()[100], 48);
 }
 
-TEST(FwStream, BlocksEveryThirtyTwoMillisecondsWithinTheBudget) {
+// The fields of stream sample k of a block (mcg_protocol.h, "Stream blocks").
+struct StreamSample {
+  int duty, counts;
+  bool clutch, load, cmd;
+};
+StreamSample sample_at(const Bytes& payload, std::size_t k) {
+  const std::size_t at = MCG_STREAM_HEADER + MCG_STREAM_SAMPLE_BYTES * k;
+  const unsigned w = payload.at(at) | payload.at(at + 1) << 8 | payload.at(at + 2) << 16;
+  const auto sext = [](unsigned v, unsigned bits) {
+    const unsigned m = 1u << (bits - 1);
+    return static_cast<int>((v & ((1u << bits) - 1)) ^ m) - static_cast<int>(m);
+  };
+  return {sext(w, 11), sext(w >> 11, 10), (w >> 21 & 1) != 0, (w >> 22 & 1) != 0, (w >> 23 & 1) != 0};
+}
+
+std::vector<Frame> stream_blocks(const std::vector<Frame>& frames) {
+  std::vector<Frame> out;
+  for (const Frame& f : frames) {
+    if (f.cmd == MCG_MSG_STREAM) {
+      out.push_back(f);
+    }
+  }
+  return out;
+}
+
+TEST(FwStream, BlocksEverySixtyFourMillisecondsWithinTheBudget) {
   Board b;
   b.set_baud(9600);
   b.set_pulses(7);
@@ -172,29 +198,139 @@ TEST(FwStream, BlocksEveryThirtyTwoMillisecondsWithinTheBudget) {
     std::vector<Frame> frames = b.take_other();
     const auto more = b.run(90, 7);
     frames.insert(frames.end(), more.begin(), more.end());
-    for (const Frame& fr : frames) {
-      if (fr.cmd != MCG_MSG_STREAM) {
-        continue;
-      }
-      ASSERT_EQ(fr.payload.size(), MCG_STREAM_HEADER + MCG_STREAM_SAMPLES);
+    for (const Frame& fr : stream_blocks(frames)) {
+      ASSERT_EQ(fr.payload.size(), MCG_STREAM_PAYLOAD);
       if (expect_seq >= 0) {
         ASSERT_EQ(fr.payload[0], expect_seq & 0xFF) << "no block lost";
       }
       expect_seq = fr.payload[0] + 1;
-      EXPECT_EQ(fwtest::i16_at(fr.payload, 1), 321);
-      EXPECT_EQ(fwtest::i16_at(fr.payload, 3), 420);
+      EXPECT_EQ(fwtest::i16_at(fr.payload, 1), 420);
       for (std::size_t i = 0; i < MCG_STREAM_SAMPLES; ++i) {
-        ASSERT_EQ(fr.payload[MCG_STREAM_HEADER + i], 14) << "7 pulses/ms over 2 ms";
+        const StreamSample smp = sample_at(fr.payload, i);
+        ASSERT_EQ(smp.counts, 28) << "7 pulses/ms over 4 ms";
+        ASSERT_EQ(smp.duty, 321);
+        ASSERT_FALSE(smp.clutch || smp.load || smp.cmd);
       }
       ++blocks;
     }
   }
-  // One block per 32 ms of board time, less the one or two still on the line.
+  // One block per 64 ms of board time, less the one or two still on the line.
   const auto elapsed_ms = static_cast<int>(host_board_time_ms() - t0);
   EXPECT_GT(elapsed_ms, seconds * 1000);
-  EXPECT_NEAR(blocks, elapsed_ms / 32, 2);
+  EXPECT_NEAR(blocks, elapsed_ms / 64, 2);
   EXPECT_EQ(b.read(MCG_REG_TX_DROPS), 0);
   EXPECT_EQ(reads, seconds * 10);
+  // The protocol page's budget: payload and frame bytes per block over the block's time.
+  EXPECT_LE((MCG_STREAM_PAYLOAD + MCG_FRAME_OVERHEAD) * 1000.0 / (MCG_STREAM_SAMPLES * MCG_STREAM_PERIOD_MS),
+            0.92 * 9600 / 10);
+}
+
+// Counts carry the direction of the drive; the outputs of each tick are those that acted during it.
+TEST(FwStream, SamplesCarrySignedCountsAndTheOutputs) {
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_DUTY_MIN, -1000), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_DUTY, -250), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_CLUTCH, 1), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_LOAD, 1), MCG_ST_OK);
+  b.set_pulses(5);
+  b.run(10, 5);
+  ASSERT_EQ(b.write(MCG_REG_STREAM, 1), MCG_ST_OK);
+  const auto blocks = stream_blocks(b.run(200, 5));
+  ASSERT_GE(blocks.size(), 2u);
+  for (std::size_t k = 0; k < MCG_STREAM_SAMPLES; ++k) {
+    const StreamSample s = sample_at(blocks[1].payload, k);
+    EXPECT_EQ(s.counts, -20);
+    EXPECT_EQ(s.duty, -250);
+    EXPECT_TRUE(s.clutch);
+    EXPECT_TRUE(s.load);
+  }
+  // Coasting (duty 0) keeps the direction of the last drive.
+  ASSERT_EQ(b.write(MCG_REG_DUTY, 0), MCG_ST_OK);
+  const auto later = stream_blocks(b.run(200, 5));
+  ASSERT_GE(later.size(), 2u);
+  EXPECT_EQ(sample_at(later[1].payload, 0).counts, -20);
+  EXPECT_EQ(sample_at(later[1].payload, 0).duty, 0);
+}
+
+// Closed loop: each sample's duty is the rounded mean of the PWM over its 4 ticks.
+TEST(FwStream, DutyIsTheMeanOverTheSample) {
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_COEF_FRAC, 8), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_KP, 64 * 256), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_P), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_STREAM, 1), MCG_ST_OK);
+  std::vector<int> duty;
+  Bytes all;
+  // Pulses that vary from tick to tick, so the P law moves the duty every tick.
+  for (int i = 0; i < 400; ++i) {
+    host_board_tick(static_cast<std::uint16_t>(i % 9));
+    duty.push_back(host_board_duty());
+    std::uint8_t buf[512];
+    const std::size_t n = host_board_tx(buf, sizeof buf);
+    all.insert(all.end(), buf, buf + n);
+  }
+  fwtest::Decoder dec;
+  const auto blocks = stream_blocks(dec.feed(all));
+  ASSERT_GE(blocks.size(), 3u);
+  // Find where the duty sequence of block 1 lies in the recorded duties.
+  std::vector<int> means;
+  for (std::size_t k = 0; k < MCG_STREAM_SAMPLES; ++k) {
+    means.push_back(sample_at(blocks[1].payload, k).duty);
+  }
+  bool found = false;
+  for (std::size_t start = 0; start + 4 * MCG_STREAM_SAMPLES <= duty.size() && !found; ++start) {
+    bool all_match = true;
+    bool varies = false;
+    for (std::size_t k = 0; k < MCG_STREAM_SAMPLES && all_match; ++k) {
+      int sum = 0;
+      for (std::size_t j = 0; j < 4; ++j) {
+        sum += duty[start + 4 * k + j];
+        varies = varies || duty[start + 4 * k + j] != duty[start + 4 * k];
+      }
+      const int mean = sum >= 0 ? (sum + 2) / 4 : -((2 - sum) / 4);
+      all_match = mean == means[k];
+    }
+    found = all_match && varies;
+  }
+  EXPECT_TRUE(found) << "no run of 64 ticks whose 4-tick means are the block's duties";
+}
+
+// A sequence started while streaming starts on a sample boundary: entries 4k ms apart fall on
+// sample boundaries, and the sample of an rpm_cmd change carries the flag.
+TEST(FwStream, SequenceStartsOnASampleBoundary) {
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_STREAM, 1), MCG_ST_OK);
+  b.run(7);
+  Bytes entries{0};
+  for (const auto& [delay, reg, value] : std::vector<std::tuple<int, int, int>>{
+           {0, MCG_REG_CLUTCH, 1}, {40, MCG_REG_RPM_CMD, 500}, {40, MCG_REG_LOAD, 1}}) {
+    const Bytes d = fwtest::le16(delay), v = fwtest::le16(value);
+    entries.insert(entries.end(), d.begin(), d.end());
+    entries.push_back(static_cast<std::uint8_t>(reg));
+    entries.insert(entries.end(), v.begin(), v.end());
+  }
+  ASSERT_EQ(b.request(MCG_CMD_SEQ_WRITE, entries)->payload.at(0), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_SEQ_STATE, MCG_SEQ_PLAY), MCG_ST_OK);
+  std::vector<Frame> frames = b.take_other();
+  const auto more = b.run(400);
+  frames.insert(frames.end(), more.begin(), more.end());
+  std::vector<StreamSample> samples;
+  for (const Frame& f : stream_blocks(frames)) {
+    for (std::size_t k = 0; k < MCG_STREAM_SAMPLES; ++k) {
+      samples.push_back(sample_at(f.payload, k));
+    }
+  }
+  std::size_t clutch_at = samples.size();
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    if (samples[k].clutch && clutch_at == samples.size()) {
+      clutch_at = k;
+    }
+  }
+  ASSERT_LT(clutch_at + 20, samples.size());
+  EXPECT_TRUE(samples[clutch_at + 10].cmd) << "40 ms = 10 samples later";
+  EXPECT_FALSE(samples[clutch_at + 9].cmd || samples[clutch_at + 11].cmd);
+  EXPECT_FALSE(samples[clutch_at + 19].load);
+  EXPECT_TRUE(samples[clutch_at + 20].load);
 }
 
 // A log dump while the stream runs at 9600 baud: the dump takes the spare bytes, no block is lost.
@@ -242,8 +378,8 @@ TEST(FwStream, LostBlocksShowAsSequenceGaps) {
   const int drops = b.read(MCG_REG_TX_DROPS);
   EXPECT_GT(drops, 0);
   const int seq_after = b.read(MCG_REG_STREAM_SEQ);
-  // 200001 ticks between the two reads: 6250 blocks, one more depending on the phase.
-  EXPECT_LE(std::abs((seq_after - seq_before + 256) % 256 - 6250 % 256), 1)
+  // 200001 ticks between the two reads: 3125 blocks, one more depending on the phase.
+  EXPECT_LE(std::abs((seq_after - seq_before + 256) % 256 - 3125 % 256), 1)
       << "the sequence advances for dropped blocks too";
 }
 

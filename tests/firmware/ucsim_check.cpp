@@ -444,7 +444,7 @@ int main(int argc, char** argv) {
     const auto v = sim.request(MCG_CMD_VERSION);
     check(v && v->payload == Bytes{MCG_ST_OK, MCG_PROTOCOL_VERSION, MCG_FW_VERSION_MAJOR,
                                    MCG_FW_VERSION_MINOR, MCG_FW_VERSION_PATCH, MCG_BOARD_UCSIM},
-          "version: protocol 1, firmware 0.1.0, board ucsim");
+          "version: protocol 2, firmware 0.2.0, board ucsim");
 
     const auto w = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_RPM_CMD, 515));
     check(w && w->payload == Bytes{MCG_ST_OK, MCG_REG_RPM_CMD, 0x03, 0x02}, "write rpm_cmd 515 acknowledged");

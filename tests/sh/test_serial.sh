@@ -57,11 +57,12 @@ check "load names the line of an unknown register" eval '! S load "$work/bad.ini
 check "clutch on, speed command 450" eval 'S set clutch 1 && S set rpm_cmd 450'
 sleep 2
 check "stream --samples 500: rows, header, no loss" eval 'S stream --samples 500 > "$work/live.csv" 2> "$work/err" &&
-  [ "$(rows "$work/live.csv")" = 500 ] && grep -qx "t,rpm,counts,duty,rpm_cmd" "$work/live.csv" && [ ! -s "$work/err" ]'
-check "stream: t runs in 2 ms steps from 0" eval '[ "$(grep -v "^#" "$work/live.csv" | awk -F, "NR==2{print \$1} END{print \$1}" | tr "\n" " ")" = "0 0.998 " ]'
+  [ "$(rows "$work/live.csv")" = 500 ] && grep -qx "t,rpm,counts,duty,v,rpm_cmd,clutch,r_load" "$work/live.csv" && [ ! -s "$work/err" ]'
+check "stream: t runs in 4 ms steps from 0" eval '[ "$(grep -v "^#" "$work/live.csv" | awk -F, "NR==2{print \$1} END{print \$1}" | tr "\n" " ")" = "0 1.996 " ]'
+check "stream: the columns of mcg-csv(5)" eval '[ "$(grep -v "^#" "$work/live.csv" | head -1)" = "t,rpm,counts,duty,v,rpm_cmd,clutch,r_load" ]'
 check "stream: the PI holds the speed command" eval 'grep -v "^#" "$work/live.csv" | awk -F, "NR>20 && \$2!=\"nan\" {s+=\$2; n++} END {m=s/n; exit !(m>440 && m<460)}"'
-check "stream: rpm_cmd is reported" eval 'tail -1 "$work/live.csv" | grep -q ",450$"'
-check "stream --seconds 0.25 gives 125 samples" eval 'S stream --seconds 0.25 > "$work/s.csv" && [ "$(rows "$work/s.csv")" = 125 ]'
+check "stream: rpm_cmd, clutch and r_load are reported" eval 'tail -1 "$work/live.csv" | grep -q ",450,2,inf$"'
+check "stream --seconds 0.256 gives 64 samples" eval 'S stream --seconds 0.256 > "$work/s.csv" && [ "$(rows "$work/s.csv")" = 64 ]'
 check "the stream is off again" eval 'S get stream > "$work/v" && same "$work/v" 0'
 
 # Ctrl-C keeps what was captured and ends cleanly

@@ -41,7 +41,7 @@ check "noisy line: 8 set/get pairs all verified" [ $ok = 1 ]
 N stream --seconds 4 --allow-loss > "$work/noisy.csv" 2> "$work/noisy.err"
 status=$?
 check "noisy line: stream --allow-loss exits 0" eval '[ $status = 0 ] || cat "$work/noisy.err"'
-check "noisy line: 2000 samples captured" [ "$(rows "$work/noisy.csv")" = 2000 ]
+check "noisy line: 1000 samples (4 s of 4 ms) captured" [ "$(rows "$work/noisy.csv")" = 1000 ]
 check "noisy line: t strictly increasing through the gaps" t_increasing "$work/noisy.csv"
 check "noisy line: losses reported in one line, or none" eval '[ ! -s "$work/noisy.err" ] ||
   { [ "$(wc -l < "$work/noisy.err")" = 1 ] && grep -Eq "^mcg-serial: lost [0-9]+ of [0-9]+ samples" "$work/noisy.err"; }'
@@ -86,8 +86,8 @@ n=$(rows "$work/cut.csv")
 check "cut line: stream ends with status 1" [ $status = 1 ]
 check "cut line: one line naming the samples kept" \
   same "$work/cut.err" "mcg-serial: error: $cut: the port vanished after $n samples (they are on stdout)"
-check "cut line: over a second of samples kept" [ "$n" -gt 500 ]
-check "cut line: the last row is complete" eval 'tail -1 "$work/cut.csv" | grep -Eq "^[0-9.]+,[0-9.na]+,[0-9]+,[-0-9.na]+,[0-9na]+$"'
+check "cut line: over a second of samples kept" [ "$n" -gt 250 ]
+check "cut line: the last row is complete" eval 'tail -1 "$work/cut.csv" | grep -Eq "^[0-9.]+,[-0-9.na]+,[-0-9.na]+,[-0-9.]+,[-0-9.]+,[0-9na]+,[12],([0-9.]+|inf)$"'
 wait_bounded "$relay_pid" 5
 check "cut line: the relay says so" grep -q "^mcg-serial relay: line cut" "$work/relay.err"
 check "the board still answers directly" eval '[ "$(timeout 30 mcg-serial -p "$tty" get rpm_cmd)" = 440 ]'

@@ -74,7 +74,7 @@ TEST(LinkSession, WrongProtocolIsRefused) {
   ScriptedLine line([](const Frame&, int) { return version_answer(MCG_PROTOCOL_VERSION + 1); });
   Session s(line, quick());
   EXPECT_EQ(error_of([&] { s.hello(); }),
-            "line: wrong firmware: it speaks protocol 2 (firmware 0.9.0 on c515), mcg-serial speaks protocol 1");
+            "line: wrong firmware: it speaks protocol 3 (firmware 0.9.0 on c515), mcg-serial speaks protocol 2");
 }
 
 TEST(LinkSession, SilenceIsNothingAnsweringAfterEveryTry) {
@@ -129,7 +129,7 @@ TEST(LinkSession, RefusalCarriesTheBoardsReason) {
 
 TEST(LinkSession, StreamBlocksDuringARequestAreKept) {
   ScriptedLine line([](const Frame&, int) {
-    Bytes out = encode(MCG_MSG_STREAM, Bytes(21, 7));
+    Bytes out = encode(MCG_MSG_STREAM, Bytes(MCG_STREAM_PAYLOAD, 7));
     const Bytes v = version_answer(MCG_PROTOCOL_VERSION);
     out.insert(out.end(), v.begin(), v.end());
     return out;

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "link/capture_meta.hpp"  // k_load_resistor_ohm
 #include "model/model.hpp"  // Model, Plant, State
 
 namespace mcg::board {
@@ -14,7 +15,7 @@ namespace mcg::board {
 /// What the emulated board is wired to.
 struct BoardOptions {
   model::Model model;               ///< the rig (mcg-sim's --config)
-  double r_load_ohm = 5.6;          ///< resistor the load relay puts across the generator, ohm
+  double r_load_ohm = link::k_load_resistor_ohm;  ///< resistor the load relay puts across the generator, ohm
   std::uint32_t baud = 9600;        ///< serial line rate; 0 = unlimited
 };
 

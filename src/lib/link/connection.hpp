@@ -26,7 +26,7 @@ struct Connection {
   /// F, the fractional bits of the coefficient registers (read once, cached).
   int frac_bits();
   void forget_frac_bits() { m_frac_bits.reset(); }
-  /// "host firmware 0.1.0, protocol 1".
+  /// "host firmware 0.2.0, protocol 2".
   std::string board_text() const;
 
  private:

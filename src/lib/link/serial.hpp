@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "link/capture_meta.hpp"  // RigOptions
+
 namespace mcg::link {
 
 /// Options every subcommand that talks to the board shares.
@@ -40,11 +42,13 @@ struct StreamOptions {
   double seconds = 0.0;            ///< stop after this much stream time (0: see samples)
   std::int64_t samples = 0;        ///< stop after this many samples (0 with seconds 0: until Ctrl-C)
   bool allow_loss = false;         ///< exit 0 even when samples were lost
-  int window_ms = 16;              ///< rpm estimator window, ms (a multiple of the 2 ms sample)
+  double window_s = 0.016;         ///< rpm estimator window, s (a multiple of the 4 ms sample)
   double idle_timeout_s = 1.0;     ///< no stream block for this long is an error
+  RigOptions rig;                  ///< supply and load resistor: v and r_load of the rows
+  std::string then;                ///< "", "play" or "loop": start the loaded sequence once streaming
 };
-/// stream: turns the board's stream on, writes CSV rows (t, rpm, counts, duty, rpm_cmd) as
-/// the blocks arrive (flushed per block), turns it off at the end. Sequence gaps count as
+/// stream: turns the board's stream on, writes CSV rows (t, rpm, counts, duty, v, rpm_cmd,
+/// clutch, r_load; mcg-csv(5)) as the blocks arrive (flushed per block), turns it off at the end. Sequence gaps count as
 /// lost samples: reported on stderr, exit status k_exit_lost_samples unless allow_loss.
 /// SIGINT ends the capture cleanly. Returns the exit status.
 int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostream& out, std::ostream& err);

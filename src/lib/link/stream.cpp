@@ -7,11 +7,13 @@
 
 #include "common/error.hpp"     // mcg::fail
 #include "config/ini.hpp"       // format_number
+#include "link/capture_meta.hpp"  // load_rig, board_config
 #include "link/connection.hpp"  // connect
 #include "link/interrupt.hpp"   // InterruptGuard
 #include "link/serial.hpp"
 #include "link/stream_block.hpp"  // StreamAssembler
 #include "mcg/version.hpp"      // k_version
+#include "model/model.hpp"      // model_from_ini, k_open_circuit
 #include "sim/encoder.hpp"      // format_rpm_estimator
 #include "table/table.hpp"      // Writer
 
@@ -26,38 +28,44 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 }  // namespace
 
 int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostream& out, std::ostream& err) {
-  std::int64_t want = options.samples;
-  if (options.seconds > 0.0) {
-    want = static_cast<std::int64_t>(std::llround(options.seconds / (MCG_STREAM_PERIOD_MS * 1e-3)));
+  constexpr double k_sample_s = MCG_STREAM_PERIOD_MS * 1e-3;
+  const auto window_samples = static_cast<int>(std::llround(options.window_s / k_sample_s));
+  if (window_samples < 1 || std::abs(window_samples * k_sample_s - options.window_s) > 1e-9) {
+    fail("--window: {} s is not a multiple of the {} s sample period", config::format_number(options.window_s),
+         config::format_number(k_sample_s));
   }
+  std::int64_t want = options.samples;
+  if (options.seconds > 0.0) want = static_cast<std::int64_t>(std::llround(options.seconds / k_sample_s));
+  const Rig rig = load_rig(options.rig);
   auto c = connect(link);
   Session& s = *c->session;
   const InterruptGuard guard;
-  const std::string mode = format_value(require_register("mode"), s.read(require_register("mode")), 0);
-  const std::int16_t clutch = s.read(require_register("clutch"));
-  const std::int16_t load = s.read(require_register("load"));
+  const std::vector<std::pair<std::string, std::string>> config = board_config(*c);
   s.write(require_register("stream"), 1);
+  if (!options.then.empty()) {
+    const RegisterInfo& state = require_register("seq_state");
+    s.write(state, static_cast<std::int16_t>(parse_value(state, options.then, "--then")));
+  }
 
   table::Writer w(out);
   w.meta("source", fmt::format("mcg-serial {} stream", k_version));
   w.meta("board", c->board_text());
   w.meta("port", link.port);
-  w.meta("sample_period", config::format_number(MCG_STREAM_PERIOD_MS * 1e-3));
+  w.meta("sample_period", config::format_number(k_sample_s));
   sim::CountEstimator est;
-  est.window_s = options.window_ms * 1e-3;
+  est.window_s = window_samples * k_sample_s;
   est.counts_per_rev = MCG_COUNTS_PER_REV;
   w.meta("rpm_estimator", sim::format_rpm_estimator(est));
-  w.meta("encoder", "512 lines, x4 quadrature decoding = 2048 counts/rev");
+  w.meta("encoder", k_encoder_text);
   w.meta("timing",
-         "counts over (t - 0.002, t]; rpm over the estimator window ending at t; duty and rpm_cmd as reported "
-         "at each 32 ms block's last sample, held until the next");
-  w.meta("mode", mode);
-  w.meta("clutch", clutch != 0 ? "2" : "1");
-  w.meta("load_relay", load != 0 ? "closed" : "open");
-  w.header({"t", "rpm", "counts", "duty", "rpm_cmd"});
+         "duty, v, clutch, r_load, rpm_cmd of row n act over [t(n), t(n+1)) (duty: the mean over the "
+         "sample's 1 ms ticks); counts over (t - sample_period, t], rpm over the estimator window ending at t; "
+         "speed signed with the direction of the last non-zero drive");
+  write_rig_meta(w, rig, config);
+  w.header({"t", "rpm", "counts", "duty", "v", "rpm_cmd", "clutch", "r_load"});
   w.finish();
 
-  StreamAssembler assembler(options.window_ms / static_cast<int>(MCG_STREAM_PERIOD_MS));
+  StreamAssembler assembler(window_samples);
   std::int64_t written = 0;
   auto last_block = Clock::now();
   std::string ended_by;
@@ -78,7 +86,8 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
       if (!assembler.push(f->payload, arrival_gap_s)) continue;
       for (const StreamRow& r : assembler.rows()) {
         if (want != 0 && written >= want) break;
-        w.row({r.t_s, r.rpm, r.counts, r.duty, r.rpm_cmd});
+        w.row({r.t_s, r.rpm, r.counts, r.duty, r.duty * rig.supply_V, r.rpm_cmd, static_cast<double>(r.clutch),
+               r.load_closed ? rig.r_load_ohm : model::k_open_circuit});
         ++written;
       }
       w.finish();

@@ -1,8 +1,9 @@
 // Stream block assembly.
 #include "link/stream_block.hpp"
 
-#include <cassert>
 #include <algorithm>
+#include <array>
+#include <cassert>
 #include <cmath>
 #include <limits>
 
@@ -17,12 +18,30 @@ constexpr double k_sample_s = MCG_STREAM_PERIOD_MS * 1e-3;
 constexpr double k_block_s = k_sample_s * MCG_STREAM_SAMPLES;
 constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 
+/// Sign-extends the low `bits` bits of `v`.
+int sign_extend(unsigned v, unsigned bits) {
+  const unsigned m = 1u << (bits - 1u);
+  const unsigned x = v & ((1u << bits) - 1u);
+  return static_cast<int>(x ^ m) - static_cast<int>(m);
+}
+
 }  // namespace
 
-StreamAssembler::StreamAssembler(int window_samples) : m_window(window_samples) { assert(window_samples >= 1); }
+StreamSample decode_stream_sample(std::span<const std::uint8_t, 3> b) {
+  const unsigned w = static_cast<unsigned>(b[0]) | static_cast<unsigned>(b[1]) << 8 | static_cast<unsigned>(b[2]) << 16;
+  return {sign_extend(w, 11), sign_extend(w >> 11, 10), (b[2] & MCG_STREAM_BIT_CLUTCH) != 0,
+          (b[2] & MCG_STREAM_BIT_LOAD) != 0, (b[2] & MCG_STREAM_BIT_CMD) != 0};
+}
+
+StreamAssembler::StreamAssembler(int window_samples)
+    : m_window(window_samples), m_rpm_cmd(k_nan), m_prev_counts(k_nan) {
+  assert(window_samples >= 1);
+}
+
+std::uint64_t StreamAssembler::lost_samples() const { return m_lost_blocks * MCG_STREAM_SAMPLES; }
 
 bool StreamAssembler::push(std::span<const std::uint8_t> payload, double arrival_gap_s) {
-  if (payload.size() != MCG_STREAM_HEADER + MCG_STREAM_SAMPLES) return false;
+  if (payload.size() != MCG_STREAM_PAYLOAD) return false;
   const std::uint8_t seq = payload[0];
   std::int64_t step = 1;
   if (m_started) {
@@ -31,39 +50,59 @@ bool StreamAssembler::push(std::span<const std::uint8_t> payload, double arrival
     const double expected = arrival_gap_s / k_block_s;
     while (static_cast<double>(step) + 128.0 < expected) step += 256;
     if (step == 0) step = 256;
-    m_lost_blocks += static_cast<std::uint64_t>(step - 1);
-    const std::int64_t gap = std::min<std::int64_t>((step - 1) * MCG_STREAM_SAMPLES, m_window);
-    for (std::int64_t k = 0; k < gap; ++k) m_window_counts.push_back(-1);
     m_block_index += step;
+  }
+  if (step > 1) {
+    // Lost blocks: nothing measured carries across the gap.
+    m_lost_blocks += static_cast<std::uint64_t>(step - 1);
+    m_window_counts.clear();
+    m_prev_counts = k_nan;
+    m_rpm_cmd = k_nan;
   }
   m_started = true;
   m_last_seq = seq;
   ++m_blocks;
 
+  std::array<StreamSample, MCG_STREAM_SAMPLES> samples{};
+  std::size_t first_cmd = MCG_STREAM_SAMPLES;
+  std::size_t last_cmd = MCG_STREAM_SAMPLES;
+  for (std::size_t k = 0; k < MCG_STREAM_SAMPLES; ++k) {
+    samples[k] = decode_stream_sample(
+        payload.subspan(MCG_STREAM_HEADER + k * MCG_STREAM_SAMPLE_BYTES).first<MCG_STREAM_SAMPLE_BYTES>());
+    if (samples[k].rpm_cmd_written) {
+      if (first_cmd == MCG_STREAM_SAMPLES) first_cmd = k;
+      last_cmd = k;
+    }
+  }
+  const double rpm_cmd_end = get_i16(payload, 1);
+  if (first_cmd == MCG_STREAM_SAMPLES) m_rpm_cmd = rpm_cmd_end;  // unchanged all through the block
+
   m_rows.clear();
-  const double duty = get_i16(payload, 1) / static_cast<double>(MCG_DUTY_FULL);
-  const double rpm_cmd = get_i16(payload, 3);
   const double rpm_per_pulse = 60.0 / (MCG_COUNTS_PER_REV * k_sample_s * m_window);
   for (std::size_t k = 0; k < MCG_STREAM_SAMPLES; ++k) {
-    const int counts = payload[MCG_STREAM_HEADER + k];
-    m_window_counts.push_back(counts == 255 ? -1 : counts);
+    const StreamSample& s = samples[k];
+    m_window_counts.push_back(m_prev_counts);
     while (m_window_counts.size() > static_cast<std::size_t>(m_window)) m_window_counts.pop_front();
     double rpm = k_nan;
     if (m_window_counts.size() == static_cast<std::size_t>(m_window)) {
-      int sum = 0;
-      for (const int c : m_window_counts) sum = c < 0 || sum < 0 ? -1 : sum + c;
-      if (sum >= 0) rpm = sum * rpm_per_pulse;
+      double sum = 0.0;
+      for (const double c : m_window_counts) sum += c;
+      rpm = sum * rpm_per_pulse;
     }
-    const bool last = k + 1 == MCG_STREAM_SAMPLES;
-    if (last) {
-      m_duty = duty;
-      m_rpm_cmd = rpm_cmd;
-      m_have_report = true;
+    double rpm_cmd = m_rpm_cmd;
+    if (k >= last_cmd) {
+      rpm_cmd = rpm_cmd_end;
+    } else if (k >= first_cmd) {
+      rpm_cmd = k_nan;  // changed twice within the block: the value in between is not reported
     }
     const std::int64_t n = m_block_index * MCG_STREAM_SAMPLES + static_cast<std::int64_t>(k);
-    m_rows.push_back({static_cast<double>(n) * k_sample_s, rpm, static_cast<double>(counts),
-                      m_have_report ? m_duty : k_nan, m_have_report ? m_rpm_cmd : k_nan});
+    const double counts_row = m_prev_counts;
+    m_rows.push_back({static_cast<double>(n) * k_sample_s, rpm, counts_row, s.duty_permille / static_cast<double>(MCG_DUTY_FULL),
+                      rpm_cmd, s.clutch_engaged ? 2 : 1, s.load_closed});
+    const bool saturated = std::abs(s.counts) >= MCG_STREAM_COUNTS_MAX;
+    m_prev_counts = saturated ? k_nan : static_cast<double>(s.counts);
   }
+  m_rpm_cmd = rpm_cmd_end;
   return true;
 }
 

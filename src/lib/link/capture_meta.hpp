@@ -1,0 +1,45 @@
+// What a capture (mcg-serial stream, dump) states besides its rows: the rig it ran on and the
+// board's configuration, so that the model reads the file unedited (mcg-csv(5)).
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace mcg::table {
+class Writer;
+}
+
+namespace mcg::link {
+
+struct Connection;
+
+/// The encoder behind every count the board reports (mcg-csv(5) `encoder`).
+inline constexpr const char* k_encoder_text = "512 lines, x4 quadrature decoding = 2048 counts/rev";
+
+/// The resistor the rig's load relay switches across the generator, ohm (the report's 5.6 ohm).
+inline constexpr double k_load_resistor_ohm = 5.6;
+
+/// Where the board's outputs go: the H-bridge supply (duty -> v) and the load relay's resistor.
+struct RigOptions {
+  std::vector<std::string> configs;          ///< --config: the rig's INI (as mcg-sim's; supply_V)
+  double r_load_ohm = k_load_resistor_ohm;   ///< --r-load: the relay's resistor, ohm
+};
+
+struct Rig {
+  double supply_V;
+  double r_load_ohm;
+  std::string supply_source;   ///< the INI files it came from, or "model default"
+};
+
+/// Reads the rig's INI files (model::model_from_ini; defaults without any).
+Rig load_rig(const RigOptions& options);
+
+/// The registers that decide what the board does with its inputs, as NAME=value pairs in
+/// engineering units (mode, rpm_cmd, clutch, load, the controller's coefficients and limits).
+std::vector<std::pair<std::string, std::string>> board_config(Connection& c);
+
+/// `# supply_V`, `# r_load_relay_ohm` and `# board_config` metadata lines.
+void write_rig_meta(table::Writer& w, const Rig& rig, const std::vector<std::pair<std::string, std::string>>& config);
+
+}  // namespace mcg::link
