@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <string>
 
 namespace mcg::linsys {
 namespace {
@@ -59,6 +61,36 @@ TEST(LinsysC2d, ZohWholeSampleDelayAddsPolesAtOrigin) {
   g.delay_s = 2.0 * k_h;
   const double e = std::exp(-2.0 * k_h);
   expect_tf(c2d(g, k_h, C2dMethod::zoh, 0.0, "t"), {1.0 - e}, {1.0, -e, 0.0, 0.0});
+}
+
+std::string c2d_error(const char* text, double delay_s, C2dMethod method) {
+  Tf g = s_tf(text);
+  g.delay_s = delay_s;
+  try {
+    c2d(g, 0.001, method, 0.0, "--plant");
+  } catch (const mcg::Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(LinsysC2d, DelayInSamplesIsBoundedByTheDegreeLimit) {
+  // Once a wrapped cast (length_error), undefined behaviour, or 17 million zeros.
+  for (C2dMethod m : {C2dMethod::zoh, C2dMethod::tustin, C2dMethod::impulse}) {
+    EXPECT_EQ(c2d_error("1/(s+1)", 3e6, m),
+              std::string("--plant: delay 3000000 s is 3000000000 samples of 0.001 s; at most ") +
+                  (m == C2dMethod::zoh ? "254" : "255") + " fit in the degree limit of 256");
+  }
+  EXPECT_EQ(c2d_error("1/(s+1)", 1e300, C2dMethod::zoh),
+            "--plant: delay 1e+300 s is 1e+303 samples of 0.001 s; at most 254 fit in the degree limit of 256");
+  EXPECT_EQ(c2d_error("1/(s+1)", std::numeric_limits<double>::infinity(), C2dMethod::foh),
+            "--plant: delay inf s is inf samples of 0.001 s; at most 255 fit in the degree limit of 256");
+  // At the limit: z^-(254+1) times a first-order denominator is degree 256.
+  Tf g = s_tf("1/(s+1)");
+  g.delay_s = 0.2545;
+  EXPECT_EQ(trim(c2d(g, 0.001, C2dMethod::zoh, 0.0, "t").den).size(), 257u);
+  g.delay_s = 0.255;
+  EXPECT_EQ(trim(c2d(g, 0.001, C2dMethod::tustin, 0.0, "t").den).size(), 257u);
 }
 
 TEST(LinsysC2d, ZohKeepsFeedthrough) {

@@ -46,6 +46,24 @@ TEST(LinsysParse, DelaysAndZ) {
   EXPECT_FALSE(parse_tf("42", "t").domain.has_value());
 }
 
+TEST(LinsysParse, SizesAreBoundedNotWrapped) {
+  // An overflowing exponent once read as 0, and nested powers grew to degree 64^3.
+  EXPECT_EQ(error_of("1/(s+1)^99999999999"), "--plant: exponent too large (at most 64) at character 9");
+  EXPECT_EQ(error_of("1/(s+1)^65"), "--plant: exponent too large (at most 64) at character 9");
+  EXPECT_EQ(error_of("1/(((s+1)^64)^64)^64"), "--plant: degree 4096 above the limit of 256 at character 14");
+  EXPECT_EQ(error_of("(s+1)^64*(s+1)^64*(s+1)^64*(s+1)^64*(s+1)"),
+            "--plant: degree 257 above the limit of 256 at character 36");
+  EXPECT_EQ(error_of("(s+1)^64*(s+1)^64*(s+1)^64*(s+1)^64+1/s"),
+            "--plant: degree 257 above the limit of 256 at character 36");
+  EXPECT_EQ(trim(parse_tf("(s+1)^64*(s+1)^64*(s+1)^64*(s+1)^64", "t").tf.num).size(), 257u);
+  EXPECT_EQ(error_of("1e999/s"), "--plant: number out of range at character 1");
+  EXPECT_EQ(error_of("1e300*s*1e300/(s+1)"), "--plant: number out of range at character 8");
+  EXPECT_EQ(error_of("10^64^2"), "--plant: unexpected '^' at character 6");
+  EXPECT_EQ(error_of("1e10^64"), "--plant: number out of range at character 5");
+  EXPECT_EQ(error_of("exp(1000)"), "--plant: number out of range at character 1");
+  EXPECT_EQ(error_of("exp(-1e308*s)*exp(-1e308*s)"), "--plant: number out of range at character 14");
+}
+
 TEST(LinsysParse, ErrorsPointAtTheCharacter) {
   EXPECT_EQ(error_of("16.557/((s/65+1)*(s/950+1)"), "--plant: unbalanced '(' at character 8");
   EXPECT_EQ(error_of("1/(s+1))"), "--plant: unexpected ')' at character 8");

@@ -80,6 +80,7 @@ Tf tf_from_lists(const std::vector<double>& num, const std::vector<double>& den,
   g.num = linsys::trim(num);
   g.den = linsys::trim(den);
   if (g.den.empty()) fail("{}: the denominator is zero", where);
+  linsys::check_degree(g, where);
   return g;
 }
 

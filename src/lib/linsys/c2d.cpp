@@ -52,9 +52,10 @@ Eigen::VectorXd balance(Eigen::MatrixXd& a) {
   return d;
 }
 
-/// Whole samples and the fraction θ of τ = d·T + θ.
-void split_delay(double delay_s, double dt_s, long& whole, double& theta_s) {
-  const double samples = delay_s / dt_s;
+/// Whole samples and the fraction θ of τ = d·T + θ; d is at most `room` (checked, so that the
+/// z^−d the caller multiplies in stays within k_max_degree).
+void split_delay(double delay_s, double dt_s, int room, const std::string& what, long& whole, double& theta_s) {
+  const double samples = delay_samples(delay_s, dt_s, room, what);
   double d = std::floor(samples + 1e-9);
   double theta = delay_s - d * dt_s;
   if (theta < 1e-9 * dt_s) theta = 0.0;
@@ -76,7 +77,7 @@ Tf make_z(Poly num, Poly den, double dt_s, long delay_samples) {
 long whole_delay(const Tf& g, double dt_s, const std::string& what, const char* method) {
   long d = 0;
   double theta = 0.0;
-  split_delay(g.delay_s, dt_s, d, theta);
+  split_delay(g.delay_s, dt_s, k_max_degree - degree(trim(g.den)), what, d, theta);
   if (theta != 0.0) {
     fail("{}: {} needs a delay of whole samples; {} s is not a multiple of {} s (use zoh)", what, method,
          config::format_number(g.delay_s), config::format_number(dt_s));
@@ -212,6 +213,7 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
   if (!(dt_s > 0.0) || !std::isfinite(dt_s)) fail("{}: sample period must be positive, got {}", what, dt_s);
   if (is_zero(g.num)) return make_z({}, {1.0}, dt_s, 0);
   if (!g.proper()) fail("{}: improper transfer function cannot be discretised", what);
+  check_degree(g, what);
   if (method == C2dMethod::tustin) {
     const long d = whole_delay(g, dt_s, what, "tustin");
     Tf h = tustin(g, dt_s, prewarp_rad_s);
@@ -227,7 +229,8 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
   if (method == C2dMethod::zoh) {
     long d = 0;
     double theta = 0.0;
-    split_delay(g.delay_s, dt_s, d, theta);
+    // A fractional delay costs one sample more: z^−(d+1).
+    split_delay(g.delay_s, dt_s, k_max_degree - static_cast<int>(n) - 1, what, d, theta);
     Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n + 1, n + 1);
     m.topLeftCorner(n, n) = ss.a;
     m.topRightCorner(n, 1) = ss.b;

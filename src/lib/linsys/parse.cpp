@@ -3,6 +3,7 @@
 
 #include "common/error.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -24,6 +25,9 @@ Value constant(double c) {
   v.num = trim(Poly{c});
   return v;
 }
+
+/// Caps a single `^n`; the degree it makes is bounded by k_max_degree on its own.
+constexpr int k_max_exponent = 64;
 
 bool same_poly(const Poly& a, const Poly& b) { return trim(a) == trim(b); }
 
@@ -60,6 +64,18 @@ class Parser {
     fail("{}: {} at character {}", m_where, what, pos + 1);
   }
 
+  /// The bounds every intermediate result keeps: degrees within k_max_degree (so that nested
+  /// powers cannot grow without end) and finite coefficients and delay.
+  Value checked(Value v, std::size_t at) const {
+    const int n = std::max(degree(trim(v.num)), degree(trim(v.den)));
+    if (n > k_max_degree) error_at(at, fmt::format("degree {} above the limit of {}", n, k_max_degree));
+    auto finite = [](const Poly& p) {
+      return std::all_of(p.begin(), p.end(), [](double c) { return std::isfinite(c); });
+    };
+    if (!finite(v.num) || !finite(v.den) || !std::isfinite(v.delay_s)) error_at(at, "number out of range");
+    return v;
+  }
+
   void skip_blanks() {
     while (m_pos < m_text.size() && std::isspace(static_cast<unsigned char>(m_text[m_pos]))) ++m_pos;
   }
@@ -79,9 +95,9 @@ class Parser {
       skip_blanks();
       const std::size_t at = m_pos;
       if (accept('+')) {
-        acc = sum(acc, term(), 1.0, at);
+        acc = checked(sum(acc, term(), 1.0, at), at);
       } else if (accept('-')) {
-        acc = sum(acc, term(), -1.0, at);
+        acc = checked(sum(acc, term(), -1.0, at), at);
       } else {
         return acc;
       }
@@ -142,7 +158,7 @@ class Parser {
       } else {
         return reduce(acc);
       }
-      acc = reduce(acc);
+      acc = checked(reduce(acc), at);
     }
   }
 
@@ -190,9 +206,15 @@ class Parser {
       error_at(start, "expected a whole-number exponent");
     }
     int n = 0;
-    std::from_chars(m_text.data() + start, m_text.data() + m_pos, n);
-    if (n > 64) error_at(start, "exponent too large");
+    const auto [end, ec] = std::from_chars(m_text.data() + start, m_text.data() + m_pos, n);
+    if (ec != std::errc() || end != m_text.data() + m_pos || n > k_max_exponent) {
+      error_at(start, fmt::format("exponent too large (at most {})", k_max_exponent));
+    }
     if (negative && is_zero(base.num)) error_at(at, "division by zero");
+    const int base_degree = std::max(degree(trim(base.num)), degree(trim(base.den)));
+    if (base_degree * n > k_max_degree) {
+      error_at(at, fmt::format("degree {} above the limit of {}", base_degree * n, k_max_degree));
+    }
     Value r;
     for (int i = 0; i < n; ++i) {
       r.num = mul(r.num, base.num);
@@ -203,7 +225,7 @@ class Parser {
       std::swap(r.num, r.den);
       r.delay_s = -r.delay_s;
     }
-    return reduce(r);
+    return checked(reduce(r), at);
   }
 
   void set_domain(Domain d, std::size_t at) {
@@ -268,7 +290,7 @@ class Parser {
     const double offset = num.empty() ? 0.0 : num.back() / den[0];
     Value v = constant(std::exp(offset));
     v.delay_s = -slope;
-    return v;
+    return checked(v, at);
   }
 
   Value number() {
@@ -277,6 +299,7 @@ class Parser {
     const char* first = m_text.data() + m_pos;
     const char* last = m_text.data() + m_text.size();
     const auto [ptr, ec] = std::from_chars(first, last, value);
+    if (ec == std::errc::result_out_of_range) error_at(start, "number out of range");
     if (ec != std::errc() || ptr == first) error_at(start, "invalid number");
     m_pos = static_cast<std::size_t>(ptr - m_text.data());
     if (!std::isfinite(value)) error_at(start, "number out of range");

@@ -24,6 +24,9 @@ struct ParsedTf {
 /// e.g. "16.557/((s/65+1)*(s/950+1))", "4658*(s/500+1)/s", "0.5*exp(-0.002*s)/(s+1)",
 /// "(11.645*z - 6.987)/(z - 1)", "z^-1". exp() takes a polynomial of degree <= 1 in s:
 /// exp(c − τ·s) = e^c·e^(−τs), a delay τ >= 0. Terms of a sum must carry the same delay.
+/// An exponent is at most 64; every intermediate numerator and denominator stays within
+/// k_max_degree and finite ("degree 4096 above the limit of 256 at character N", "number out of
+/// range at character N", "exponent too large (at most 64) at character N").
 /// Errors are mcg::Error "<where>: <what> at character N" (N counts from 1), e.g.
 /// "--plant: unbalanced '(' at character 12", "--plant: s and z mixed at character 9".
 ParsedTf parse_tf(std::string_view text, const std::string& where);

@@ -4,6 +4,7 @@
 #include "common/error.hpp"
 #include "config/ini.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <numbers>
@@ -66,9 +67,25 @@ Tf cancel_origin(Tf g) {
   return g;
 }
 
+void check_degree(const Tf& g, const std::string& what) {
+  const int n = std::max(degree(trim(g.num)), degree(trim(g.den)));
+  if (n > k_max_degree) fail("{}: degree {} above the limit of {}", what, n, k_max_degree);
+}
+
+double delay_samples(double delay_s, double dt_s, int room, const std::string& what) {
+  const double samples = delay_s / dt_s;
+  // The same 1e-9 of a sample as the callers' floor and round: a whole count above room fails.
+  if (!std::isfinite(samples) || std::floor(samples + 1e-9) > room) {
+    fail("{}: delay {} s is {} samples of {} s; at most {} fit in the degree limit of {}", what,
+         config::format_number(delay_s), config::format_number(samples), config::format_number(dt_s),
+         std::max(room, 0), k_max_degree);
+  }
+  return samples;
+}
+
 Tf fold_delay(const Tf& g, const std::string& what) {
   if (!g.discrete() || g.delay_s == 0.0) return g;
-  const double samples = g.delay_s / g.dt_s;
+  const double samples = delay_samples(g.delay_s, g.dt_s, k_max_degree - degree(trim(g.den)), what);
   const double k = std::round(samples);
   if (std::abs(samples - k) > 1e-9 * std::max(1.0, samples)) {
     fail("{}: delay {} s is not a whole number of samples of {} s", what, config::format_number(g.delay_s),

@@ -32,6 +32,17 @@ struct Tf {
   double dc_gain() const;
 };
 
+/// The highest degree a numerator or denominator may reach, typed or listed or made by a delay of
+/// z^−k: far above any plant of the rig, low enough that roots and responses stay fast (a
+/// 256×256 companion matrix). Beyond it the tools stop with an error, not a long run out of memory.
+inline constexpr int k_max_degree = 256;
+/// Throws mcg::Error "<what>: degree N above the limit of 256" when num or den is above k_max_degree.
+void check_degree(const Tf& g, const std::string& what);
+/// A delay as a number of samples, delay_s/dt_s, checked to be finite and at most `room`
+/// (what is left of k_max_degree for z^−k); throws mcg::Error naming `what` otherwise, so the
+/// caller may convert it to an integer safely.
+double delay_samples(double delay_s, double dt_s, int room, const std::string& what);
+
 /// The name of the variable: "s" or "z".
 const char* var_name(Domain d);
 /// a·b (domains and sample periods must agree; throws mcg::Error otherwise).
