@@ -29,6 +29,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   fr->add_flag("!--no-current", friction.fit.use_current, "ignore a measured current (use the voltage balance)");
   fr->add_flag("!--no-static", friction.fit.static_friction, "runs never rest: no static level (Ts written = Tc)");
+  fr->add_option("--torque", friction.fit.torque_column, "column holding the drive torque (N m; N with --linear) itself");
+  fr->add_option("--position", friction.fit.position_column, "column holding the position (rad; m with --linear): speed by differences");
+  fr->add_flag("--fit-inertia", friction.fit.fit_inertia, "estimate the inertia (mass) with the friction");
+  fr->add_flag("--offset", friction.fit.offset, "estimate a constant drive bias with the friction");
+  fr->add_flag("--linear", friction.linear, "linear axis: m, N, N s/m, kg; results in [fit.friction] only");
   fr->add_option("files", friction.files, "runs with t, v, clutch, r_load, rpm [, i] ('-' = stdin)")->required();
 
   mcg::fit::TfRunOptions tf;

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace mcg::fit {
 namespace {
 
@@ -171,6 +173,44 @@ TEST(FitFrictionErrors, BadDataIsNamed) {
   FrictionOptions bad;
   bad.order = 4;
   EXPECT_EQ(error_of({stuck}, bad), "--order must be 1, 2 or 3");
+}
+
+// A current-driven axis as a servo logs it: the drive torque itself and the encoder's
+// position, no speed, no machine constants. The inertia and a (zero) offset are estimated
+// with the friction, the speed is the position's central difference.
+TEST(FitFrictionDirect, TorqueAndPositionColumnsWithInertia) {
+  const model::Model rig;
+  Program p;
+  for (const double v : {3.0, 8.0, -5.0, 12.0, -10.0, 6.0, -2.0, 14.0, -14.0, 4.0}) {
+    p.hold(v, 0.5, 0).ramp(v, -0.5 * v, 0.4, 0);
+  }
+  const model::Outputs out = model::simulate(rig, p.inputs);
+  table::Table t;
+  t.source = "servo.csv";
+  std::vector<double> torque, position;
+  for (std::size_t k = 0; k < out.i_A.size(); ++k) {
+    torque.push_back(rig.params.motor.Kt_Nm_A * out.i_A[k]);
+    position.push_back(std::floor(out.theta_rad[k] / (2.0 * M_PI) * 2048.0) * 2.0 * M_PI / 2048.0);
+  }
+  t.set("t", p.inputs.t_s);
+  t.set("theta", position);
+  t.set("torque", torque);
+  FrictionOptions options;
+  options.torque_column = "torque";
+  options.position_column = "theta";
+  options.fit_inertia = true;
+  options.offset = true;
+  options.static_friction = false;
+  options.settle_s = 0.0;
+  options.window_s = 0.02;
+  const FrictionResult r = fit_friction({t}, rig.params, options);
+  ASSERT_EQ(r.states.size(), 1U);
+  const auto& st = r.states[0];
+  EXPECT_NEAR(st.inertia, rig.params.motor.J_kg_m2, 0.03 * rig.params.motor.J_kg_m2);
+  EXPECT_NEAR(st.total.value.Tc_Nm, rig.params.motor.friction.Tc_Nm, 0.05 * rig.params.motor.friction.Tc_Nm);
+  EXPECT_NEAR(st.total.value.viscous[0], rig.params.motor.friction.viscous[0], 0.15 * rig.params.motor.friction.viscous[0]);
+  EXPECT_NEAR(st.offset, 0.0, 4.0 * st.offset_se);
+  EXPECT_GT(st.inertia_se, 0.0);
 }
 
 }  // namespace

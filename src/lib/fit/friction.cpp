@@ -30,6 +30,7 @@ struct Window {
   double omega_rad_s;
   double torque_Nm;
   bool from_current;
+  double accel_rad_s2;  ///< (w_end - w_start) / window
 };
 
 struct Breakaway {
@@ -58,17 +59,30 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
   if (table.rows() < k_min_rows) fail("{}: too short: {} rows (at least {} needed)", table.source, table.rows(), k_min_rows);
   model::Inputs in;
   in.t_s = table.col("t");
+  const std::size_t n = table.rows();
+  const bool direct = !options.torque_column.empty();
   if (!table.has("v") && table.has("duty")) {
     in.v_V = table.col("duty");
     for (double& v : in.v_V) v *= p.supply_V;
+  } else if (direct && !table.has("v")) {
+    in.v_V.assign(n, 0.0);
   } else {
     in.v_V = table.col("v");
   }
-  in.clutch = table.col("clutch");
-  in.r_load_ohm = table.col("r_load");
+  in.clutch = direct && !table.has("clutch") ? std::vector<double>(n, 0.0) : table.col("clutch");
+  in.r_load_ohm = direct && !table.has("r_load") ? std::vector<double>(n, model::k_open_circuit) : table.col("r_load");
   model::validate_inputs(in, table.source, table.first_line);
   std::vector<double> omega;
-  if (table.has("rpm") || !table.has("omega")) {
+  if (!options.position_column.empty()) {
+    table::require_finite(table, options.position_column);
+    const auto& x = table.col(options.position_column);
+    omega.resize(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t a = k > 0 ? k - 1 : 0;
+      const std::size_t b = k + 1 < n ? k + 1 : n - 1;
+      omega[k] = (x[b] - x[a]) / (in.t_s[b] - in.t_s[a]);
+    }
+  } else if (table.has("rpm") || !table.has("omega")) {
     omega = table.col("rpm");
     for (double& w : omega) w *= 2.0 * std::numbers::pi / 60.0;
   } else {
@@ -76,13 +90,18 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
   }
   const std::vector<double>* current = options.use_current && table.has("i") ? &table.col("i") : nullptr;
   const std::vector<double>* current_gen = options.use_current && table.has("i_gen") ? &table.col("i_gen") : nullptr;
+  const std::vector<double>* torque = direct ? &table.col(options.torque_column) : nullptr;
 
-  const std::size_t n = table.rows();
   const auto& m = p.motor;
   std::vector<double> drive(n);
   std::vector<bool> measured(n);
   for (std::size_t k = 0; k < n; ++k) {
     const double v = std::clamp(in.v_V[k], -p.supply_V, p.supply_V);
+    if (torque != nullptr) {
+      measured[k] = std::isfinite((*torque)[k]);
+      drive[k] = (*torque)[k];
+      continue;
+    }
     measured[k] = current != nullptr && std::isfinite((*current)[k]);
     drive[k] = measured[k] ? m.Kt_Nm_A * (*current)[k] : m.Kt_Nm_A * (v - m.Ke_V_s_rad * omega[k]) / m.R_ohm;
   }
@@ -129,7 +148,8 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
         load = gen_measured ? gen / count
                             : p.generator.Kt_Nm_A * p.generator.Ke_V_s_rad * w / (p.generator.R_ohm + in.r_load_ohm[k]);
       }
-      states[clutch].windows.push_back({w, tau - j_shaft * accel - load, all_measured});
+      const double inertial = options.fit_inertia ? 0.0 : j_shaft * accel;
+      states[clutch].windows.push_back({w, tau - inertial - load, all_measured, accel});
     }
     start = k + 1;
   }
@@ -170,12 +190,14 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
   }
 }
 
-/// Number of clusters of |w| separated by more than max(1 rad/s, 2 %).
+/// Number of clusters of |w| separated by more than 2 % of the top speed (and 2 % of their
+/// own): in the speed's own units, so a linear axis in m/s counts like a shaft in rad/s.
 std::size_t distinct_speeds(std::vector<double> speeds) {
   std::sort(speeds.begin(), speeds.end());
   std::size_t levels = speeds.empty() ? 0 : 1;
+  const double floor = speeds.empty() ? 0.0 : 0.02 * speeds.back();
   for (std::size_t k = 1; k < speeds.size(); ++k) {
-    if (speeds[k] - speeds[k - 1] > std::max(1.0, 0.02 * speeds[k])) ++levels;
+    if (speeds[k] - speeds[k - 1] > std::max(floor, 0.02 * speeds[k])) ++levels;
   }
   return levels;
 }
@@ -208,7 +230,13 @@ StateFriction estimate(int clutch, const StateData& data, const FrictionOptions&
   }
 
   const auto rows = static_cast<Eigen::Index>(data.windows.size());
-  const auto cols = static_cast<Eigen::Index>(needed);
+  const auto poly = static_cast<Eigen::Index>(needed);
+  const Eigen::Index col_inertia = options.fit_inertia ? poly : -1;
+  const Eigen::Index col_offset = options.offset ? poly + (options.fit_inertia ? 1 : 0) : -1;
+  const Eigen::Index cols = poly + (options.fit_inertia ? 1 : 0) + (options.offset ? 1 : 0);
+  if (rows <= cols) {
+    fail("clutch state {}: {} windows for {} unknowns: no excitation in the needed range", clutch, rows, cols);
+  }
   Eigen::MatrixXd a(rows, cols);
   Eigen::VectorXd b(rows);
   out.from_current = true;
@@ -217,7 +245,9 @@ StateFriction estimate(int clutch, const StateData& data, const FrictionOptions&
     const double s = w.omega_rad_s > 0.0 ? 1.0 : -1.0;
     const double x = std::abs(w.omega_rad_s);
     double xp = 1.0;
-    for (Eigen::Index c = 0; c < cols; ++c, xp *= x) a(r, c) = s * xp;
+    for (Eigen::Index c = 0; c < poly; ++c, xp *= x) a(r, c) = s * xp;
+    if (col_inertia >= 0) a(r, col_inertia) = w.accel_rad_s2;
+    if (col_offset >= 0) a(r, col_offset) = 1.0;
     b[r] = w.torque_Nm;
     out.from_current = out.from_current && w.from_current;
   }
@@ -228,9 +258,17 @@ StateFriction estimate(int clutch, const StateData& data, const FrictionOptions&
   covariance_statistics(a, a * coef - b, se, corr, sigma);
   out.total.value.Tc_Nm = coef[0];
   out.total.se.Tc_Nm = se[0];
-  for (Eigen::Index c = 1; c < cols; ++c) {
+  for (Eigen::Index c = 1; c < poly; ++c) {
     out.total.value.viscous[static_cast<std::size_t>(c - 1)] = coef[c];
     out.total.se.viscous[static_cast<std::size_t>(c - 1)] = se[c];
+  }
+  if (col_inertia >= 0) {
+    out.inertia = coef[col_inertia];
+    out.inertia_se = se[col_inertia];
+  }
+  if (col_offset >= 0) {
+    out.offset = coef[col_offset];
+    out.offset_se = se[col_offset];
   }
 
   if (!options.static_friction) {

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -28,6 +29,21 @@ struct FrictionOptions {
   /// Estimate the static level from starts from rest. Off for runs that never rest (a
   /// closed loop that keeps the shaft moving): then Ts is reported equal to Tc.
   bool static_friction = true;
+  /// Column holding the drive torque (N m; N on a linear axis) itself, e.g. a force computed
+  /// by a current-driven amplifier's controller: used instead of Kt i or the voltage balance
+  /// (no machine constant needed). Runs without clutch or r_load are then the motor alone
+  /// (clutch 0, relay open) and need no v.
+  std::string torque_column;
+  /// Column holding the measured position (rad; m on a linear axis): the speed is its central
+  /// difference instead of a measured rpm/omega.
+  std::string position_column;
+  /// Estimate the inertia (kg m^2; kg on a linear axis) with the friction: the windows are
+  /// regressed on the mean acceleration too, instead of subtracting J dw/dt with J from
+  /// the configuration.
+  bool fit_inertia = false;
+  /// Estimate a constant drive bias (N m; N) with the friction: a load that does not change
+  /// sign with the direction (gravity on an inclined axis, an amplifier offset).
+  bool offset = false;
 };
 
 /// A friction element and the standard errors of its values (same layout).
@@ -38,7 +54,10 @@ struct FrictionTerm {
 
 /// What the runs in one clutch state show: the total friction on the motor shaft.
 ///   moving windows: T_f = mean(T_drive) - J_shaft dw/dt - T_gen_load, regressed on
-///                   sign(w) (Tc + c1 |w| + ... + c_order |w|^order), standard errors from OLS;
+///                   sign(w) (Tc + c1 |w| + ... + c_order |w|^order), standard errors from OLS
+///                   (fit_inertia: J dw/dt is a regressor, not subtracted; offset: a constant
+///                   regressor too); dw/dt = (w_end - w_start) / window, so the window mean of
+///                   J dw/dt is exact without differentiating twice;
 ///   T_drive       = Kt i (measured current) or Kt (v - Ke w) / R (voltage balance, the
 ///                   armature at steady state: L di/dt averages out over a window);
 ///   T_gen_load    = Kt_g i_gen, or Kt_g Ke_g w / (R_g + r_load) (state 2 only);
@@ -54,6 +73,10 @@ struct StateFriction {
   double omega_min_rad_s = 0.0;  ///< speed range of the moving windows (|w|)
   double omega_max_rad_s = 0.0;
   bool from_current = false;  ///< every window used the measured current
+  double inertia = std::numeric_limits<double>::quiet_NaN();     ///< fit_inertia: J (kg m^2, or kg)
+  double inertia_se = std::numeric_limits<double>::quiet_NaN();
+  double offset = std::numeric_limits<double>::quiet_NaN();      ///< offset: constant bias (N m, or N)
+  double offset_se = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// The stacked elements (standard errors add in quadrature):

@@ -138,14 +138,19 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, std::ostream
 void run_friction(const FrictionRunOptions& options, std::ostream& out) {
   if (options.files.empty()) fail("friction: no input files");
   const model::Params base = model::from_ini(config::Ini::load_all(options.config));
+  if (options.linear && (options.fit.torque_column.empty() || options.fit.position_column.empty())) {
+    fail("--linear: needs --torque (a force column, N) and --position (m)");
+  }
   const FrictionResult result = fit_friction(read_all(options.files), base, options.fit);
   config::Ini ini;
-  if (result.motor) {
+  if (!options.linear && result.motor) {
     write_friction(ini, "motor", *result.motor, "state 0");
     write_friction(ini, "generator", *result.motor, "= motor (equivalent machines)");
   }
-  if (result.clutch_disengaged) write_friction(ini, "clutch_disengaged", *result.clutch_disengaged, "state 1 - motor");
-  if (result.clutch_engaged) {
+  if (!options.linear && result.clutch_disengaged) {
+    write_friction(ini, "clutch_disengaged", *result.clutch_disengaged, "state 1 - motor");
+  }
+  if (!options.linear && result.clutch_engaged) {
     write_friction(ini, "clutch_engaged", *result.clutch_engaged, "state 2 - motor - generator");
   }
   const std::string sec = "fit.friction";
@@ -155,10 +160,29 @@ void run_friction(const FrictionRunOptions& options, std::ostream& out) {
     const std::string p = fmt::format("state{}.", st.clutch);
     ini.set(sec, p + "windows", static_cast<double>(st.windows), "quasi-steady windows while moving");
     ini.set(sec, p + "breakaways", static_cast<double>(st.breakaways), "starts from rest");
-    ini.set(sec, p + "speed_range_rad_s", fmt::format("{} {}", num6(st.omega_min_rad_s), num6(st.omega_max_rad_s)));
-    ini.set(sec, p + "torque_from", st.from_current ? "current" : "voltage balance");
-    ini.set(sec, p + "total_Ts_Nm", num6(st.total.value.Ts_Nm), se_comment(st.total.se.Ts_Nm, "N m"));
-    ini.set(sec, p + "total_Tc_Nm", num6(st.total.value.Tc_Nm), se_comment(st.total.se.Tc_Nm, "N m"));
+    const bool lin = options.linear;
+    const char* const torque_unit = lin ? "N" : "N m";
+    const char* const torque_key = lin ? "_N" : "_Nm";
+    ini.set(sec, p + (lin ? "speed_range_m_s" : "speed_range_rad_s"),
+            fmt::format("{} {}", num6(st.omega_min_rad_s), num6(st.omega_max_rad_s)));
+    ini.set(sec, p + "torque_from",
+            !options.fit.torque_column.empty() ? "column " + options.fit.torque_column
+                                               : (st.from_current ? "current" : "voltage balance"));
+    ini.set(sec, p + "total_Ts" + torque_key, num6(st.total.value.Ts_Nm), se_comment(st.total.se.Ts_Nm, torque_unit));
+    ini.set(sec, p + "total_Tc" + torque_key, num6(st.total.value.Tc_Nm), se_comment(st.total.se.Tc_Nm, torque_unit));
+    if (lin) {
+      static const char* const keys[3] = {"total_visc1_N_s_m", "total_visc2_N_s2_m2", "total_visc3_N_s3_m3"};
+      static const char* const units[3] = {"N s/m", "N s^2/m^2", "N s^3/m^3"};
+      for (std::size_t c = 0; c < static_cast<std::size_t>(options.fit.order); ++c) {
+        ini.set(sec, p + keys[c], num6(st.total.value.viscous[c]), se_comment(st.total.se.viscous[c], units[c]));
+      }
+    }
+    if (std::isfinite(st.inertia)) {
+      ini.set(sec, p + (lin ? "mass_kg" : "inertia_kg_m2"), num6(st.inertia), se_comment(st.inertia_se, lin ? "kg" : "kg m^2"));
+    }
+    if (std::isfinite(st.offset)) {
+      ini.set(sec, p + "offset" + torque_key, num6(st.offset), se_comment(st.offset_se, torque_unit));
+    }
   }
   ini.write(out);
 }

@@ -16,11 +16,16 @@ struct FrictionRunOptions {
   std::vector<std::string> config;  ///< --config files: R, Ke, Kt, J, supply and the base frictions
   std::vector<std::string> files;   ///< runs ("-" = stdin)
   FrictionOptions fit;
+  /// The axis is linear (a ball screw, a belt): position in m, speed in m/s, drive force in
+  /// N. The results are then forces (N, N s/m, kg) in [fit.friction] only: the rig's model
+  /// sections hold rotary parameters.
+  bool linear = false;
 };
 
 /// Writes the stacked frictions as INI ([motor], [generator], [clutch_disengaged],
 /// [clutch_engaged]; each value with its standard error as a comment) and the evidence per
-/// clutch state in [fit.friction].
+/// clutch state in [fit.friction] (with the inertia and offset when estimated; on a linear
+/// axis only [fit.friction], in N, N s/m and kg).
 void run_friction(const FrictionRunOptions& options, std::ostream& out);
 
 /// Options of `mcg-fit tf`.

@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Real data: EMPS (a current-driven Maxon DC motor on a ball screw, closed-loop position
+# moves; Janot, Gautier, Brunot 2019). mcg-fit friction on the estimation run, from the
+# logged force and the motor encoder's position only, must give the Coulomb and viscous
+# friction within two of its standard errors of the published IDIM-LS values
+# (Fc = 20.3935 N, Fv = 203.5034 N s/m), in SI units. Skipped when the data is absent.
+# Args: TOOL_DIR SOURCE_DIR.
+set -euo pipefail
+tools=$1
+src=$2
+data="$src/../shared/data/real/emps/emps_estimation_DATA_EMPS.csv"
+[[ -r "$data" ]] || { echo "skipped: EMPS data not present"; exit 125; }
+[[ -x "$tools/mcg-fit" ]] || { echo "skipped: mcg-fit not built"; exit 125; }
+export PATH="$tools:$PATH"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+# The benchmark names its time column t_s; the CSV contract calls it t.
+sed '1s/^t_s,/t,/' "$data" >"$work/emps.csv"
+mcg-fit friction --linear --torque force_N --position qm_m --fit-inertia --offset --no-static --order 1 \
+  "$work/emps.csv" >"$work/fit.ini"
+
+failures=0
+# check KEY PUBLISHED: value and standard error from "KEY = value  ; +- se UNIT"
+check() {
+  local key=$1 published=$2 line value se
+  line=$(grep "^$key = " "$work/fit.ini") || { echo "FAIL $key: not written"; failures=$((failures + 1)); return; }
+  value=$(awk '{ print $3 }' <<<"$line")
+  se=$(awk '{ print $6 }' <<<"$line")
+  if awk -v v="$value" -v s="$se" -v p="$published" 'BEGIN { d = v - p; if (d < 0) d = -d; exit !(s > 0 && d <= 2 * s) }'; then
+    echo "ok   $key = $value +- $se (published $published)"
+  else
+    echo "FAIL $key = $value +- $se: published $published is not within two standard errors"
+    failures=$((failures + 1))
+  fi
+}
+check state0.total_Tc_N 20.3935
+check state0.total_visc1_N_s_m 203.5034
+check state0.offset_N -3.1648
+[[ $failures -eq 0 ]]
