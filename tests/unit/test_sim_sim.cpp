@@ -2,6 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
 #include <numbers>
 #include <sstream>
 
@@ -212,12 +215,32 @@ TEST(SimRun, MeasuredMetadataOfReplacedColumnsIsDropped) {
   EXPECT_EQ(t.col("rpm")[0], 0.0);
 }
 
+// The config file sets a 2 ms dead time, --effect the same effect with 4 ms: the option wins,
+// in the metadata and in the motion (the shaft starts after 4 ms, not 2 ms).
 TEST(SimRun, EffectOptionOverridesTheConfigSection) {
-  RunOptions opt;
-  opt.effects = {"dead_time:tau_d_s=0.004"};
-  std::istringstream text(run_text(opt, "t,v\n0,1\n0.001,1\n"));
-  const table::Table t = table::read(text, "out");
-  EXPECT_EQ(t.meta.get("effects"), "dead_time:tau_d_s=0.004");
+  const auto path = std::filesystem::temp_directory_path() / fmt::format("mcg_effect_override_{}.ini", ::getpid());
+  {
+    std::ofstream ini(path);
+    ini << "[effect.dead_time]\ntau_d_s = 0.002\n";
+  }
+  std::string input = "t,v\n";
+  for (int k = 0; k < 10; ++k) input += fmt::format("{},{}\n", k * 1e-3, 12.0);
+  RunOptions from_config;
+  from_config.configs = {path.string()};
+  RunOptions overridden = from_config;
+  overridden.effects = {"dead_time:tau_d_s=0.004"};
+  std::istringstream config_text(run_text(from_config, input));
+  std::istringstream override_text(run_text(overridden, input));
+  std::filesystem::remove(path);
+  const table::Table c = table::read(config_text, "config");
+  const table::Table o = table::read(override_text, "override");
+  EXPECT_EQ(c.meta.get("effects"), "dead_time:tau_d_s=0.002");
+  EXPECT_EQ(o.meta.get("effects"), "dead_time:tau_d_s=0.004");
+  // Row 3 (t = 3 ms): moving after the config's 2 ms, still at rest under the option's 4 ms.
+  EXPECT_GT(c.col("omega")[3], 0.0);
+  EXPECT_EQ(o.col("omega")[3], 0.0);
+  EXPECT_EQ(o.col("omega")[4], 0.0);
+  EXPECT_GT(o.col("omega")[6], 0.0);
 }
 
 }  // namespace
