@@ -95,7 +95,10 @@ int main(int argc, char** argv) {
   CLI::App* rl = analysis_sub("rlocus", "root locus of 1 + K L: k, branch, re, im (CSV)");
   rl->add_option("--k-max", o.k_max, "largest gain")->check(CLI::Range(1e-12, k_inf));
   rl->add_option("--points", o.points, "number of gains (400)")->check(CLI::Range(2, 1000000));
-  CLI::App* step = analysis_sub("step", "closed-loop unit step: t, r, y, e, u (CSV) with metrics as metadata");
+  CLI::App* step = analysis_sub("step", "unit step, closed loop (t, r, y, e, u) or open (t, r, y, u): CSV with stepinfo metrics");
+  step->add_flag("--open-loop", o.open_loop, "the step of the plant (times the controller) as typed, no feedback");
+  step->add_option("--rise", o.rise_pct, "rise-time limits LOW,HIGH, % of the final value (10,90)");
+  step->add_option("--settling", o.settling_pct, "settling band, % (2)")->check(CLI::Range(1e-9, 100.0));
   step->add_option("--t-end", o.t_end_s, "duration, s (10 time constants of the slowest pole)")
       ->check(CLI::Range(1e-12, k_inf));
   step->add_option("--points", o.points, "samples of a continuous loop (2000)")->check(CLI::Range(2, 1000000));

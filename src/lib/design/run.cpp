@@ -591,6 +591,20 @@ void write_rlocus(const Options& o, const std::vector<Tf>& factors, std::ostream
   w.finish();
 }
 
+linsys::StepLimits step_limits(const Options& o) {
+  linsys::StepLimits lim;
+  if (!o.rise_pct.empty()) {
+    const std::vector<double> v = parse_list(o.rise_pct, "--rise");
+    if (v.size() != 2 || !(v[0] >= 0.0 && v[0] < v[1] && v[1] <= 100.0)) {
+      fail("--rise: expected LOW,HIGH with 0 <= LOW < HIGH <= 100 (percent), got '{}'", o.rise_pct);
+    }
+    lim.rise_low = v[0] / 100.0;
+    lim.rise_high = v[1] / 100.0;
+  }
+  if (!std::isnan(o.settling_pct)) lim.settling = o.settling_pct / 100.0;
+  return lim;
+}
+
 void write_step(const Options& o, const Resolved& r, std::ostream& out) {
   const std::optional<Tf> c = analysis_controller(o, r);
   Tf plant = r.setup.plant;
@@ -601,16 +615,26 @@ void write_step(const Options& o, const Resolved& r, std::ostream& out) {
   }
   const double t_end = std::isnan(o.t_end_s) ? 0.0 : o.t_end_s;
   if (!std::isnan(o.t_end_s) && !(o.t_end_s > 0.0)) fail("--t-end: must be positive");
-  const linsys::StepResponse s = linsys::step_response(plant, c, t_end, o.points > 0 ? o.points : 2000);
-  const linsys::StepMetrics m = linsys::step_metrics(s.t_s, s.y, s.final_value, 1.0);
-  const std::vector<std::pair<std::string, double>> metrics{
-      {"final_value", m.final_value},       {"rise_time_s", m.rise_time_s},
-      {"peak", m.peak},                     {"peak_time_s", m.peak_time_s},
-      {"overshoot_pct", m.overshoot_pct},   {"steady_state_error", m.steady_state_error},
-      {"settling_time_s", m.settling_time_s}, {"transient_time_s", m.transient_time_s}};
+  const linsys::StepLimits lim = step_limits(o);
+  const linsys::StepResponse s =
+      linsys::step_response(plant, c, t_end, o.points > 0 ? o.points : 2000, o.open_loop);
+  const linsys::StepMetrics m = linsys::step_info(s, 1.0, lim);
+  std::vector<std::pair<std::string, double>> metrics{
+      {"final_value", m.final_value},   {"rise_time_s", m.rise_time_s},       {"transient_time_s", m.transient_time_s},
+      {"settling_time_s", m.settling_time_s}, {"settling_min", m.settling_min}, {"settling_max", m.settling_max},
+      {"overshoot_pct", m.overshoot_pct}, {"undershoot_pct", m.undershoot_pct}, {"peak", m.peak},
+      {"peak_time_s", m.peak_time_s}};
+  if (!o.open_loop) metrics.emplace_back("steady_state_error", m.steady_state_error);
+  const std::string loop_kind = o.open_loop ? "open" : "closed";
+  const std::string levels = fmt::format("rise {}-{} %, settling {} %", format_number(100.0 * lim.rise_low),
+                                         format_number(100.0 * lim.rise_high), format_number(100.0 * lim.settling));
+  const char* timing = s.sampled ? "at the sample instants" : "interpolated between samples";
   if (o.metrics) {
     Ini ini;
+    ini.set("step", "loop", loop_kind);
     for (const auto& [k, v] : metrics) ini.set("step", k, v);
+    ini.set("step", "levels", levels);
+    ini.set("step", "times", timing);
     if (!note.empty()) ini.set("step", "note", note);
     if (!s.note.empty()) ini.set("step", "simulation", s.note);
     ini.write(out);
@@ -619,11 +643,19 @@ void write_step(const Options& o, const Resolved& r, std::ostream& out) {
   table::Writer w(out);
   w.meta("source", std::string("mcg-design ") + k_version);
   w.meta("loop", linsys::tf_text(c ? linsys::series(*c, plant) : plant));
+  w.meta("step", loop_kind);
   if (!note.empty()) w.meta("note", note);
   if (!s.note.empty()) w.meta("simulation", s.note);
   for (const auto& [k, v] : metrics) w.meta(k, format_number(v));
-  w.header({"t", "r", "y", "e", "u"});
-  for (std::size_t k = 0; k < s.t_s.size(); ++k) w.row({s.t_s[k], 1.0, s.y[k], 1.0 - s.y[k], s.u[k]});
+  w.meta("levels", levels);
+  w.meta("times", timing);
+  if (o.open_loop) {
+    w.header({"t", "r", "y", "u"});
+    for (std::size_t k = 0; k < s.t_s.size(); ++k) w.row({s.t_s[k], 1.0, s.y[k], s.u[k]});
+  } else {
+    w.header({"t", "r", "y", "e", "u"});
+    for (std::size_t k = 0; k < s.t_s.size(); ++k) w.row({s.t_s[k], 1.0, s.y[k], 1.0 - s.y[k], s.u[k]});
+  }
   w.finish();
 }
 

@@ -63,6 +63,9 @@ struct Options {
   double t_end_s = NAN;
   double k_max = NAN;
   bool metrics = false;
+  bool open_loop = false;    ///< step: the series C·G as typed, no feedback
+  std::string rise_pct;      ///< step: "LOW,HIGH" rise-time limits, % of the final value
+  double settling_pct = NAN;  ///< step: settling band, % (2)
 };
 
 /// Runs one subcommand, writing INI (designs, margins, c2d, loop) or CSV (bode, nyquist,
