@@ -4,6 +4,7 @@
 #include "common/error.hpp"
 #include "fit/diag_residual.hpp"
 #include "fit/gap.hpp"
+#include "sim/encoder.hpp"
 #include "sim/run.hpp"
 #include "table/table.hpp"
 

@@ -6,7 +6,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -39,25 +38,10 @@ const std::vector<double>& pick(const model::Outputs& out, const std::string& na
   return out.rpm;
 }
 
-/// The ADC range in `# i_measurement:` ("... (range -2.5..2.495 A, saturates) ..."), if any.
-std::optional<std::pair<double, double>> current_range(std::string_view text) {
-  const auto at = text.find("range ");
-  if (at == std::string_view::npos) return std::nullopt;
-  const char* p = text.data() + at + 6;
-  const char* end = text.data() + text.size();
-  double lo = 0.0;
-  double hi = 0.0;
-  auto r = std::from_chars(p, end, lo);
-  if (r.ec != std::errc{} || end - r.ptr < 2 || r.ptr[0] != '.' || r.ptr[1] != '.') return std::nullopt;
-  r = std::from_chars(r.ptr + 2, end, hi);
-  if (r.ec != std::errc{} || !(lo < hi)) return std::nullopt;
-  return std::pair{lo, hi};
-}
-
 }  // namespace
 
 std::vector<double> window_average_rpm(const std::vector<double>& t_s, const std::vector<double>& theta_rad,
-                                       const sim::CountEstimator& estimator) {
+                                       const measurement::CountEstimator& estimator) {
   const std::size_t n = t_s.size();
   std::vector<double> rpm(n);
   const double to_rpm = 60.0 / (2.0 * std::numbers::pi * estimator.window_s);
@@ -131,16 +115,18 @@ Run make_run(const table::Table& table, const std::vector<std::string>& outputs,
   }
   for (const auto& name : run.outputs) run.measured.push_back(table.col(name));
   // A saturated current reading says only "at least this much": not measured.
-  const auto range = table.meta.get("i_measurement");
-  const auto limits = range ? current_range(*range) : std::nullopt;
-  for (std::size_t o = 0; o < run.outputs.size() && limits; ++o) {
-    if (run.outputs[o] != "i") continue;
-    for (double& y : run.measured[o]) {
-      if (y <= limits->first || y >= limits->second) y = k_nan;
+  if (const auto text = table.meta.get("i_measurement")) {
+    const measurement::CurrentChain chain =
+        measurement::parse_i_measurement(*text, fmt::format("{}: i_measurement", table.source));
+    for (std::size_t o = 0; o < run.outputs.size(); ++o) {
+      if (run.outputs[o] != "i") continue;
+      for (double& y : run.measured[o]) {
+        if (chain.at_rail(y)) y = k_nan;
+      }
     }
   }
   if (const auto text = table.meta.get("rpm_estimator")) {
-    run.rpm_estimator = sim::parse_rpm_estimator(*text, table.source);
+    run.rpm_estimator = measurement::parse_rpm_estimator(*text, table.source);
   }
   return run;
 }

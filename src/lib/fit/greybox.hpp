@@ -5,8 +5,8 @@
 
 #include "config/ini.hpp"
 #include "fit/nls.hpp"
+#include "measurement/measurement.hpp"
 #include "model/model.hpp"
-#include "sim/encoder.hpp"
 #include "table/table.hpp"
 
 #include <cstddef>
@@ -20,16 +20,16 @@
 namespace mcg::fit {
 
 /// How `rpm` was measured: encoder counts over a trailing window (window_s, counts_per_rev).
-using RpmEstimator = sim::CountEstimator;
+using RpmEstimator = measurement::CountEstimator;
 
-/// The run's encoder estimator (sim::CountEstimator, from `# rpm_estimator:`) applied to a
+/// The run's encoder estimator (measurement::CountEstimator, from `# rpm_estimator:`) applied to a
 /// simulated shaft angle theta(t) without the count quantisation:
 ///   rpm(t_n) = (theta(t_n) - theta(t_n - W)) / W * 60 / (2 pi),
 /// theta interpolated linearly between samples and held at theta(t_0) before the start.
 /// Quantising would make the fit's cost piecewise constant in the parameters (useless for
 /// a Jacobian); the quantisation error is left to the residual as measurement noise.
 std::vector<double> window_average_rpm(const std::vector<double>& t_s, const std::vector<double>& theta_rad,
-                                       const sim::CountEstimator& estimator);
+                                       const measurement::CountEstimator& estimator);
 
 /// Measured columns a fit can compare with the model.
 /// rpm (rev/min), i (A), i_gen (A), v_gen (V), omega (rad/s).
@@ -52,8 +52,8 @@ struct Run {
 /// r_load and the measured `outputs` (empty: rpm, or omega when there is no rpm, and each of
 /// i, i_gen, v_gen that is present and not constant, the generator's two only when the
 /// clutch is not 0 throughout). When the
-/// `# i_measurement:` metadata names the ADC range ("range -2.5..2.495 A"), current samples
-/// at either end of it are saturated and count as not measured. Throws mcg::Error naming the file (and line) for a missing column, a bad
+/// `# i_measurement:` metadata (mcg-csv(5)) names the ADC range, current samples
+/// at its rails (CurrentChain::at_rail) are saturated and count as not measured. Throws mcg::Error naming the file (and line) for a missing column, a bad
 /// input value, or fewer than `min_rows` rows ("too short").
 Run make_run(const table::Table& table, const std::vector<std::string>& outputs, const model::Params& params,
              std::size_t min_rows = 50);

@@ -15,7 +15,7 @@
 #include "link/connection.hpp"  // Connection
 #include "link/interrupt.hpp"   // InterruptGuard
 #include "mcg/version.hpp"      // k_version
-#include "sim/encoder.hpp"      // format_rpm_estimator
+#include "measurement/measurement.hpp"  // CountEstimator, format_rpm_estimator
 #include "table/table.hpp"      // Writer, read_path
 
 namespace mcg::link {
@@ -204,10 +204,10 @@ void run_dump(const LinkOptions& link, const DumpOptions& options, std::ostream&
   w.meta("board", c->board_text());
   w.meta("port", link.port);
   w.meta("sample_period", config::format_number(interval_s));
-  sim::CountEstimator est;
+  measurement::CountEstimator est;
   est.window_s = interval_s;
   est.counts_per_rev = MCG_COUNTS_PER_REV;
-  w.meta("rpm_estimator", sim::format_rpm_estimator(est));
+  w.meta("rpm_estimator", measurement::format_rpm_estimator(est));
   w.meta("encoder", "512 lines, x4 quadrature decoding = 2048 counts/rev");
   w.meta("timing", "counts and rpm over (t - sample_period, t]; t = 0 when the recording started");
   w.header({"t", "rpm", "counts"});

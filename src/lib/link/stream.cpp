@@ -13,8 +13,8 @@
 #include "link/serial.hpp"
 #include "link/stream_block.hpp"  // StreamAssembler
 #include "mcg/version.hpp"      // k_version
+#include "measurement/measurement.hpp"  // CountEstimator, format_rpm_estimator
 #include "model/model.hpp"      // model_from_ini, k_open_circuit
-#include "sim/encoder.hpp"      // format_rpm_estimator
 #include "table/table.hpp"      // Writer
 
 namespace mcg::link {
@@ -52,10 +52,10 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
   w.meta("board", c->board_text());
   w.meta("port", link.port);
   w.meta("sample_period", config::format_number(k_sample_s));
-  sim::CountEstimator est;
+  measurement::CountEstimator est;
   est.window_s = window_samples * k_sample_s;
   est.counts_per_rev = MCG_COUNTS_PER_REV;
-  w.meta("rpm_estimator", sim::format_rpm_estimator(est));
+  w.meta("rpm_estimator", measurement::format_rpm_estimator(est));
   w.meta("encoder", k_encoder_text);
   w.meta("timing",
          "duty, v, clutch, r_load, rpm_cmd of row n act over [t(n), t(n+1)) (duty: the mean over the "

@@ -1,6 +1,8 @@
 // The board's speed measurement: encoder counts accumulated over a trailing window.
 #pragma once
 
+#include "measurement/measurement.hpp"
+
 #include <deque>
 #include <string>
 #include <string_view>
@@ -9,21 +11,10 @@
 
 namespace mcg::sim {
 
-/// "counts over W s window, N counts/rev": the count is floor(theta N / (2 pi)) as a real
-/// up/down counter holds it, and rpm(t) = (count(t) - count(t - W)) / N / W * 60.
-struct CountEstimator {
-  double window_s = 0.005;
-  double counts_per_rev = 2048.0;   ///< 512-line encoder, x4 quadrature decoding
-
-  /// Speed resolution, rpm per count: 60 / (N W).
-  double rpm_per_count() const { return 60.0 / (counts_per_rev * window_s); }
-};
-
-/// Parses the data contract's `rpm_estimator` text, e.g. "counts over 0.005 s window,
-/// 2048 counts/rev". Throws mcg::Error "<where>: ..." when it does not match.
-CountEstimator parse_rpm_estimator(std::string_view text, std::string_view where = "rpm_estimator");
-/// The metadata text for `estimator`, in the form parse_rpm_estimator() reads.
-std::string format_rpm_estimator(const CountEstimator& estimator);
+/// The estimator and its metadata text are owned by the measurement module.
+using measurement::CountEstimator;
+using measurement::format_rpm_estimator;
+using measurement::parse_rpm_estimator;
 
 /// Encoder count of shaft angle theta_rad: floor(theta N / (2 pi)).
 double encoder_count(double theta_rad, double counts_per_rev);

@@ -17,18 +17,13 @@
 #include "mcg/version.hpp"
 #include "model/model.hpp"
 #include "sim/controller.hpp"
+#include "measurement/measurement.hpp"
 #include "sim/encoder.hpp"
 #include "table/table.hpp"
 
 namespace mcg::sim {
 
 namespace {
-
-/// The board's current measurement: 1 ohm shunt, 10-bit ADC over 0..5 V, 2.5 V offset.
-double adc_current(double i_A) {
-  const double code = std::clamp(std::round((i_A + 2.5) / 5.0 * 1024.0), 0.0, 1023.0);
-  return code * 5.0 / 1024.0 - 2.5;
-}
 
 std::string join(const std::vector<std::string>& parts, std::string_view sep) {
   std::string out;
@@ -134,6 +129,7 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   const Controller controller = configured.value_or(report_pi());
   const CountEstimator estimator{opt.window_s, opt.counts_per_rev};
   const bool noisy = opt.noise_i_A > 0.0 || opt.noise_v_gen_V > 0.0;
+  const measurement::CurrentChain adc = measurement::board_current_chain();
   meta.set("source", fmt::format("mcg-sim {}", k_version));
   meta.set("model", opt.configs.empty() ? std::string("built-in rig (the report's, tuned friction)")
                                         : join(opt.configs, " + "));
@@ -156,11 +152,10 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
                             : fmt::format("{} counts/rev", config::format_number(opt.counts_per_rev)));
   }
   if (noisy || opt.adc) {
-    std::string text = opt.adc ? "1 ohm shunt, 10-bit ADC over 0-5 V with 2.5 V mid-scale offset (range "
-                                 "-2.5..2.495 A, saturates)"
-                               : "simulated";
-    if (opt.noise_i_A > 0.0) text += fmt::format(", noise sigma {} A", config::format_number(opt.noise_i_A));
-    meta.set("i_measurement", text);
+    measurement::CurrentChain chain = opt.adc ? adc : measurement::CurrentChain{};
+    chain.simulated = !opt.adc;
+    if (opt.noise_i_A > 0.0) chain.sigma_A = opt.noise_i_A;
+    meta.set("i_measurement", measurement::format_i_measurement(chain));
   }
   if (opt.noise_v_gen_V > 0.0) {
     meta.set("v_gen_measurement", fmt::format("noise sigma {} V", config::format_number(opt.noise_v_gen_V)));
@@ -235,7 +230,7 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
     double v_gen = s.v_gen_V;
     if (opt.noise_i_A > 0.0) i_meas += opt.noise_i_A * unit(rng);
     if (opt.noise_v_gen_V > 0.0) v_gen += opt.noise_v_gen_V * unit(rng);
-    if (opt.adc) i_meas = adc_current(i_meas);
+    if (opt.adc) i_meas = adc.quantise(i_meas);
 
     for (std::size_t c = 0; c < plan.size(); ++c) {
       switch (plan[c].what) {

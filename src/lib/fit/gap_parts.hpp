@@ -1,0 +1,84 @@
+// The parts of the gap diagnosis (see gap.hpp for the method), shared between its files:
+//   gap_data.cpp      the measured runs: split, measurement metadata, noise floors
+//   gap_search.cpp    scoring of a model, the candidates and their fits (refits, singles, pairs)
+//   gap_decision.cpp  significance, ranking and the verdict
+//   gap_report.cpp    where the residual lies, and the CSV / text / residual outputs
+//   gap.cpp           diagnose_gap() from those parts, and the subcommand
+// Internal to the fit library: tools and tests use gap.hpp.
+#pragma once
+
+#include "fit/gap.hpp"
+
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace mcg::fit::gap_detail {
+
+inline constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
+
+// --- data ------------------------------------------------------------------------------
+
+/// Noise floors of the compared outputs (rpm, i), pooled over the scored validation rows.
+/// Throws when neither output has a floor.
+std::vector<OutputFloor> noise_floors(const GapData& data);
+/// Scored validation rows.
+std::size_t validation_count(const GapData& data);
+/// Index of output `name` in `floors`, or npos.
+std::size_t floor_index(const std::vector<OutputFloor>& floors, const std::string& name);
+
+// --- search ----------------------------------------------------------------------------
+
+/// Validation evaluation of one model: per run, per output (in the run's order) the
+/// simulated series, and per floor output the pooled squared error and count.
+struct Evaluation {
+  std::vector<std::vector<std::vector<double>>> simulated;
+  std::vector<double> sum_sq;
+  std::vector<std::size_t> count;
+  double score = 0.0;
+  std::vector<double> rms;
+};
+Evaluation evaluate(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors);
+
+/// The fit objective on the training runs (sum over runs and outputs of the squared NRMSE),
+/// used to pick a starting point on a grid.
+double training_cost(const model::Model& model, const std::vector<Run>& runs);
+/// RMS of the rpm residual over the training runs.
+double training_rms_rpm(const model::Model& model, const std::vector<Run>& runs);
+
+/// The candidates of one diagnosis, before the decision orders them.
+struct Candidates {
+  GapCandidate none;                    ///< the model as given
+  GapCandidate pm;                      ///< the refit of the nominal parameters
+  std::vector<GapCandidate> singles;    ///< one effect each, best FPE first
+  std::vector<GapCandidate> pairs;      ///< best FPE first
+  std::vector<GapCandidate> skipped;    ///< effects the training runs do not excite
+  std::string best_single;              ///< the best significant single effect, empty if none
+};
+
+/// Fits every candidate. `gap`: the model as given misses by more than the noise (singles
+/// are significant only then); `before`: its validation evaluation.
+Candidates search_candidates(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors,
+                             const Evaluation& before, bool gap, const GapSettings& settings);
+
+// --- decision --------------------------------------------------------------------------
+
+/// score_ref - score > max(k_abs, k_rel (score_ref - outputs)).
+bool improves(double score, double score_ref, std::size_t outputs);
+/// Akaike's final prediction error: score (N + k) / (N - k), N = `samples` (validation rows
+/// times outputs), k free parameters; inf when not finite or k >= N.
+double fpe(double score, std::size_t k, double samples);
+/// The verdict: sets report.diagnosis, report.reason and report.candidates (diagnosis first,
+/// then the rest by FPE, the skipped last).
+void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& report);
+
+// --- report ----------------------------------------------------------------------------
+
+/// Where the residual of `simulated` lies on the validation runs: speed regimes, frequency
+/// bands, current regimes, and the whiteness checks.
+void analyse(const GapData& data, const std::vector<std::vector<std::vector<double>>>& simulated,
+             std::vector<RegimeStat>& regimes, std::vector<RegimeStat>& bands, std::vector<RegimeStat>& current,
+             Whiteness& white);
+
+}  // namespace mcg::fit::gap_detail

@@ -1,0 +1,313 @@
+// The gap diagnosis' report: where the residual lies (regimes, bands, whiteness) and the
+// CSV, text and residual-series outputs.
+#include "fit/gap_parts.hpp"
+
+#include "table/table.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <ostream>
+
+namespace mcg::fit {
+
+using namespace gap_detail;
+
+namespace {
+
+std::vector<RegimeStat> pool(const std::vector<std::vector<RegimeStat>>& parts) {
+  if (parts.empty()) return {};
+  std::vector<RegimeStat> out = parts.front();
+  std::vector<double> sum_sq(out.size(), 0.0);
+  for (auto& s : out) s.samples = 0;
+  for (const auto& part : parts) {
+    assert(part.size() == out.size());
+    for (std::size_t k = 0; k < part.size(); ++k) {
+      if (part[k].samples == 0) continue;
+      out[k].samples += part[k].samples;
+      sum_sq[k] += part[k].rms * part[k].rms * static_cast<double>(part[k].samples);
+    }
+  }
+  // The total is the "all" row of a regime table, or the sum of the rows of a band table.
+  double total = 0.0;
+  bool has_all = false;
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    if (out[k].group == "all") {
+      total = sum_sq[k];
+      has_all = true;
+    }
+  }
+  if (!has_all) {
+    for (double v : sum_sq) total += v;
+  }
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    out[k].rms = out[k].samples > 0 ? std::sqrt(sum_sq[k] / static_cast<double>(out[k].samples)) : k_nan;
+    out[k].share = total > 0.0 ? sum_sq[k] / total : 0.0;
+  }
+  return out;
+}
+
+/// The residual of output `name` of every validation run (NaN on unscored rows).
+std::vector<std::vector<double>> residual_series(const GapData& data,
+                                                 const std::vector<std::vector<std::vector<double>>>& simulated,
+                                                 const std::string& name) {
+  std::vector<std::vector<double>> out;
+  for (std::size_t r = 0; r < data.validate.size(); ++r) {
+    const ScoredRun& sr = data.validate[r];
+    std::vector<double> res(sr.run.inputs.t_s.size(), k_nan);
+    const auto it = std::find(sr.run.outputs.begin(), sr.run.outputs.end(), name);
+    if (it != sr.run.outputs.end()) {
+      const auto o = static_cast<std::size_t>(it - sr.run.outputs.begin());
+      for (std::size_t n = sr.first_scored; n < res.size(); ++n) res[n] = sr.run.measured[o][n] - simulated[r][o][n];
+    }
+    out.push_back(std::move(res));
+  }
+  return out;
+}
+
+double rpm_resolution(const Run& run) {
+  const RpmEstimator est = run.rpm_estimator.value_or(RpmEstimator{});
+  return 60.0 / (est.window_s * est.counts_per_rev);
+}
+
+std::vector<double> measured_rpm(const Run& run) {
+  const auto it = std::find(run.outputs.begin(), run.outputs.end(), "rpm");
+  if (it == run.outputs.end()) return std::vector<double>(run.inputs.t_s.size(), k_nan);
+  return run.measured[static_cast<std::size_t>(it - run.outputs.begin())];
+}
+
+}  // namespace
+
+void gap_detail::analyse(const GapData& data, const std::vector<std::vector<std::vector<double>>>& simulated,
+                         std::vector<RegimeStat>& regimes, std::vector<RegimeStat>& bands,
+                         std::vector<RegimeStat>& current, Whiteness& white) {
+  const auto rpm_res = residual_series(data, simulated, "rpm");
+  const auto i_res = residual_series(data, simulated, "i");
+  std::vector<std::vector<RegimeStat>> reg, band, cur;
+  std::vector<double> joined_r;
+  std::vector<double> joined_u;
+  std::size_t max_lag = 50;
+  std::size_t first_lag = 1;
+  for (std::size_t r = 0; r < data.validate.size(); ++r) {
+    const Run& run = data.validate[r].run;
+    const std::vector<double> rpm = measured_rpm(run);
+    const RegimeContext ctx{&run.inputs, rpm, rpm_resolution(run)};
+    reg.push_back(regime_breakdown(ctx, rpm_res[r]));
+    cur.push_back(regime_breakdown(ctx, i_res[r]));
+    std::vector<double> dt;
+    for (std::size_t n = 1; n < run.inputs.t_s.size(); ++n) dt.push_back(run.inputs.t_s[n] - run.inputs.t_s[n - 1]);
+    std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
+    const double dt_s = dt[dt.size() / 2];
+    band.push_back(band_breakdown(rpm_res[r], dt_s));
+    if (run.rpm_estimator) {
+      first_lag = std::max(first_lag, static_cast<std::size_t>(std::lround(run.rpm_estimator->window_s / dt_s)) + 1);
+    }
+    joined_r.insert(joined_r.end(), rpm_res[r].begin(), rpm_res[r].end());
+    joined_u.insert(joined_u.end(), run.inputs.v_V.begin(), run.inputs.v_V.end());
+    joined_r.insert(joined_r.end(), max_lag, k_nan);
+    joined_u.insert(joined_u.end(), max_lag, k_nan);
+  }
+  regimes = pool(reg);
+  bands = pool(band);
+  current = pool(cur);
+  white = whiteness(joined_r, joined_u, max_lag, first_lag);
+}
+
+namespace {
+
+double at_or_nan(const std::vector<double>& v, std::size_t k) { return k < v.size() ? v[k] : k_nan; }
+
+/// sqrt(max(0, rms^2 - floor^2)): the part of an RMS above the noise.
+double above_noise(double rms, double floor) {
+  return std::isfinite(rms) ? std::sqrt(std::max(0.0, rms * rms - floor * floor)) : k_nan;
+}
+
+std::string number(double v, int digits = 4) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  return fmt::format("{:.{}g}", v, digits);
+}
+
+/// "stribeck.v_s_rad_s=7.9+-0.4 ..." for the added effects first, then the nominal scales.
+std::string params_text(const GapCandidate& c) {
+  std::vector<std::string> effect_part;
+  std::vector<std::string> nominal_part;
+  for (std::size_t k = 0; k < c.free.size(); ++k) {
+    const std::string item = fmt::format("{}={}+-{}", c.free[k], number(c.values[k]), number(c.std_errors[k], 2));
+    (c.free[k].rfind("param_mismatch.", 0) == 0 ? nominal_part : effect_part).push_back(item);
+  }
+  if (const model::Effect* cog = c.model.effect("cogging"); cog != nullptr && c.evaluated &&
+                                                             std::find(c.effects.begin(), c.effects.end(), "cogging") !=
+                                                                 c.effects.end()) {
+    effect_part.push_back(fmt::format("cogging.N_per_rev={}", number(cog->get("N_per_rev"))));
+  }
+  std::string out;
+  for (const auto& part : {effect_part, nominal_part}) {
+    for (const auto& item : part) {
+      if (!out.empty()) out += ' ';
+      out += item;
+    }
+  }
+  return out;
+}
+
+struct Summary {
+  std::size_t rpm = std::string::npos;
+  std::size_t i = std::string::npos;
+  double floor_rpm = k_nan;
+  double floor_i = k_nan;
+};
+
+Summary summary_of(const GapReport& report) {
+  Summary s;
+  s.rpm = floor_index(report.floors, "rpm");
+  s.i = floor_index(report.floors, "i");
+  if (s.rpm != std::string::npos) s.floor_rpm = report.floors[s.rpm].floor;
+  if (s.i != std::string::npos) s.floor_i = report.floors[s.i].floor;
+  return s;
+}
+
+void write_regime_table(std::ostream& out, const std::string& title, const std::vector<RegimeStat>& before,
+                        const std::vector<RegimeStat>& after, const char* unit, int digits) {
+  out << fmt::format("{}\n  {:<22} {:>8} {:>12} {:>7} {:>12} {:>7}\n", title, "regime", "samples",
+                     fmt::format("before {}", unit), "share", fmt::format("after {}", unit), "share");
+  for (std::size_t k = 0; k < before.size() && k < after.size(); ++k) {
+    const auto& b = before[k];
+    const auto& a = after[k];
+    if (b.samples == 0) continue;
+    out << fmt::format("  {:<22} {:>8} {:>12.{}f} {:>6.1f}% {:>12.{}f} {:>6.1f}%\n", b.group + " " + b.regime, b.samples,
+                       b.rms, digits, 100.0 * b.share, a.rms, digits, 100.0 * a.share);
+  }
+}
+
+}  // namespace
+
+void write_gap_csv(std::ostream& out, const GapReport& report) {
+  const Summary s = summary_of(report);
+  const GapCandidate& none = *std::find_if(report.candidates.begin(), report.candidates.end(),
+                                           [](const auto& c) { return c.name == "none"; });
+  const double before_rpm = at_or_nan(none.rms, s.rpm);
+  const double before_i = at_or_nan(none.rms, s.i);
+  out << "# source: mcg-fit gap\n";
+  out << "# diagnosis: " << report.diagnosis << "\n";
+  if (!report.split_note.empty()) out << "# split: " << report.split_note << "\n";
+  for (const auto& f : report.floors) {
+    out << fmt::format("# noise_floor_{}: {} (measurement chain {}, from the data {})\n", f.output, number(f.floor),
+                       number(f.noise.chain), number(f.noise.data));
+  }
+  out << "# validation_samples: " << report.validation_samples << "\n";
+  out << "effect,rms_before_rpm,rms_after_rpm,shrink_pct,gap_before_rpm,gap_after_rpm,gap_shrink_pct,"
+         "rms_before_i_A,rms_after_i_A,train_rms_rpm,score,fpe,n_params,n_added,params,significant,status\n";
+  for (const auto& c : report.candidates) {
+    const double after_rpm = at_or_nan(c.rms, s.rpm);
+    const double gap_before = above_noise(before_rpm, s.floor_rpm);
+    const double gap_after = above_noise(after_rpm, s.floor_rpm);
+    const double shrink = 100.0 * (before_rpm - after_rpm) / before_rpm;
+    const double gap_shrink = gap_before > 0.0 ? 100.0 * (gap_before - gap_after) / gap_before : k_nan;
+    out << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", c.name, number(before_rpm, 6),
+                       number(after_rpm, 6), number(shrink, 4), number(gap_before, 6), number(gap_after, 6),
+                       number(gap_shrink, 4), number(before_i, 6), number(at_or_nan(c.rms, s.i), 6),
+                       number(c.train_rms_rpm, 6),
+                       number(c.score, 6), number(c.fpe, 6), c.free.size(), c.added_parameters, params_text(c),
+                       c.significant ? 1 : 0, c.status);
+  }
+}
+
+void write_gap_text(std::ostream& out, const GapReport& report) {
+  const Summary s = summary_of(report);
+  const GapCandidate& diag = report.candidates.front();
+  const GapCandidate& none = *std::find_if(report.candidates.begin(), report.candidates.end(),
+                                           [](const auto& c) { return c.name == "none"; });
+  out << fmt::format("diagnosis: {}\n  {}.\n", report.diagnosis, report.reason);
+  if (!report.split_note.empty()) out << "split: " << report.split_note << "\n";
+  for (const auto& f : report.floors) {
+    const char* unit = f.output == "rpm" ? "rpm" : "A";
+    out << fmt::format("noise floor {}: {} {} (measurement chain {}, estimated from the data {})\n", f.output,
+                       number(f.floor), unit, number(f.noise.chain), number(f.noise.data));
+  }
+  if (s.rpm != std::string::npos) {
+    const double b = none.rms[s.rpm];
+    const double a = diag.rms[s.rpm];
+    out << fmt::format("validation rpm RMS: {:.2f} -> {:.2f} rpm ({:.0f} % less); above the noise {:.2f} -> {:.2f} rpm\n",
+                       b, a, 100.0 * (b - a) / b, above_noise(b, s.floor_rpm), above_noise(a, s.floor_rpm));
+  }
+  if (s.i != std::string::npos) {
+    out << fmt::format("validation i RMS: {:.4f} -> {:.4f} A\n", none.rms[s.i], diag.rms[s.i]);
+  }
+  if (!diag.free.empty()) out << "fitted parameters (+- one standard error): " << params_text(diag) << "\n";
+  out << "\ncandidates, diagnosis first (score = validation MSE in noise units summed over outputs; FPE ranks):\n";
+  out << fmt::format("  {:<32} {:>10} {:>10} {:>9} {:>3}  {}\n", "effect", "rms rpm", "score", "fpe", "sig", "status");
+  for (const auto& c : report.candidates) {
+    out << fmt::format("  {:<32} {:>10} {:>10} {:>9} {:>3}  {}\n", c.name, number(at_or_nan(c.rms, s.rpm)),
+                       number(c.score), number(c.fpe), c.significant ? "yes" : "no", c.status);
+  }
+  out << "\n";
+  if (s.rpm != std::string::npos) {
+    write_regime_table(out, "where the speed gap lies (validation residual rpm, before and after):",
+                       report.regimes_before, report.regimes_after, "rpm", 2);
+    write_regime_table(out, "by frequency band:", report.bands_before, report.bands_after, "rpm", 2);
+  }
+  if (s.i != std::string::npos) {
+    write_regime_table(out, "where the current gap lies (validation residual i):", report.current_regimes_before,
+                       report.current_regimes_after, "A", 4);
+  }
+  auto checks = [&](const char* label, const Whiteness& w) {
+    out << fmt::format("  {}: autocorrelation Q = {:.0f} (99 % limit {:.0f}, {}; largest {:.3f} at lag {}), "
+                       "cross-correlation with v Q = {:.0f} (limit {:.0f}, {}; largest {:.3f} at lag {})\n",
+                       label, w.q_auto, w.q_auto_limit, w.white() ? "white" : "not white", w.max_auto,
+                       w.max_auto_lag, w.q_cross, w.q_cross_limit, w.independent() ? "independent" : "correlated",
+                       w.max_cross, w.max_cross_lag);
+  };
+  out << fmt::format("residual checks (speed; whiteness from lag {}, past the estimator window, to 50 samples):\n",
+                     report.white_before.first_lag);
+  checks("before", report.white_before);
+  checks("after ", report.white_after);
+}
+
+void write_gap_residuals(std::ostream& out, const GapReport& report, const GapData& data) {
+  table::Writer w(out);
+  w.meta("source", "mcg-fit gap");
+  w.meta("diagnosis", report.diagnosis);
+  for (std::size_t r = 0; r < data.validate.size(); ++r) {
+    w.meta(fmt::format("run_{}", r + 1), data.validate[r].run.source);
+  }
+  std::vector<std::string> names = {"run", "t", "v", "clutch", "r_load", "transient"};
+  for (const auto& f : report.floors) {
+    for (const char* suffix : {"", "_before", "_after", "_res_before", "_res_after"}) names.push_back(f.output + suffix);
+  }
+  w.header(names);
+  std::vector<double> row(names.size());
+  for (std::size_t r = 0; r < data.validate.size(); ++r) {
+    const ScoredRun& sr = data.validate[r];
+    const model::Inputs& in = sr.run.inputs;
+    const std::vector<bool> transient = transient_mask(in);
+    for (std::size_t n = sr.first_scored; n < in.t_s.size(); ++n) {
+      row[0] = static_cast<double>(r + 1);
+      row[1] = in.t_s[n];
+      row[2] = in.v_V[n];
+      row[3] = in.clutch[n];
+      row[4] = in.r_load_ohm[n];
+      row[5] = transient[n] ? 1.0 : 0.0;
+      std::size_t k = 6;
+      for (const auto& f : report.floors) {
+        const auto it = std::find(sr.run.outputs.begin(), sr.run.outputs.end(), f.output);
+        const bool has = it != sr.run.outputs.end();
+        const auto o = static_cast<std::size_t>(it - sr.run.outputs.begin());
+        const double y = has ? sr.run.measured[o][n] : k_nan;
+        const double b = has ? report.simulated_before[r][o][n] : k_nan;
+        const double a = has ? report.simulated_after[r][o][n] : k_nan;
+        row[k++] = y;
+        row[k++] = b;
+        row[k++] = a;
+        row[k++] = y - b;
+        row[k++] = y - a;
+      }
+      w.row(row);
+    }
+  }
+  w.finish();
+}
+
+}  // namespace mcg::fit

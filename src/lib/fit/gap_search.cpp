@@ -1,0 +1,514 @@
+// The gap diagnosis' search: how a model is scored, how each candidate is fitted (the
+// nominal refit, one effect, pairs), and the order in which they are tried.
+#include "fit/gap_parts.hpp"
+
+#include "common/error.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <complex>
+#include <mutex>
+#include <numbers>
+#include <thread>
+
+namespace mcg::fit {
+
+using namespace gap_detail;
+
+namespace {
+
+/// The nominal parameters a refit moves: the scale factors of the param_mismatch effect.
+/// L is left alone: at 1 kHz sampling the 1 ms electrical time constant barely shows.
+const std::vector<std::string>& mismatch_scales() {
+  static const std::vector<std::string> names = {"Kt_scale",     "J_scale",       "coulomb_scale",
+                                                 "static_scale", "viscous_scale", "R_scale"};
+  return names;
+}
+
+/// How one catalog effect is fitted: the parameters set free and a coarse grid of
+/// starting points (the best grid point on the training cost starts the fit).
+struct EffectPlan {
+  std::string name;
+  std::vector<std::string> free;                  ///< effect parameter keys fitted
+  std::vector<std::vector<double>> grid;          ///< per free key, starting values tried
+};
+
+const std::vector<EffectPlan>& effect_plans() {
+  static const std::vector<EffectPlan> plans = {
+      {"stribeck", {"v_s_rad_s", "shape_exp"}, {{2.0, 5.0, 12.0, 30.0, 80.0}, {1.5}}},
+      {"dead_time", {"tau_d_s"}, {{0.0005, 0.001, 0.002, 0.004, 0.008, 0.016}}},
+      {"supply_sag", {"R_s_ohm"}, {{0.3, 1.0, 3.0}}},
+      {"hbridge", {"R_on_ohm", "deadband"}, {{0.1, 0.5}, {0.005, 0.02, 0.06}}},
+      {"brush_drop", {"V_b_V"}, {{0.2, 0.5, 1.0, 2.0}}},
+      {"clutch_compliance", {"k_Nm_per_rad", "zeta"}, {{0.01, 0.03, 0.1, 0.3, 1.0}, {0.03, 0.1, 0.3}}},
+      {"clutch_engage_lag", {"T_max_Nm", "tau_s"}, {{0.01, 0.05, 0.2}, {0.005, 0.03, 0.1}}},
+      {"cogging",
+       {"T_c_Nm", "phase_rad"},
+       {{0.0006, 0.001, 0.0016, 0.0025}, {-2.75, -1.96, -1.18, -0.39, 0.39, 1.18, 1.96, 2.75}}},
+      {"thermal", {"R_th_K_W", "tau_th_s"}, {{5.0, 20.0, 60.0}, {5.0, 60.0}}},
+  };
+  return plans;
+}
+
+const EffectPlan* find_plan(std::string_view name) {
+  for (const auto& p : effect_plans()) {
+    if (p.name == name) return &p;
+  }
+  return nullptr;
+}
+
+/// Why an effect cannot be identified from the training runs (empty: it can).
+std::string not_excited(std::string_view effect, const std::vector<Run>& runs) {
+  bool engaged = false;
+  bool engages = false;
+  for (const Run& run : runs) {
+    const auto& c = run.inputs.clutch;
+    for (std::size_t n = 0; n < c.size(); ++n) {
+      if (c[n] == 2.0) engaged = true;
+      if (n > 0 && c[n] == 2.0 && c[n - 1] != 2.0) engages = true;
+    }
+  }
+  if (effect == "clutch_compliance" && !engaged) return "not excited: clutch never engaged in training";
+  if (effect == "clutch_engage_lag" && !engages) return "not excited: no engagement in training";
+  return {};
+}
+
+struct Job {
+  std::string name;
+  std::vector<std::string> effects;
+  model::Model start;       ///< effects present with starting values (grid applied later)
+  std::vector<std::string> free;
+  std::vector<std::string> grid_effects;  ///< effects whose plan grid is searched before the fit
+  int evaluations_per_parameter = 10;     ///< simulation budget per free parameter (and one)
+  std::vector<std::string> stage1_free;   ///< fitted alone first (the added effect's parameters)
+  std::vector<model::Model> other_starts; ///< further nominal models the grid is searched on
+};
+
+void add_effect(model::Model& m, std::string_view name) {
+  if (m.effect(name) == nullptr) m.effects.push_back(model::default_effect(name));
+}
+
+/// The scale of param_mismatch that moves a nominal parameter (empty: none does).
+std::string scale_of(std::string_view name) {
+  if (name == "motor.R_ohm") return "R_scale";
+  if (name == "motor.J_kg_m2") return "J_scale";
+  if (name == "motor.Kt_Nm_A" || name == "motor.Ke_V_s_rad") return "Kt_scale";
+  if (name.ends_with(".Tc_Nm")) return "coulomb_scale";
+  if (name.ends_with(".Ts_Nm")) return "static_scale";
+  if (name.find(".visc") != std::string_view::npos) return "viscous_scale";
+  return {};
+}
+
+std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed) {
+  std::vector<std::string> free;
+  for (const auto& s : mismatch_scales()) {
+    if (std::none_of(fixed.begin(), fixed.end(), [&](const std::string& f) { return scale_of(f) == s; })) {
+      free.push_back("param_mismatch." + s);
+    }
+  }
+  if (free.empty()) fail("--fix pins every parameter the refit moves");
+  return free;
+}
+
+/// Searches the effect's grid (the cartesian product of its starting values, on each of the
+/// `bases`) on the training cost and returns the best point.
+model::Model grid_start(const std::vector<model::Model>& bases, const EffectPlan& plan, const std::vector<Run>& runs,
+                        const std::vector<double>& cogging_n) {
+  std::vector<std::vector<double>> axes = plan.grid;
+  std::vector<std::string> keys = plan.free;
+  if (plan.name == "cogging" && !cogging_n.empty()) {
+    keys.push_back("N_per_rev");
+    axes.push_back(cogging_n);
+  }
+  std::size_t points = 1;
+  for (const auto& a : axes) points *= a.size();
+  double best = std::numeric_limits<double>::infinity();
+  model::Model best_model = bases.front();
+  for (const model::Model& base : bases) {
+    for (std::size_t p = 0; p < points; ++p) {
+      model::Model trial = base;
+      std::size_t rest = p;
+      for (std::size_t k = 0; k < keys.size(); ++k) {
+        model::set_parameter(trial, plan.name + "." + keys[k], axes[k][rest % axes[k].size()]);
+        rest /= axes[k].size();
+      }
+      const double cost = training_cost(trial, runs);
+      if (cost < best) {
+        best = cost;
+        best_model = std::move(trial);
+      }
+    }
+  }
+  return best_model;
+}
+
+GapCandidate run_job(const Job& job, const GapData& data, const std::vector<OutputFloor>& floors,
+                     const GapSettings& settings, unsigned jacobian_threads, const std::vector<double>& cogging_n) {
+  GapCandidate c;
+  c.name = job.name;
+  c.effects = job.effects;
+  model::Model start = job.start;
+  if (job.grid_effects.empty() && !job.other_starts.empty()) {
+    double best = training_cost(start, data.train);
+    for (const model::Model& other : job.other_starts) {
+      const double cost = training_cost(other, data.train);
+      if (cost < best) {
+        best = cost;
+        start = other;
+      }
+    }
+  }
+  for (const auto& e : job.grid_effects) {
+    if (const EffectPlan* plan = find_plan(e)) {
+      std::vector<model::Model> bases{start};
+      for (model::Model other : job.other_starts) {
+        add_effect(other, e);
+        bases.push_back(std::move(other));
+      }
+      start = grid_start(bases, *plan, data.train, cogging_n);
+    }
+  }
+  FitProblem problem;
+  problem.runs = data.train;
+  problem.nls.threads = jacobian_threads;
+  problem.nls.xtol = 1e-4;
+  problem.nls.ftol = 1e-5;
+  problem.nls.check_smoothness = false;
+  problem.bounds = settings.bounds;
+  auto budget = [&](std::size_t free) {
+    return settings.max_evaluations > 0 ? settings.max_evaluations
+                                        : job.evaluations_per_parameter * static_cast<int>(free + 1);
+  };
+  // Stage 1: the added effect alone on the refitted nominal model (cheap, and it brings the
+  // effect into its basin before the nominal parameters may move to absorb it).
+  if (!job.stage1_free.empty()) {
+    problem.model = start;
+    problem.free = job.stage1_free;
+    problem.nls.max_evaluations = budget(job.stage1_free.size());
+    start = fit_model(problem).model;
+  }
+  problem.model = start;
+  problem.free = job.free;
+  problem.nls.max_evaluations = budget(job.free.size());
+  const FitResult fit = fit_model(problem);
+  c.model = fit.model;
+  c.free = job.free;
+  for (Eigen::Index k = 0; k < fit.nls.values.size(); ++k) {
+    c.values.push_back(fit.nls.values[k]);
+    c.std_errors.push_back(fit.nls.std_errors[k]);
+  }
+  for (const auto& e : job.effects) {
+    if (const EffectPlan* plan = find_plan(e)) c.added_parameters += plan->free.size();
+  }
+  c.status = fit.nls.converged ? "fitted" : "fitted, budget spent";
+  c.evaluated = true;
+  const Evaluation ev = evaluate(c.model, data, floors);
+  c.score = ev.score;
+  c.rms = ev.rms;
+  c.train_rms_rpm = training_rms_rpm(c.model, data.train);
+  return c;
+}
+
+/// Runs the jobs on `threads` workers; each result lands at its job's index.
+std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& data,
+                                   const std::vector<OutputFloor>& floors, const GapSettings& settings,
+                                   unsigned threads, const std::vector<double>& cogging_n, std::size_t& done,
+                                   std::size_t total) {
+  std::vector<GapCandidate> out(jobs.size());
+  std::atomic<std::size_t> next{0};
+  std::mutex mutex;
+  std::exception_ptr error;
+  const unsigned workers = std::max(1U, std::min<unsigned>(threads, static_cast<unsigned>(jobs.size())));
+  const unsigned jac_threads = std::max(1U, threads / workers);
+  auto work = [&] {
+    while (true) {
+      const std::size_t k = next.fetch_add(1);
+      if (k >= jobs.size()) return;
+      try {
+        out[k] = run_job(jobs[k], data, floors, settings, jac_threads, cogging_n);
+      } catch (const Error& e) {
+        // A candidate the data cannot fit is reported as such; the others go on.
+        GapCandidate& c = out[k];
+        c.name = jobs[k].name;
+        c.effects = jobs[k].effects;
+        c.model = jobs[k].start;
+        c.status = fmt::format("fit failed: {}", e.what());
+        c.score = k_nan;
+        c.rms.assign(floors.size(), k_nan);
+        c.train_rms_rpm = k_nan;
+      } catch (...) {
+        std::lock_guard lock(mutex);
+        if (!error) error = std::current_exception();
+        return;
+      }
+      std::lock_guard lock(mutex);
+      ++done;
+      if (settings.progress) settings.progress(fmt::format("fitted {} ({}/{})", jobs[k].name, done, total));
+    }
+  };
+  std::vector<std::thread> pool;
+  for (unsigned w = 1; w < workers; ++w) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+  return out;
+}
+
+}  // namespace
+
+namespace gap_detail {
+
+Evaluation evaluate(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors) {
+  Evaluation ev;
+  ev.sum_sq.assign(floors.size(), 0.0);
+  ev.count.assign(floors.size(), 0);
+  for (const ScoredRun& sr : data.validate) {
+    auto sim = simulate_as_measured(model, sr.run);
+    for (std::size_t o = 0; o < sr.run.outputs.size(); ++o) {
+      const std::size_t f = floor_index(floors, sr.run.outputs[o]);
+      if (f == std::string::npos) continue;
+      const auto& y = sr.run.measured[o];
+      for (std::size_t n = sr.first_scored; n < y.size(); ++n) {
+        const double r = y[n] - sim[o][n];
+        if (!std::isfinite(r)) continue;
+        ev.sum_sq[f] += r * r;
+        ++ev.count[f];
+      }
+    }
+    ev.simulated.push_back(std::move(sim));
+  }
+  for (std::size_t f = 0; f < floors.size(); ++f) {
+    const double mse = ev.count[f] > 0 ? ev.sum_sq[f] / static_cast<double>(ev.count[f]) : k_nan;
+    ev.rms.push_back(std::sqrt(mse));
+    if (ev.count[f] > 0) ev.score += mse / (floors[f].floor * floors[f].floor);
+  }
+  return ev;
+}
+
+/// The fit objective on the training runs (sum over runs and outputs of the squared NRMSE),
+/// used to pick a starting point on a grid.
+double training_cost(const model::Model& model, const std::vector<Run>& runs) {
+  double cost = 0.0;
+  for (const Run& run : runs) {
+    const auto sim = simulate_as_measured(model, run);
+    for (std::size_t o = 0; o < run.outputs.size(); ++o) {
+      const auto& y = run.measured[o];
+      double mean = 0.0;
+      std::size_t count = 0;
+      for (double v : y) {
+        if (std::isfinite(v)) {
+          mean += v;
+          ++count;
+        }
+      }
+      if (count < 2) continue;
+      mean /= static_cast<double>(count);
+      double err = 0.0;
+      double spread = 0.0;
+      for (std::size_t n = 0; n < y.size(); ++n) {
+        if (!std::isfinite(y[n])) continue;
+        err += (sim[o][n] - y[n]) * (sim[o][n] - y[n]);
+        spread += (y[n] - mean) * (y[n] - mean);
+      }
+      if (spread > 0.0) cost += err / spread;
+    }
+  }
+  return std::isfinite(cost) ? cost : std::numeric_limits<double>::infinity();
+}
+
+double training_rms_rpm(const model::Model& model, const std::vector<Run>& runs) {
+  double sq = 0.0;
+  std::size_t count = 0;
+  for (const Run& run : runs) {
+    const auto it = std::find(run.outputs.begin(), run.outputs.end(), "rpm");
+    if (it == run.outputs.end()) continue;
+    const auto o = static_cast<std::size_t>(it - run.outputs.begin());
+    const auto sim = simulate_as_measured(model, run);
+    for (std::size_t n = 0; n < run.measured[o].size(); ++n) {
+      const double r = run.measured[o][n] - sim[o][n];
+      if (std::isfinite(r)) {
+        sq += r * r;
+        ++count;
+      }
+    }
+  }
+  return count > 0 ? std::sqrt(sq / static_cast<double>(count)) : k_nan;
+}
+
+Candidates search_candidates(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors,
+                             const Evaluation& before, bool gap, const GapSettings& settings) {
+  const unsigned threads = settings.threads > 0 ? settings.threads : std::max(1U, std::thread::hardware_concurrency());
+  const std::size_t outputs = floors.size();
+  const auto n_val = static_cast<double>(validation_count(data) * outputs);
+  auto fpe = [&](double score, std::size_t k) { return gap_detail::fpe(score, k, n_val); };
+
+  // The model as given.
+  GapCandidate none;
+  none.name = "none";
+  none.status = "as given";
+  none.model = model;
+  none.score = before.score;
+  none.fpe = before.score;
+  none.rms = before.rms;
+  none.train_rms_rpm = training_rms_rpm(model, data.train);
+  none.evaluated = true;
+
+  std::size_t done = 0;
+  std::size_t total = 2 + effect_plans().size() + settings.pair_effects * (settings.pair_effects - 1) / 2;
+
+  // The refit of the nominal parameters, warm start of every effect candidate.
+  model::Model base = model;
+  add_effect(base, "param_mismatch");
+  Job pm_job{"param_mismatch", {}, base, mismatch_free(settings.fixed), {}, 20, {}, {}};
+  if (settings.progress) settings.progress("fitting param_mismatch (nominal parameters)");
+  std::vector<GapCandidate> pm_result = run_jobs({pm_job}, data, floors, settings, threads, {}, done, total);
+  GapCandidate pm = std::move(pm_result.front());
+  pm.fpe = fpe(pm.score, pm.free.size());
+
+  // Single effects.
+  std::vector<Job> jobs;
+  std::vector<GapCandidate> skipped;
+  const std::vector<double> cogging_n = cogging_orders(pm.model, data.train, 2);
+  for (const EffectPlan& plan : effect_plans()) {
+    if (model.effect(plan.name) != nullptr) continue;
+    const std::string why = not_excited(plan.name, data.train);
+    if (!why.empty()) {
+      GapCandidate c;
+      c.name = plan.name;
+      c.effects = {plan.name};
+      c.status = why;
+      c.score = k_nan;
+      c.fpe = std::numeric_limits<double>::infinity();
+      c.rms.assign(outputs, k_nan);
+      c.train_rms_rpm = k_nan;
+      skipped.push_back(std::move(c));
+      ++done;
+      continue;
+    }
+    Job job{plan.name, {plan.name}, pm.model, mismatch_free(settings.fixed), {plan.name}, 15, {}, {base}};
+    add_effect(job.start, plan.name);
+    for (const auto& key : plan.free) {
+      job.free.push_back(plan.name + "." + key);
+      job.stage1_free.push_back(plan.name + "." + key);
+    }
+    jobs.push_back(std::move(job));
+  }
+  std::vector<GapCandidate> singles = run_jobs(jobs, data, floors, settings, threads, cogging_n, done, total);
+
+  // The refit must not lose to an effect fit that merely found better nominal values: when
+  // some candidate's nominal scales alone fit the training runs better, refit from there.
+  {
+    model::Model start = pm.model;
+    const double pm_cost = training_cost(pm.model, data.train);
+    double best = pm_cost;
+    for (const auto& c : singles) {
+      if (!c.evaluated) continue;
+      model::Model trial = pm.model;
+      *std::find_if(trial.effects.begin(), trial.effects.end(), [](const auto& e) { return e.name == "param_mismatch"; }) =
+          *c.model.effect("param_mismatch");
+      const double cost = training_cost(trial, data.train);
+      if (cost < best) {
+        best = cost;
+        start = trial;
+      }
+    }
+    if (best < pm_cost) {
+      if (settings.progress) settings.progress("refitting param_mismatch from a better start");
+      ++total;
+      Job again{"param_mismatch", {}, start, mismatch_free(settings.fixed), {}, 10, {}, {}};
+      GapCandidate refit = std::move(run_jobs({again}, data, floors, settings, threads, {}, done, total).front());
+      refit.fpe = fpe(refit.score, refit.free.size());
+      if (refit.evaluated && training_cost(refit.model, data.train) < pm_cost) pm = std::move(refit);
+    }
+  }
+  const double ref_score = std::min(before.score, pm.score);
+  for (auto& c : singles) {
+    c.fpe = fpe(c.score, c.free.size());
+    c.significant = gap && improves(c.score, ref_score, outputs);
+  }
+  std::sort(singles.begin(), singles.end(), [](const auto& a, const auto& b) { return a.fpe < b.fpe; });
+
+  // Pairs of the strongest significant effects, each started from the better single fit
+  // with the other effect's fitted values.
+  std::vector<const GapCandidate*> strong;
+  for (const auto& c : singles) {
+    if (c.significant && strong.size() < settings.pair_effects) strong.push_back(&c);
+  }
+  std::vector<Job> pair_jobs;
+  for (std::size_t a = 0; a < strong.size(); ++a) {
+    for (std::size_t b = a + 1; b < strong.size(); ++b) {
+      const GapCandidate& first = *strong[a];
+      const GapCandidate& second = *strong[b];
+      // Named in catalog order, so that a pair reads the same whichever single fitted better.
+      const bool in_order = find_plan(first.name) < find_plan(second.name);
+      const std::string name = in_order ? first.name + "+" + second.name : second.name + "+" + first.name;
+      // Started from the better single's model with the other effect added, or from the
+      // model as given with both effects at their single-fit values.
+      Job job{name, {first.name, second.name}, first.model, first.free, {}, 10, {}, {base}};
+      job.start.effects.push_back(*second.model.effect(second.name));
+      job.other_starts.front().effects.push_back(*first.model.effect(first.name));
+      job.other_starts.front().effects.push_back(*second.model.effect(second.name));
+      for (const GapCandidate* single : {&first, &second}) {
+        for (const auto& key : find_plan(single->name)->free) job.stage1_free.push_back(single->name + "." + key);
+      }
+      for (const auto& key : find_plan(second.name)->free) job.free.push_back(second.name + "." + key);
+      pair_jobs.push_back(std::move(job));
+    }
+  }
+  total = done + pair_jobs.size();
+  std::vector<GapCandidate> pairs = run_jobs(pair_jobs, data, floors, settings, threads, cogging_n, done, total);
+  const GapCandidate* best_single = strong.empty() ? nullptr : strong.front();
+  for (auto& c : pairs) {
+    c.fpe = fpe(c.score, c.free.size());
+    c.significant = best_single != nullptr && improves(c.score, best_single->score, outputs) &&
+                    improves(c.score, ref_score, outputs);
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) { return a.fpe < b.fpe; });
+
+  Candidates out;
+  if (best_single != nullptr) out.best_single = best_single->name;
+  out.none = std::move(none);
+  out.pm = std::move(pm);
+  out.singles = std::move(singles);
+  out.pairs = std::move(pairs);
+  out.skipped = std::move(skipped);
+  return out;
+}
+
+}  // namespace gap_detail
+
+std::vector<double> cogging_orders(const model::Model& model, const std::vector<Run>& runs, std::size_t keep) {
+  std::vector<double> power(k_max_cogging_order + 1, 0.0);
+  for (const Run& run : runs) {
+    const auto it = std::find(run.outputs.begin(), run.outputs.end(), "rpm");
+    if (it == run.outputs.end()) continue;
+    const auto o = static_cast<std::size_t>(it - run.outputs.begin());
+    const auto& y = run.measured[o];
+    const auto sim = simulate_as_measured(model, run);
+    // The measured angle: the trapezoidal integral of the measured speed.
+    std::vector<std::complex<double>> acc(k_max_cogging_order + 1, {0.0, 0.0});
+    double theta = 0.0;
+    for (std::size_t n = 1; n < y.size(); ++n) {
+      const double dt = run.inputs.t_s[n] - run.inputs.t_s[n - 1];
+      if (std::isfinite(y[n]) && std::isfinite(y[n - 1])) theta += 0.5 * (y[n] + y[n - 1]) * dt * std::numbers::pi / 30.0;
+      const double r = y[n] - sim[o][n];
+      if (!std::isfinite(r) || y[n] == 0.0) continue;
+      for (std::size_t order = 2; order <= k_max_cogging_order; ++order) {
+        acc[order] += r * std::polar(1.0, -static_cast<double>(order) * theta);
+      }
+    }
+    for (std::size_t order = 2; order <= k_max_cogging_order; ++order) power[order] += std::norm(acc[order]);
+  }
+  std::vector<double> orders;
+  for (std::size_t order = 2; order <= k_max_cogging_order; ++order) orders.push_back(static_cast<double>(order));
+  std::stable_sort(orders.begin(), orders.end(), [&](double a, double b) {
+    return power[static_cast<std::size_t>(a)] > power[static_cast<std::size_t>(b)];
+  });
+  orders.resize(std::min(keep, orders.size()));
+  return orders;
+}
+
+}  // namespace mcg::fit
