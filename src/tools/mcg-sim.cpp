@@ -46,6 +46,11 @@ int main(int argc, char** argv) {
     if (!board.link_path.empty()) {
       board.configs = opt.configs;
       board.effects = opt.effects;
+      for (const CLI::Option* o : app.get_options()) {
+        if (o->count() > 0) board.options_given.push_back(o->get_name());
+      }
+      board.board.max_step_s = opt.max_step_s;
+      if (app.count("--r-load") > 0) board.board.r_load_ohm = opt.r_load_ohm;
       mcg::board::serve(board);
       return;
     }

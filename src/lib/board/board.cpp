@@ -24,7 +24,7 @@ double encoder_position(double theta_rad) {
 }  // namespace
 
 EmulatedBoard::EmulatedBoard(const BoardOptions& options)
-    : m_options(options), m_plant(options.model, model::SimOptions{}, 1) {
+    : m_options(options), m_plant(options.model, model::SimOptions{options.max_step_s}, 1) {
   assert(!g_board_alive);
   g_board_alive = true;
   host_board_reset();

@@ -17,6 +17,7 @@ struct BoardOptions {
   model::Model model;               ///< the rig (mcg-sim's --config)
   double r_load_ohm = link::k_load_resistor_ohm;  ///< resistor the load relay puts across the generator, ohm
   std::uint32_t baud = 9600;        ///< serial line rate; 0 = unlimited
+  double max_step_s = 1e-3;         ///< the plant's largest integration step (model::SimOptions)
 };
 
 /// One board per process (the core keeps its state in globals, as on the 8051): a second
@@ -66,7 +67,13 @@ struct ServeOptions {
   BoardOptions board;              ///< board.model is replaced by the model of configs and effects
   double speed = 1.0;              ///< simulated seconds per wall-clock second (> 0)
   double seconds = 0.0;            ///< stop after this much simulated time; 0 = until a signal
+  std::vector<std::string> options_given;   ///< mcg-sim's options on the command line, e.g. "--seed"
 };
+
+/// Throws mcg::Error naming the first of `options_given` that mcg-sim --board does not use, and
+/// why: the emulated board measures only what the firmware measures (the encoder, through its
+/// own windows), and its clutch and load come from the board's outputs.
+void refuse_unused_options(const std::vector<std::string>& options_given);
 
 /// Creates the pseudo-terminal, links it at options.link_path and runs the board in real time
 /// (times `speed`) until SIGINT or SIGTERM (or `seconds`), then removes the link. A client may

@@ -3,6 +3,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <string_view>
+#include <utility>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -43,7 +46,28 @@ model::Model load_model(const std::vector<std::string>& configs, const std::vect
   return model;
 }
 
+void refuse_unused_options(const std::vector<std::string>& options_given) {
+  // What each mcg-sim option would mean on the emulated board, and why it does not apply.
+  static constexpr std::array<std::pair<std::string_view, std::string_view>, 9> k_refused{{
+      {"--encoder", "the board measures speed with its encoder; mcg-serial stream writes the rpm it counts"},
+      {"--window", "the rpm window of a capture is mcg-serial stream --window"},
+      {"--counts-per-rev", "the board's encoder has 2048 counts/rev (mcg-protocol(7))"},
+      {"--open-loop", "the board's mode register chooses open or closed loop (mcg-serial set mode)"},
+      {"--clutch", "the clutch is the board's output (mcg-serial set clutch)"},
+      {"--noise-i", "the board measures no current, only the encoder"},
+      {"--noise-v-gen", "the board measures no generator voltage, only the encoder"},
+      {"--adc", "the board measures no current, only the encoder"},
+      {"--seed", "nothing on the emulated board is random"},
+  }};
+  for (const auto& given : options_given) {
+    for (const auto& [name, why] : k_refused) {
+      if (given == name) fail("{}: not used with --board: {}", name, why);
+    }
+  }
+}
+
 void serve(const ServeOptions& options) {
+  refuse_unused_options(options.options_given);
   BoardOptions board_options = options.board;
   board_options.model = load_model(options.configs, options.effects);
   link::PtyLink pty(options.link_path);
