@@ -54,7 +54,7 @@ static MCG_CODE MenuItem s_items[] = {
     {MCG_REG_DUTY_STEP, KIND_INT, "Duty step 0.1%"},
     {MCG_REG_SERVICE_MS, KIND_INT, "Service ms"},
     {MCG_REG_LOG_INTERVAL, KIND_INT, "Log interval ms"},
-    {MCG_REG_CLUTCH, KIND_INT, "Clutch 0/1"},
+    {MCG_REG_CLUTCH, KIND_INT, "Clutch 1/2 eng"},
     {MCG_REG_LOAD, KIND_INT, "Load relay 0/1"},
     {MCG_REG_STREAM, KIND_INT, "Stream 0/1"},
 };
@@ -337,7 +337,7 @@ static void main_key(uint8_t key, uint8_t repeat) {
       regs_write(MCG_REG_DUTY, g_duty_min > 0 ? g_duty_min : (g_duty_max < 0 ? g_duty_max : 0));
       break;
     case 1:
-      regs_write(MCG_REG_CLUTCH, (int16_t)!g_clutch_on);
+      regs_write(MCG_REG_CLUTCH, (int16_t)(g_clutch_on ? MCG_CLUTCH_ATTACHED : MCG_CLUTCH_ENGAGED));
       break;
     case 2:
       regs_write(MCG_REG_LOAD, (int16_t)!g_load_on);

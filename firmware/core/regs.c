@@ -105,7 +105,7 @@ uint8_t regs_read(uint8_t reg, int16_t* value) MCG_REENTRANT {
       v = g_stream_on;
       break;
     case MCG_REG_CLUTCH:
-      v = g_clutch_on;
+      v = g_clutch_on ? MCG_CLUTCH_ENGAGED : MCG_CLUTCH_ATTACHED;
       break;
     case MCG_REG_LOAD:
       v = g_load_on;
@@ -235,7 +235,7 @@ uint8_t regs_write(uint8_t reg, int16_t v) {
       g_stream_on = (uint8_t)v;
       break;
     case MCG_REG_CLUTCH:
-      g_clutch_on = (uint8_t)v;
+      g_clutch_on = (uint8_t)(v == MCG_CLUTCH_ENGAGED);
       hal_clutch_write(g_clutch_on);
       break;
     case MCG_REG_LOAD:

@@ -173,6 +173,7 @@ typedef struct {
 #define MCG_UNIT_COUNT 7u    /* a count (counters read as u16) */
 #define MCG_UNIT_SWITCH 8u   /* 0 off, 1 on */
 #define MCG_UNIT_FLAGS 9u    /* MCG_FLAG_* bits */
+#define MCG_UNIT_CLUTCH 10u  /* MCG_CLUTCH_*: the clutch states of mcg-csv(5) the board can take */
 
 #define MCG_I16_MIN (-32767 - 1)
 #define MCG_I16_MAX 32767
@@ -200,7 +201,8 @@ typedef struct {
   X(LOG_INTERVAL, "log_interval", MCG_RW, 1, 255, 4, MCG_UNIT_MS, "RAM log point spacing, ms") \
   X(LOG_COUNT, "log_count", MCG_RO, 0, MCG_LOG_POINTS, 0, MCG_UNIT_COUNT, "RAM log points recorded") \
   X(STREAM, "stream", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, "stream blocks on") \
-  X(CLUTCH, "clutch", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, "clutch engaged") \
+  X(CLUTCH, "clutch", MCG_RW, MCG_CLUTCH_ATTACHED, MCG_CLUTCH_ENGAGED, MCG_CLUTCH_ATTACHED, MCG_UNIT_CLUTCH, \
+    "clutch: 1 attached and disengaged, 2 engaged (as in mcg-csv(5))") \
   X(LOAD, "load", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, "generator load relay closed") \
   X(RPM, "rpm", MCG_RO, 0, 7471, 0, MCG_UNIT_RPM, "measured speed over 16 ms, rpm") \
   X(COUNTS_16MS, "counts_16ms", MCG_RO, 0, 4080, 0, MCG_UNIT_COUNT, "encoder pulses in the last 16 ms") \
@@ -216,6 +218,11 @@ typedef struct {
 #define MCG_MODE_PI 2u   /* incremental, b0 b1 */
 #define MCG_MODE_PID 3u  /* incremental, b0 b1 b2 */
 #define MCG_MODE_COUNT 4u
+
+/* Clutch states, numbered as the clutch column of mcg-csv(5) in every tool. State 0 (motor alone, the
+ * clutch removed) exists on the bench but not for the board, whose clutch is mounted. */
+#define MCG_CLUTCH_ATTACHED 1u /* attached and disengaged */
+#define MCG_CLUTCH_ENGAGED 2u
 
 #define MCG_SEQ_STOP 0u
 #define MCG_SEQ_PLAY 1u /* play once from entry 0 */

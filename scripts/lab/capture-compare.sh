@@ -10,7 +10,7 @@ out=$3
 mkdir -p "$out"
 # Engaged, under the controller at 300 rpm for a second; then the profile plays from the
 # board's RAM while we stream.
-mcg-serial -p "$port" set clutch 1 >/dev/null
+mcg-serial -p "$port" set clutch 2 >/dev/null
 mcg-serial -p "$port" set rpm_cmd 300 >/dev/null
 mcg-serial -p "$port" load "$controller" >/dev/null
 sleep 1

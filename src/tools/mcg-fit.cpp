@@ -40,8 +40,8 @@ int main(int argc, char** argv) {
   CLI::App* tfc = app.add_subcommand("tf", "rational transfer function fitted to a frequency response");
   tfc->add_option("--poles", tf.fit.poles, "number of poles")->check(CLI::Range(1, 12))->capture_default_str();
   tfc->add_option("--zeros", tf.fit.zeros, "number of zeros")->check(CLI::Range(0, 12))->capture_default_str();
-  tfc->add_option("--fmin", tf.fit.f_min_hz, "ignore frequencies below, Hz")->check(CLI::Range(0.0, 1e9));
-  tfc->add_option("--fmax", tf.fit.f_max_hz, "ignore frequencies above, Hz")->check(CLI::Range(0.0, 1e9));
+  tfc->add_option("--f-min,--fmin", tf.fit.f_min_hz, "ignore frequencies below, Hz")->check(CLI::Range(0.0, 1e9));
+  tfc->add_option("--f-max,--fmax", tf.fit.f_max_hz, "ignore frequencies above, Hz")->check(CLI::Range(0.0, 1e9));
   tfc->add_flag("!--no-coherence", tf.fit.use_coherence, "weight all frequencies alike");
   tfc->add_flag("--delay", tf.fit.fit_delay, "fit a transport delay too (written as delay_s)");
   tfc->add_option("file", tf.file, "f_hz,mag_db,phase_deg[,coherence] table ('-' = stdin)")->capture_default_str();

@@ -22,14 +22,14 @@ int main(int argc, char** argv) {
   auto* list = app.add_subcommand("list", "list the serial ports with their descriptions");
 
   std::vector<std::string> get_names;
-  auto* get = app.add_subcommand("get", "print registers (all, as an INI [board] section, without NAME)");
+  auto* get = app.add_subcommand("get", "print registers in engineering units, duty in % (all, as an INI [board] section, without NAME)");
   get->add_option("NAME", get_names, "register name");
 
   std::string set_name;
   std::string set_value;
   auto* set = app.add_subcommand("set", "write a register in engineering units and verify it");
   set->add_option("NAME", set_name, "register name")->required();
-  set->add_option("VALUE", set_value, "value: rpm, duty %, gain, ms, or a name (mode: open p pi pid)")->required();
+  set->add_option("VALUE", set_value, "value: rpm, duty in % (CSV 0.25 = 25 %), gain, ms, clutch 1/2, or a name (mode: open p pi pid)")->required();
 
   std::string load_path;
   auto* load = app.add_subcommand("load", "write every register of a [board] or [controller] INI and verify each");

@@ -138,9 +138,9 @@ int main(int argc, char** argv) {
   bode_cmd->add_option("--lines", bode.lines_hz, "multisine lines, Hz, e.g. 1,2,5 (default from metadata)");
   bode_cmd->add_option("--period", bode.period_s, "multisine period, s (default from metadata)")
       ->check(CLI::Range(1e-6, 1e6));
-  bode_cmd->add_option("--fmin", bode.f_min_hz, "lowest frequency written, Hz (default: excitation band)")
+  bode_cmd->add_option("--f-min,--fmin", bode.f_min_hz, "lowest frequency written, Hz (default: excitation band)")
       ->check(CLI::Range(0.0, 1e9));
-  bode_cmd->add_option("--fmax", bode.f_max_hz, "highest frequency written, Hz (default: excitation band)")
+  bode_cmd->add_option("--f-max,--fmax", bode.f_max_hz, "highest frequency written, Hz (default: excitation band)")
       ->check(CLI::Range(0.0, 1e9));
 
   return mcg::tool_main(app, argc, argv, [&] {

@@ -230,7 +230,7 @@ TEST(FwStream, SamplesCarrySignedCountsAndTheOutputs) {
   Board b;
   ASSERT_EQ(b.write(MCG_REG_DUTY_MIN, -1000), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_DUTY, -250), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_CLUTCH, 1), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_CLUTCH, MCG_CLUTCH_ENGAGED), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_LOAD, 1), MCG_ST_OK);
   b.set_pulses(5);
   b.run(10, 5);
@@ -303,7 +303,7 @@ TEST(FwStream, SequenceStartsOnASampleBoundary) {
   b.run(7);
   Bytes entries{0};
   for (const auto& [delay, reg, value] : std::vector<std::tuple<int, int, int>>{
-           {0, MCG_REG_CLUTCH, 1}, {40, MCG_REG_RPM_CMD, 500}, {40, MCG_REG_LOAD, 1}}) {
+           {0, MCG_REG_CLUTCH, MCG_CLUTCH_ENGAGED}, {40, MCG_REG_RPM_CMD, 500}, {40, MCG_REG_LOAD, 1}}) {
     const Bytes d = fwtest::le16(delay), v = fwtest::le16(value);
     entries.insert(entries.end(), d.begin(), d.end());
     entries.push_back(static_cast<std::uint8_t>(reg));
@@ -394,7 +394,7 @@ TEST(FwSequence, PlaysEntriesAtTheirTimes) {
   };
   entry(5, MCG_REG_DUTY, 100);
   entry(10, MCG_REG_DUTY, 200);
-  entry(0, MCG_REG_CLUTCH, 1);
+  entry(0, MCG_REG_CLUTCH, MCG_CLUTCH_ENGAGED);
   entry(3, MCG_REG_LOAD, 1);
   const auto w = b.request(MCG_CMD_SEQ_WRITE, entries);
   ASSERT_TRUE(w);

@@ -92,7 +92,7 @@ TEST(FwMenu, MainScreenLines) {
   Board b;
   b.set_pulses(14);
   ASSERT_EQ(b.write(MCG_REG_DUTY, 375), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_CLUTCH, 1), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_CLUTCH, MCG_CLUTCH_ENGAGED), MCG_ST_OK);
   b.run(600, 14);
   EXPECT_EQ(lcd(0), "  410 rpm OL  C-");
   EXPECT_EQ(lcd(1), "open   d  37.5% ");

@@ -61,7 +61,7 @@ TEST(FwProtocol, DefaultsAfterReset) {
   EXPECT_EQ(b.read(MCG_REG_DUTY_MAX), 1000);
   EXPECT_EQ(b.read(MCG_REG_DUTY_MIN), 0);
   EXPECT_EQ(b.read(MCG_REG_DUTY_STEP), 10);
-  EXPECT_EQ(b.read(MCG_REG_CLUTCH), 0);
+  EXPECT_EQ(b.read(MCG_REG_CLUTCH), static_cast<int>(MCG_CLUTCH_ATTACHED));
   EXPECT_EQ(b.read(MCG_REG_LOAD), 0);
 }
 
@@ -133,7 +133,7 @@ TEST(FwProtocol, RangesOfEveryWritableRegister) {
       {MCG_REG_DUTY_STEP, 1, 1000},   {MCG_REG_DUTY_BIAS, -1000, 1000},
       {MCG_REG_COEF_FRAC, 0, 12},     {MCG_REG_SERVICE_MS, 5, 250},
       {MCG_REG_LOG_INTERVAL, 1, 255}, {MCG_REG_STREAM, 0, 1},
-      {MCG_REG_CLUTCH, 0, 1},         {MCG_REG_LOAD, 0, 1},
+      {MCG_REG_CLUTCH, 1, 2},         {MCG_REG_LOAD, 0, 1},
   };
   for (const Case& c : cases) {
     Board b;

@@ -35,6 +35,8 @@ std::string unit_text(unsigned unit) {
       return "count";
     case MCG_UNIT_SWITCH:
       return "0/1";
+    case MCG_UNIT_CLUTCH:
+      return "MCG_CLUTCH_*";
     default:
       return "MCG_FLAG_*";
   }

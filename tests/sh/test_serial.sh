@@ -54,7 +54,7 @@ check "load names the line of an unknown register" eval '! S load "$work/bad.ini
   same "$work/err" "mcg-serial: error: $work/bad.ini:3: [board] speed: not a register of the board"'
 
 # stream: closed loop on the PI just loaded, clutch engaged
-check "clutch on, speed command 450" eval 'S set clutch 1 && S set rpm_cmd 450'
+check "clutch on, speed command 450" eval 'S set clutch 2 && S set rpm_cmd 450'
 sleep 2
 check "stream --samples 500: rows, header, no loss" eval 'S stream --samples 500 > "$work/live.csv" 2> "$work/err" &&
   [ "$(rows "$work/live.csv")" = 500 ] && grep -qx "t,rpm,counts,duty,v,rpm_cmd,clutch,r_load" "$work/live.csv" && [ ! -s "$work/err" ]'
@@ -92,11 +92,11 @@ check "dump: the speed is held by the closed loop" eval 'grep -v "^#" "$work/ram
 check "dump metadata: sample_period" grep -qx "# sample_period: 0.001" "$work/ram.csv"
 
 # send: a command sequence, played
-printf 't,rpm_cmd,clutch\n0,400,1\n0.1,400,1\n0.3,520,1\n0.5,520,0\n' > "$work/seq.csv"
+printf 't,rpm_cmd,clutch\n0,400,2\n0.1,400,2\n0.3,520,2\n0.5,520,1\n' > "$work/seq.csv"
 check "send --then play" eval 'S send "$work/seq.csv" --then play > "$work/out" &&
   same "$work/out" "sequence: 4 entries over 0.5 s loaded, playing"'
 sleep 0.8
-check "the sequence ran" eval 'S get rpm_cmd clutch seq_len > "$work/v" && same "$work/v" "$(printf "520\n0\n4")"'
+check "the sequence ran" eval 'S get rpm_cmd clutch seq_len > "$work/v" && same "$work/v" "$(printf "520\n1\n4")"'
 printf 't,rpm_cmd\n0,400\n0.1,900\n' > "$work/bad.csv"
 check "send names the row of a value out of range" eval '! S send "$work/bad.csv" 2> "$work/err" &&
   same "$work/err" "mcg-serial: error: $work/bad.csv:3: rpm_cmd: 900 rpm is outside 120..720 rpm"'
@@ -110,7 +110,7 @@ if command -v script > /dev/null; then
 fi
 
 # the port vanishes mid-stream: what was captured stays
-S set clutch 1 > /dev/null
+S set clutch 2 > /dev/null
 S stream > "$work/gone.csv" 2> "$work/gone.err" &
 spid=$!
 wait_rows "$work/gone.csv" 400

@@ -9,7 +9,7 @@ command -v mcg-sim > /dev/null || { echo "mcg-sim not built, skipped"; exit 125;
 
 tty=$work/ttyMCG
 start_board "$tty" || exit 1
-timeout 30 mcg-serial -p "$tty" set clutch 1 || exit 1
+timeout 30 mcg-serial -p "$tty" set clutch 2 || exit 1
 timeout 30 mcg-serial -p "$tty" set duty 30 || exit 1
 
 # start_relay LINK [relay options]: a faulty line from the board to LINK.

@@ -130,7 +130,7 @@ TEST(BoardBoard, EveryRegisterAtItsRangeEdges) {
 
 TEST(BoardBoard, OpenLoopDutyDrivesThePlant) {
   Rig rig;
-  rig.session.write(reg("clutch"), 1);
+  rig.session.write(reg("clutch"), MCG_CLUTCH_ENGAGED);
   rig.session.write(reg("duty"), 300);
   rig.line.run(2.0);
   // The board's speed measurement against the plant's own speed, within one count of the
@@ -149,7 +149,7 @@ struct Settled {
 
 Settled settle_p(double kp) {
   Rig rig;
-  rig.session.write(reg("clutch"), 1);
+  rig.session.write(reg("clutch"), MCG_CLUTCH_ENGAGED);
   rig.session.write(reg("coef_frac"), 8);
   rig.session.write(reg("kp"), link::to_raw(reg("kp"), kp, 8));
   rig.session.write(reg("mode"), MCG_MODE_P);
@@ -180,7 +180,7 @@ TEST(BoardBoard, AWrittenGainChangesTheClosedLoop) {
 
 TEST(BoardBoard, StreamCarriesTheEncoderSpeedWithoutLoss) {
   Rig rig;
-  rig.session.write(reg("clutch"), 1);
+  rig.session.write(reg("clutch"), MCG_CLUTCH_ENGAGED);
   rig.session.write(reg("duty"), 400);
   rig.line.run(1.5);
   rig.session.write(reg("stream"), 1);
@@ -204,7 +204,7 @@ TEST(BoardBoard, StreamCarriesTheEncoderSpeedWithoutLoss) {
 
 TEST(BoardBoard, LogRecordsAndDumps) {
   Rig rig;
-  rig.session.write(reg("clutch"), 1);
+  rig.session.write(reg("clutch"), MCG_CLUTCH_ENGAGED);
   rig.session.write(reg("duty"), 250);
   rig.line.run(1.0);
   rig.session.write(reg("log_interval"), 2);

@@ -60,7 +60,15 @@ TEST(LinkRegisters, ParseAndFormat) {
   EXPECT_EQ(parse_value(mode, "3", "set"), 3.0);
   EXPECT_EQ(format_value(mode, 3, 0), "pid");
   EXPECT_EQ(error_of([&] { parse_value(mode, "fast", "set"); }), "set: mode: invalid value 'fast' (open, p, pi, pid)");
-  EXPECT_EQ(parse_value(require_register("clutch"), "on", "x"), 1.0);
+  EXPECT_EQ(parse_value(require_register("stream"), "on", "x"), 1.0);
+  // Clutch states as in every tool's CSV: 1 attached and disengaged, 2 engaged; 0 is not the board's.
+  const auto& clutch = require_register("clutch");
+  EXPECT_EQ(parse_value(clutch, "engaged", "x"), 2.0);
+  EXPECT_EQ(parse_value(clutch, "1", "x"), 1.0);
+  EXPECT_EQ(error_of([&] { parse_value(clutch, "0", "set"); }),
+            "set: clutch 0 (motor alone) is not a state of the board: its clutch is mounted (1 attached and "
+            "disengaged, 2 engaged)");
+  EXPECT_EQ(error_of([&] { to_raw(clutch, 3.0, 0); }), "clutch: 3 is outside 1..2");
   EXPECT_EQ(error_of([] { parse_value(require_register("rpm_cmd"), "4e", "a.ini:3"); }),
             "a.ini:3: rpm_cmd: invalid value '4e'");
   EXPECT_EQ(format_value(require_register("flags"), MCG_FLAG_SATURATED | MCG_FLAG_SEQ, 0), "saturated,seq");

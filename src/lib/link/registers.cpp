@@ -129,6 +129,10 @@ double parse_value(const RegisterInfo& reg, std::string_view text, std::string_v
     if (key == "on") value = 1.0;
     if (key == "off") value = 0.0;
   }
+  if (reg.unit == Unit::Clutch) {
+    if (key == "disengaged") value = MCG_CLUTCH_ATTACHED;
+    if (key == "engaged") value = MCG_CLUTCH_ENGAGED;
+  }
   if (value) return *value;
   double number = 0.0;
   const char* end = text.data() + text.size();
@@ -138,7 +142,12 @@ double parse_value(const RegisterInfo& reg, std::string_view text, std::string_v
     if (reg.unit == Unit::Mode) hint = " (open, p, pi, pid)";
     if (reg.unit == Unit::SeqState) hint = " (stop, play, loop)";
     if (reg.unit == Unit::Switch) hint = " (0, 1, off, on)";
+    if (reg.unit == Unit::Clutch) hint = " (1 or disengaged, 2 or engaged)";
     fail("{}: {}: invalid value '{}'{}", where, reg.name, text, hint);
+  }
+  if (reg.unit == Unit::Clutch && number == 0.0) {
+    fail("{}: clutch 0 (motor alone) is not a state of the board: its clutch is mounted (1 attached and "
+         "disengaged, 2 engaged)", where);
   }
   return number;
 }

@@ -24,6 +24,7 @@ enum class Unit : std::uint8_t {
   Count = MCG_UNIT_COUNT,        ///< a count, raw = value (counters read as unsigned 16 bit)
   Switch = MCG_UNIT_SWITCH,      ///< 0/1 (also off/on)
   Flags = MCG_UNIT_FLAGS,        ///< MCG_FLAG_* bits, read only
+  Clutch = MCG_UNIT_CLUTCH,      ///< mcg-csv clutch state: 1 attached and disengaged, 2 engaged (also names)
 };
 
 struct RegisterInfo {

@@ -20,7 +20,7 @@ struct GeneratorOptions {
   double bias = 0.0;         ///< added to every sample, in the column's unit
   double dt_s = 0.001;
   std::optional<double> duration_s;  ///< default per generator (see default_duration_s)
-  double clutch = 0.0;               ///< 0, 1 or 2 until the first --clutch-schedule change
+  double clutch = 2.0;               ///< 0, 1 or 2 until the first --clutch-schedule change (2, as mcg-sim)
   std::string clutch_schedule;       ///< "1@0,2@1.5"
   double r_load_ohm = std::numeric_limits<double>::infinity();
   std::string r_load_schedule;  ///< "inf@0,5.6@2"
