@@ -60,7 +60,9 @@ check "capture-compare.sh exits 0" '[ $? = 0 ]'
 kill "$board" 2>/dev/null
 wait "$board" 2>/dev/null
 rms=$(sed -n 's/.*rpm RMS difference \([0-9.]*\) rpm.*/\1/p' "$work/cc.out")
-check "board and model agree within 40 rpm RMS (got ${rms:-nothing})" 'awk -v r="${rms:-999}" "BEGIN { exit !(r < 40) }"'
+check "board and model agree within 20 rpm RMS (got ${rms:-nothing})" 'awk -v r="${rms:-999}" "BEGIN { exit !(r < 20) }"'
+check "the model ran on the capture as it stands: the same rows" '[ "$(grep -vc "^#" "$work/cc/measured.csv")" = "$(grep -vc "^#" "$work/cc/simulated.csv")" ]'
+check "the capture starts with the sequence: rpm_cmd 300 from t = 0" 'grep -v "^#" "$work/cc/measured.csv" | sed -n 2p | grep -q "^0,.*,300,2,inf$"'
 check "capture-compare.sh captured the step to 520 rpm" 'awk -F, "!/^#/ && \$2 > 500 { n++ } END { exit !(n > 100) }" "$work/cc/measured.csv"'
 
 echo "lab scripts: $passed passed, $failed failed"

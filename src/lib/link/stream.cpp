@@ -41,10 +41,15 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
   Session& s = *c->session;
   const InterruptGuard guard;
   const std::vector<std::pair<std::string, std::string>> config = board_config(*c);
-  s.write(require_register("stream"), 1);
-  if (!options.then.empty()) {
+  const RegisterInfo& stream = require_register("stream");
+  if (options.then.empty()) {
+    s.write(stream, 1);
+  } else {
+    // A sequence that turns the stream on in its first entry starts the capture on its own first
+    // tick (t = 0 there); the read comes a frame time (> 5 ms) after the start, when that entry ran.
     const RegisterInfo& state = require_register("seq_state");
     s.write(state, static_cast<std::int16_t>(parse_value(state, options.then, "--then")));
+    if (s.read(stream) == 0) s.write(stream, 1);
   }
 
   table::Writer w(out);
