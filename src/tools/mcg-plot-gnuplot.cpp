@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   auto* bode = app.add_flag("--bode", o.bode, "magnitude and phase panels from f_hz,mag_db,phase_deg (log f)");
   auto* xy = app.add_flag("--xy", o.xy, "points of y against x (e.g. -x v -y i), in any order");
+  auto* rlocus = app.add_flag("--rlocus", o.rlocus,
+                              "root locus of mcg-design rlocus: im against re, a line per branch, poles, asymptotes, boundary");
   app.add_flag("--steps", o.steps, "draw samples as held until the next (zero-order hold)");
   app.add_flag("--logx", o.logx, "logarithmic horizontal axis");
   app.add_flag("--logy", o.logy, "logarithmic vertical axis");
@@ -38,5 +40,6 @@ int main(int argc, char** argv) {
       ->expected(2)
       ->check(CLI::Range(10, 20000));
   bode->excludes(xy);
+  rlocus->excludes(bode)->excludes(xy);
   return mcg::tool_main(app, argc, argv, [&] { mcg::plot::run(o); });
 }

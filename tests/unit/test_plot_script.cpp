@@ -150,6 +150,32 @@ TEST(PlotScript, XyDrawsPointsAgainstAnyColumn) {
   EXPECT_THAT(script, HasSubstr("with points pointtype 7 pointsize 0.5 linecolor 1 title 'i'"));
 }
 
+TEST(PlotScript, BranchesAreSeparateLines) {
+  // Rows k-major as mcg-design rlocus writes them; each branch must be drawn on its own.
+  const char* csv = "k,branch,re,im\n0,1,-2,0\n0,2,0,0\n1,1,-1,0\n1,2,-1,0\n2,1,-1,-1\n2,2,-1,1\n";
+  Spec spec;
+  spec.x = "re";
+  spec.y = {"im"};
+  EXPECT_THAT(build_script(spec, {input(csv)}), HasSubstr("$data1 << EOD\n-2 0\n-1 0\n-1 -1\n\n0 0\n-1 0\n-1 1\nEOD\n"));
+}
+
+TEST(PlotScript, RootLocusWithPolesAsymptotesAndBoundary) {
+  const char* csv =
+      "# asymptote_centre: -1\n# asymptote_angles_deg: 90 270\n# boundary: imaginary axis\n"
+      "k,branch,re,im\n0,1,-2,0\n0,2,0,0\n1,1,-1,0\n1,2,-1,0\n2,1,-1,-1\n2,2,-1,1\n";
+  Spec spec;
+  spec.mode = Mode::rlocus;
+  const auto script = build_script(spec, {input(csv)});
+  EXPECT_THAT(script, HasSubstr("$data1 << EOD\n-2 0\n-1 0\n-1 -1\n\n0 0\n-1 0\n-1 1\nEOD\n"));
+  EXPECT_THAT(script, HasSubstr("$poles << EOD\n-2 0\n0 0\nEOD\n"));
+  // Rays from -1 as long as the locus reaches from there (1): to (-1, 1) and (-1, -1), up to rounding.
+  EXPECT_THAT(script, HasSubstr("$asymptotes << EOD\n-1 0\n-0.9999999999999999 1\n\n-1 0\n-1.0000000000000002 -1\n\nEOD\n"));
+  EXPECT_THAT(script, HasSubstr("set yzeroaxis"));
+  EXPECT_THAT(script, HasSubstr("set size ratio -1\n"));
+  const auto z = build_script(spec, {input("# boundary: unit circle\nk,branch,re,im\n0,1,0.5,0\n1,1,0.2,0\n")});
+  EXPECT_THAT(z, HasSubstr("set object 1 circle at 0,0 size 1"));
+}
+
 TEST(PlotScript, HostileNamesAndTitlesStayInsideStringLiterals) {
   Spec spec;
   spec.output = {Output::Kind::png, "o'x.png", "", 100, 100};

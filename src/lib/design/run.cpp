@@ -563,6 +563,23 @@ void write_rlocus(const Options& o, const std::vector<Tf>& factors, std::ostream
   w.meta("loop", linsys::tf_text(loop));
   if (!note.empty()) w.meta("note", note);
   for (const auto& g : ranges) w.meta("k_stable", fmt::format("{} .. {}", format_number(g.k_low), format_number(g.k_high)));
+  w.meta("boundary", loop.discrete() ? "unit circle" : "imaginary axis");
+  // n − m branches leave for infinity along rays from the centroid (Σp − Σz)/(n − m) at
+  // (2q + 1)·180/(n − m) degrees.
+  const std::vector<Complex> poles = linsys::roots(linsys::trim(loop.den));
+  const std::vector<Complex> zeros = linsys::roots(linsys::trim(loop.num));
+  if (poles.size() > zeros.size()) {
+    const double excess = static_cast<double>(poles.size() - zeros.size());
+    double centre = 0.0;
+    for (const Complex& p : poles) centre += p.real();
+    for (const Complex& z : zeros) centre -= z.real();
+    std::string angles;
+    for (std::size_t q = 0; q < poles.size() - zeros.size(); ++q) {
+      angles += (angles.empty() ? "" : " ") + format_number((2.0 * static_cast<double>(q) + 1.0) * 180.0 / excess);
+    }
+    w.meta("asymptote_centre", format_number(centre / excess));
+    w.meta("asymptote_angles_deg", angles);
+  }
   w.header({"k", "branch", "re", "im"});
   std::vector<Complex> prev;
   for (double k : ks) {

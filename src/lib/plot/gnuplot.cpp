@@ -175,7 +175,7 @@ std::string gnuplot_program() {
 
 void run(const Options& o) {
   Spec spec;
-  spec.mode = o.bode ? Mode::bode : (o.xy ? Mode::xy : Mode::series);
+  spec.mode = o.bode ? Mode::bode : (o.xy ? Mode::xy : (o.rlocus ? Mode::rlocus : Mode::series));
   spec.x = o.x;
   spec.y = o.y;
   spec.y2 = o.y2;
@@ -200,7 +200,7 @@ void run(const Options& o) {
     spec.output.kind = Output::Kind::window;
     spec.output.window_term = window_terminal(program);
   }
-  const bool tall = spec.mode == Mode::bode;
+  const bool tall = spec.mode == Mode::bode || spec.mode == Mode::rlocus;
   if (text) {
     spec.output.width = o.size ? (*o.size)[0] : 100;
     spec.output.height = o.size ? (*o.size)[1] : (tall ? 44 : 30);

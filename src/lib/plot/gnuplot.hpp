@@ -16,6 +16,7 @@ struct Options {
   std::vector<std::string> y2;
   bool bode = false;
   bool xy = false;
+  bool rlocus = false;  ///< --rlocus: a root locus of mcg-design rlocus
   bool steps = false;
   bool logx = false;
   bool logy = false;

@@ -70,6 +70,11 @@ Selection select(const Spec& spec, const table::Table& first) {
     s.y = {"mag_db", "phase_deg"};
     return s;
   }
+  if (spec.mode == Mode::rlocus) {
+    s.x = "re";
+    s.y = {"im"};
+    return s;
+  }
   s.x = spec.x;
   s.y2 = spec.y2;
   s.y = spec.y;
@@ -91,8 +96,19 @@ void append_block(std::string& out, std::size_t index, const table::Table& tbl, 
       fail("{}: column '{}' has no finite value to plot", tbl.source, c == 0 ? s.x : joined_names(s.y, s.y2)[c - 1]);
     }
   }
+  // Rows grouped by branch (in their order within it), a blank line where a branch ends.
+  std::vector<std::size_t> order(tbl.rows());
+  for (std::size_t r = 0; r < order.size(); ++r) order[r] = r;
+  const std::vector<double>* branch = nullptr;
+  const auto names = joined_names(s.y, s.y2);
+  if (tbl.has("branch") && s.x != "branch" && std::find(names.begin(), names.end(), "branch") == names.end()) {
+    branch = &tbl.col("branch");
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return (*branch)[a] < (*branch)[b]; });
+  }
   out += fmt::format("$data{} << EOD\n", index);
-  for (std::size_t r = 0; r < tbl.rows(); ++r) {
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const std::size_t r = order[i];
+    if (branch != nullptr && i > 0 && (*branch)[r] != (*branch)[order[i - 1]]) out += '\n';
     for (std::size_t c = 0; c < columns.size(); ++c) {
       if (c > 0) out += ' ';
       append_number(out, (*columns[c])[r]);
@@ -100,6 +116,76 @@ void append_block(std::string& out, std::size_t index, const table::Table& tbl, 
     out += '\n';
   }
   out += "EOD\n";
+}
+
+/// Numbers of a metadata value ("60 180 300"); empty when absent or not numbers.
+std::vector<double> meta_numbers(const table::Table& tbl, std::string_view key) {
+  std::vector<double> out;
+  const auto text = tbl.meta.get(key);
+  if (!text) return out;
+  const char* p = text->data();
+  const char* end = p + text->size();
+  while (p < end) {
+    while (p < end && (*p == ' ' || *p == ',')) ++p;
+    if (p >= end) break;
+    double v = 0.0;
+    const auto [next, ec] = std::from_chars(p, end, v);
+    if (ec != std::errc() || next == p) return {};
+    out.push_back(v);
+    p = next;
+  }
+  return out;
+}
+
+/// The extras of a root locus: open-loop poles (rows with k = 0) as crosses, the asymptotes
+/// (rays from `asymptote_centre` at `asymptote_angles_deg`, as long as the locus is wide) and
+/// the stability boundary (`boundary`: unit circle or imaginary axis).
+std::string rlocus_extras(const table::Table& tbl, std::string& plot) {
+  std::string out;
+  const auto& re = tbl.col("re");
+  const auto& im = tbl.col("im");
+  double reach = 0.0;
+  if (tbl.has("k")) {
+    const auto& k = tbl.col("k");
+    out += "$poles << EOD\n";
+    for (std::size_t r = 0; r < tbl.rows(); ++r) {
+      if (k[r] != 0.0) continue;
+      append_number(out, re[r]);
+      out += ' ';
+      append_number(out, im[r]);
+      out += '\n';
+    }
+    out += "EOD\n";
+    plot += ", \\\n     $poles using 1:2 with points pointtype 2 pointsize 2 linecolor rgb 'black' title 'open-loop poles'";
+  }
+  const std::vector<double> centre = meta_numbers(tbl, "asymptote_centre");
+  const std::vector<double> angles = meta_numbers(tbl, "asymptote_angles_deg");
+  if (centre.size() == 1 && !angles.empty()) {
+    for (std::size_t r = 0; r < tbl.rows(); ++r) {
+      if (std::isfinite(re[r]) && std::isfinite(im[r])) reach = std::max(reach, std::hypot(re[r] - centre[0], im[r]));
+    }
+    if (reach == 0.0) reach = 1.0;
+    out += "$asymptotes << EOD\n";
+    for (double a : angles) {
+      const double rad = a * std::acos(-1.0) / 180.0;
+      append_number(out, centre[0]);
+      out += " 0\n";
+      append_number(out, centre[0] + reach * std::cos(rad));
+      out += ' ';
+      append_number(out, reach * std::sin(rad));
+      out += "\n\n";
+    }
+    out += "EOD\n";
+    plot += ", \\\n     $asymptotes using 1:2 with lines dashtype 3 linecolor rgb 'gray40' title 'asymptotes'";
+  }
+  const auto boundary = tbl.meta.get("boundary");
+  if (boundary && *boundary == "unit circle") {
+    out += "set object 1 circle at 0,0 size 1 fillstyle empty border linecolor rgb 'gray40' dashtype 2 back\n";
+    out += "set xrange [*<-1.1:1.1<*]\nset yrange [*<-1.1:1.1<*]\n";
+  } else if (boundary && *boundary == "imaginary axis") {
+    out += "set yzeroaxis linetype -1 linecolor rgb 'gray40' dashtype 2\n";
+  }
+  return out;
 }
 
 std::string join_labels(const std::vector<std::string>& names) {
@@ -224,6 +310,18 @@ std::string build_script(const Spec& spec, const std::vector<Input>& inputs) {
       out += plot + "\n";
     }
     out += "unset multiplot\n";
+  } else if (spec.mode == Mode::rlocus) {
+    if (title) out += fmt::format("set title {}\n", quote(*title));
+    out += "set autoscale noextend\nset size ratio -1\nset key outside right top box opaque\n";
+    out += fmt::format("set xlabel {}\nset ylabel {}\n", quote("real part"), quote("imaginary part"));
+    std::string plot = "plot ";
+    for (std::size_t i = 0; i < inputs.size(); ++i) {
+      if (i > 0) plot += ", \\\n     ";
+      plot += fmt::format("$data{} using 1:2 with lines linecolor {}{} title {}", i + 1, i + 1, dashes(i + 1),
+                          inputs.size() == 1 ? quote("branches") : quote(inputs[i].label));
+    }
+    out += rlocus_extras(inputs.front().table, plot);
+    out += plot + "\n";
   } else {
     if (title) out += fmt::format("set title {}\n", quote(*title));
     out += fmt::format("set xlabel {}\n", quote(label_for(s.x)));

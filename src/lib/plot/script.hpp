@@ -22,7 +22,9 @@ std::string quote(std::string_view text);
 /// Unknown columns are labelled by name alone.
 std::string label_for(std::string_view column);
 
-enum class Mode { series, bode, xy };
+/// rlocus: im against re of mcg-design rlocus, equal axes, each branch its own line, the
+/// open-loop poles (k = 0) marked, the asymptotes and the stability boundary from its metadata.
+enum class Mode { series, bode, xy, rlocus };
 
 /// Where the plot goes.
 struct Output {
@@ -62,7 +64,9 @@ struct Input {
 std::optional<std::string> title_of(const Spec& spec, const std::vector<Input>& inputs);
 
 /// The complete gnuplot script: terminal and output (when spec.output says so), one inline
-/// data block per input ($data1, $data2, ...) holding only the columns drawn, labels and
+/// data block per input ($data1, $data2, ...) holding only the columns drawn (a table with a
+/// `branch` column, as a root locus, is written branch by branch with a blank line between, so
+/// each branch is its own line), labels and
 /// the plot commands. Inputs after the first are drawn dashed in the same colours.
 /// Throws mcg::Error for a missing column (naming the table) or an empty selection.
 std::string build_script(const Spec& spec, const std::vector<Input>& inputs);
