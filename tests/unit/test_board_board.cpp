@@ -195,7 +195,7 @@ TEST(BoardBoard, StreamCarriesTheEncoderSpeedWithoutLoss) {
     ASSERT_TRUE(assembler.push(f->payload, 0.064));
     last_rpm = assembler.rows().back().rpm;
     EXPECT_DOUBLE_EQ(assembler.rows().back().duty, 0.4);
-    EXPECT_EQ(assembler.rows().back().clutch, 2);
+    EXPECT_EQ(assembler.rows().back().clutch, 2.0);
   }
   EXPECT_EQ(assembler.lost_samples(), 0u);
   const double true_rpm = rig.board.plant_state().omega_rad_s * 60.0 / (2.0 * std::numbers::pi);

@@ -72,8 +72,8 @@ TEST(LinkStreamBlock, RowsFollowTheDataContract) {
   EXPECT_TRUE(std::isnan(rows[0].counts));
   EXPECT_DOUBLE_EQ(rows[1].counts, 30.0);
   EXPECT_DOUBLE_EQ(rows[0].duty, 0.355);
-  EXPECT_EQ(rows[0].clutch, 2);
-  EXPECT_FALSE(rows[0].load_closed);
+  EXPECT_EQ(rows[0].clutch, 2.0);
+  EXPECT_EQ(rows[0].load, 0.0);
   EXPECT_TRUE(std::isnan(rows[3].rpm));  // 3 samples measured: the window is not full yet
   // 4 samples of 30 pulses in 16 ms: 120 * 1875 / 1024 rpm (the protocol's exact factor).
   EXPECT_DOUBLE_EQ(rows[4].rpm, 120.0 * 1875.0 / 1024.0);
@@ -110,10 +110,17 @@ TEST(LinkStreamBlock, SequenceGapsAreLostSamplesAndTimeSkips) {
   EXPECT_EQ(a.lost_samples(), 0u);
   a.push(steady(3, 0, 10), 3 * k_block_s);  // blocks 1 and 2 lost
   EXPECT_EQ(a.lost_samples(), 32u);
-  EXPECT_DOUBLE_EQ(a.rows()[0].t_s, 5 * 0.064);
-  EXPECT_TRUE(std::isnan(a.rows()[0].counts));  // nothing carries across the gap
-  EXPECT_TRUE(std::isnan(a.rows()[3].rpm));
-  EXPECT_FALSE(std::isnan(a.rows()[4].rpm));  // the window holds the block's first 4 samples
+  // A row per lost sample, unmeasured, then the block's own rows.
+  ASSERT_EQ(a.rows().size(), 48u);
+  EXPECT_DOUBLE_EQ(a.rows()[0].t_s, 3 * 0.064);
+  EXPECT_TRUE(std::isnan(a.rows()[0].duty) && std::isnan(a.rows()[0].clutch) && std::isnan(a.rows()[0].rpm_cmd));
+  EXPECT_TRUE(std::isnan(a.rows()[31].load));
+  const StreamRow* rows = a.rows().data() + 32;
+  EXPECT_DOUBLE_EQ(rows[0].t_s, 5 * 0.064);
+  EXPECT_DOUBLE_EQ(rows[0].duty, 0.0);
+  EXPECT_TRUE(std::isnan(rows[0].counts));  // nothing carries across the gap
+  EXPECT_TRUE(std::isnan(rows[3].rpm));
+  EXPECT_FALSE(std::isnan(rows[4].rpm));  // the window holds the block's first 4 samples
 }
 
 TEST(LinkStreamBlock, LongSilenceUnwrapsByArrivalTime) {
@@ -122,7 +129,7 @@ TEST(LinkStreamBlock, LongSilenceUnwrapsByArrivalTime) {
   // 18 s without data: 281 blocks, sequence 10 + 281 = 291 = 35 mod 256.
   a.push(steady(35, 0, 10), 18.0);
   EXPECT_EQ(a.lost_samples(), 280u * 16u);
-  EXPECT_DOUBLE_EQ(a.rows()[0].t_s, 281 * 0.064);
+  EXPECT_DOUBLE_EQ(a.rows()[280u * 16u].t_s, 281 * 0.064);
 }
 
 TEST(LinkStreamBlock, SaturatedSamplesLeaveRpmUnmeasured) {

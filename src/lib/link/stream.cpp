@@ -91,8 +91,8 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
       if (!assembler.push(f->payload, arrival_gap_s)) continue;
       for (const StreamRow& r : assembler.rows()) {
         if (want != 0 && written >= want) break;
-        w.row({r.t_s, r.rpm, r.counts, r.duty, r.duty * rig.supply_V, r.rpm_cmd, static_cast<double>(r.clutch),
-               r.load_closed ? rig.r_load_ohm : model::k_open_circuit});
+        const double r_load = std::isnan(r.load) ? r.load : r.load != 0.0 ? rig.r_load_ohm : model::k_open_circuit;
+        w.row({r.t_s, r.rpm, r.counts, r.duty, r.duty * rig.supply_V, r.rpm_cmd, r.clutch, r_load});
         ++written;
       }
       w.finish();
@@ -115,7 +115,7 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
   if (lost > 0) {
     err << fmt::format(
         "mcg-serial: lost {} of {} samples ({} stream blocks; {} damaged frames, {} bytes of noise)\n", lost,
-        static_cast<std::uint64_t>(written) + lost, lost / MCG_STREAM_SAMPLES, st.bad_crc + st.too_long + st.timeouts,
+        static_cast<std::uint64_t>(written), lost / MCG_STREAM_SAMPLES, st.bad_crc + st.too_long + st.timeouts,
         st.skipped_bytes);
     if (!options.allow_loss) return k_exit_lost_samples;
   }

@@ -52,8 +52,12 @@ bool StreamAssembler::push(std::span<const std::uint8_t> payload, double arrival
     if (step == 0) step = 256;
     m_block_index += step;
   }
+  m_rows.clear();
   if (step > 1) {
-    // Lost blocks: nothing measured carries across the gap.
+    // Lost blocks: a row per lost sample, and nothing measured carries across the gap.
+    for (std::int64_t n = (m_block_index - step + 1) * MCG_STREAM_SAMPLES; n < m_block_index * MCG_STREAM_SAMPLES; ++n) {
+      m_rows.push_back({static_cast<double>(n) * k_sample_s, k_nan, k_nan, k_nan, k_nan, k_nan, k_nan});
+    }
     m_lost_blocks += static_cast<std::uint64_t>(step - 1);
     m_window_counts.clear();
     m_prev_counts = k_nan;
@@ -77,7 +81,6 @@ bool StreamAssembler::push(std::span<const std::uint8_t> payload, double arrival
   const double rpm_cmd_end = get_i16(payload, 1);
   if (first_cmd == MCG_STREAM_SAMPLES) m_rpm_cmd = rpm_cmd_end;  // unchanged all through the block
 
-  m_rows.clear();
   const double rpm_per_pulse = 60.0 / (MCG_COUNTS_PER_REV * k_sample_s * m_window);
   for (std::size_t k = 0; k < MCG_STREAM_SAMPLES; ++k) {
     const StreamSample& s = samples[k];
@@ -98,7 +101,7 @@ bool StreamAssembler::push(std::span<const std::uint8_t> payload, double arrival
     const std::int64_t n = m_block_index * MCG_STREAM_SAMPLES + static_cast<std::int64_t>(k);
     const double counts_row = m_prev_counts;
     m_rows.push_back({static_cast<double>(n) * k_sample_s, rpm, counts_row, s.duty_permille / static_cast<double>(MCG_DUTY_FULL),
-                      rpm_cmd, s.clutch_engaged ? 2 : 1, s.load_closed});
+                      rpm_cmd, s.clutch_engaged ? 2.0 : 1.0, s.load_closed ? 1.0 : 0.0});
     const bool saturated = std::abs(s.counts) >= MCG_STREAM_COUNTS_MAX;
     m_prev_counts = saturated ? k_nan : static_cast<double>(s.counts);
   }

@@ -17,13 +17,14 @@ struct StreamRow {
   double counts;    ///< signed pulses over (t - P, t]; NaN when not received
   double duty;      ///< -1..1, mean PWM duty over [t, t + P)
   double rpm_cmd;   ///< rpm in force over [t, t + P); NaN where a block changed it twice
-  int clutch;       ///< mcg-csv clutch state: 1 attached and disengaged, 2 engaged
-  bool load_closed; ///< the load relay closed
+  double clutch;    ///< mcg-csv clutch state: 1 attached and disengaged, 2 engaged
+  double load;      ///< 1 the load relay closed, 0 open
 };
 
 /// Turns stream blocks into rows. Each block carries a sequence number (mod 256) and 16
 /// samples of 4 ms. A block whose sequence number skips k numbers follows k lost blocks (16 k
-/// lost samples); t keeps counting through the gap so the time axis stays true. The wrap is
+/// lost samples): rows() then starts with a row per lost sample, t filled in and every other
+/// field NaN, so the time axis stays true and a tool driven by the capture stops at the gap. The wrap is
 /// resolved with the arrival time: a gap of g seconds since the previous block means about
 /// g / 0.064 blocks, so 20 s without data does not read as a small gap.
 class StreamAssembler {
