@@ -4,7 +4,8 @@
 # (encoder counts over 5 ms at 2048 counts/rev, current noise sigma 3 mA through the 10-bit
 # ADC, seeded); the diagnosis sees only the data and the nominal model. Training and
 # validation use different excitations. Each case asserts the named effect(s) and, for an
-# effect, that the validation gap above the noise floor shrinks by at least 60 %.
+# effect, that the validation gap above the noise floor shrinks by at least 60 %. The effect
+# parameters are not the example cases' (test_gap_range.sh covers each effect's range).
 # Args: TOOL_DIR SOURCE_DIR. Runs the built (Release) tools; a few seconds per case.
 set -euo pipefail
 tools=$1
@@ -67,17 +68,17 @@ run_case() {
 }
 
 run_case none none "" "steps_load 2" "prbs_at 7 2 0 5"
-run_case dead_time dead_time "dead_time:tau_d_s=0.003" "prbs_at 8 2.5 0 1" "steps_load 2"
-run_case supply_sag supply_sag "supply_sag:R_s_ohm=1.5" "steps_load 2" "prbs_at 9 3 2 2"
-run_case brush_drop brush_drop "brush_drop:V_b_V=0.7" "stairs_low 6 1" "chirp_at 7 2 2"
-run_case stribeck stribeck "stribeck:v_s_rad_s=8,shape_exp=1.5" "stairs_low 4 0" "prbs_at 3 1.5 2 3"
-run_case cogging cogging "cogging:T_c_Nm=0.0015,N_per_rev=14,phase_rad=0.7" "stairs_low 2.5 0" "prbs_at 2.2 0.8 0 4"
-run_case clutch_compliance clutch_compliance "clutch_compliance:k_Nm_per_rad=0.1,zeta=0.08" "chirp_at 7 2.5 2" "engage"
-run_case hbridge hbridge "hbridge:R_on_ohm=0.4,deadband=0.04" "steps_load 2" "prbs_at 6 2 0 7"
-run_case clutch_engage_lag clutch_engage_lag "clutch_engage_lag:T_max_Nm=0.04,tau_s=0.03" "engage" \
+run_case dead_time dead_time "dead_time:tau_d_s=0.0025" "prbs_at 8 2.5 0 1" "steps_load 2"
+run_case supply_sag supply_sag "supply_sag:R_s_ohm=2.3" "steps_load 2" "prbs_at 9 3 2 2"
+run_case brush_drop brush_drop "brush_drop:V_b_V=1.1" "stairs_low 6 1" "chirp_at 7 2 2"
+run_case stribeck stribeck "stribeck:v_s_rad_s=12,shape_exp=2" "stairs_low 4 0" "prbs_at 3 1.5 2 3"
+run_case cogging cogging "cogging:T_c_Nm=0.0019,N_per_rev=11,phase_rad=-1.2" "stairs_low 2.5 0" "prbs_at 2.2 0.8 0 4"
+run_case clutch_compliance clutch_compliance "clutch_compliance:k_Nm_per_rad=0.25,zeta=0.15" "chirp_at 7 2.5 2" "engage"
+run_case hbridge hbridge "hbridge:R_on_ohm=0.6,deadband=0.05" "steps_load 2" "prbs_at 6 2 0 7"
+run_case clutch_engage_lag clutch_engage_lag "clutch_engage_lag:T_max_Nm=0.08,tau_s=0.05" "engage" \
   "mcg-sweep step --level 9 --at 0.1 --then 6@1.4 --duration 3 --clutch-schedule 0@0,2@0.8,1@1.8,2@2.3"
-run_case thermal thermal "thermal:R_th_K_W=8,tau_th_s=4" "steps_load 2" "prbs_loaded 10 3 8"
-run_case two_effects "dead_time+brush_drop" "dead_time:tau_d_s=0.003 brush_drop:V_b_V=0.7" "prbs_at 8 2.5 2 6" \
+run_case thermal thermal "thermal:R_th_K_W=6,tau_th_s=3" "steps_load 2" "prbs_loaded 10 3 8"
+run_case two_effects "dead_time+brush_drop" "dead_time:tau_d_s=0.0035 brush_drop:V_b_V=0.8" "prbs_at 8 2.5 2 6" \
   "steps_load 0"
 
 if ((failures > 0)); then

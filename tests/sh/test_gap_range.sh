@@ -68,7 +68,12 @@ draw() {
 #   thermal-mid/high  R_th 13.5/18.5 K/W, tau 6.8/9.2 s: thermal named, 45-47 % shrink; on a
 #                  3 s training run only the heat capacity tau/R_th shows (t << tau), R_th
 #                  runs to its bound 200 K/W
-declare -A known=([cogging-low]=1 [cogging-high]=1 [thermal-mid]=1 [thermal-high]=1)
+#   dead_time-4.2ms   4.2 ms, trained on clutch 0 only, validated engaged and loaded: none
+#                  (the param_mismatch refit on clutch-0 data makes the engaged validation
+#                  worse, 110 against 27.7 rpm, and every effect is fitted on top of it)
+#   pair-2.5ms-1.1V   dead_time 2.5 ms + brush_drop 1.1 V: brush_drop alone is named
+declare -A known=([cogging-low]=1 [cogging-high]=1 [thermal-mid]=1 [thermal-high]=1 [dead_time-4.2ms]=1
+  [pair-2.5ms-1.1V]=1)
 xfail() {
   if [[ -n "${known[$1]:-}" ]]; then
     echo "xfail $2"
@@ -100,12 +105,12 @@ check() {
   fi
 }
 
-# case NAME EXPECTED EFFECTS TRAIN VALIDATE [NOISE]
+# case NAME EXPECTED EFFECTS TRAIN VALIDATE [NOISE [TRAIN_SEED VALIDATE_SEED]]
 run_case() {
   local name=$1 expected=$2 effects=$3 noise=${6:-0.003}
   if [[ -z "${GAP_RANGE_ONLY:-}" || "$name" =~ $GAP_RANGE_ONLY ]]; then
-    eval "$4" | measure "$effects" $((100 + seed)) "$noise" >"$work/$name-train.csv"
-    eval "$5" | measure "$effects" $((200 + seed)) "$noise" >"$work/$name-validate.csv"
+    eval "$4" | measure "$effects" "${7:-$((100 + seed))}" "$noise" >"$work/$name-train.csv"
+    eval "$5" | measure "$effects" "${8:-$((200 + seed))}" "$noise" >"$work/$name-validate.csv"
     check "$name" "$expected" "$effects"
   fi
   seed=$((seed + 1))
@@ -132,6 +137,10 @@ done
 # Nominal parameters off (inertia +30 %, Kt and Ke -10 %, Coulomb x2): a refit explains it.
 run_case param_mismatch param_mismatch "param_mismatch:J_scale=1.3,Kt_scale=0.9,coulomb_scale=2" \
   "steps_load 2" "prbs_at 7 2 0 $seed"
+# Two fixed points found wanting (see the known list above), kept as they were found.
+run_case dead_time-4.2ms dead_time "dead_time:tau_d_s=0.0042" "prbs_at 8 2.5 0 1" "steps_load 2" 0.003 11 12
+run_case pair-2.5ms-1.1V "dead_time+brush_drop" "dead_time:tau_d_s=0.0025 brush_drop:V_b_V=1.1" \
+  "prbs_at 8 2.5 2 6" "steps_load 0" 0.003 11 12
 # Nothing missing, twice the rig's current noise: none.
 run_case none-noisy none "" "steps_load 2" "prbs_at 7 2 0 $seed" 0.006
 

@@ -53,11 +53,11 @@ TEST(ModelEffects, CatalogHasTheFixedNamesInOrder) {
 }
 
 TEST(ModelEffects, ParseFillsDefaultsAndRoundTrips) {
-  const Effect e = parse_effect("cogging:T_c_Nm=0.0015, phase_rad=0.7");
-  EXPECT_EQ(e.get("T_c_Nm"), 0.0015);
+  const Effect e = parse_effect("cogging:T_c_Nm=0.0021, phase_rad=-1.2");
+  EXPECT_EQ(e.get("T_c_Nm"), 0.0021);
   EXPECT_EQ(e.get("N_per_rev"), 14.0);
-  EXPECT_EQ(e.get("phase_rad"), 0.7);
-  EXPECT_EQ(format_effect(e), "cogging:T_c_Nm=0.0015,N_per_rev=14,phase_rad=0.7");
+  EXPECT_EQ(e.get("phase_rad"), -1.2);
+  EXPECT_EQ(format_effect(e), "cogging:T_c_Nm=0.0021,N_per_rev=14,phase_rad=-1.2");
   const Effect back = parse_effect(format_effect(e));
   EXPECT_EQ(back.params, e.params);
   EXPECT_EQ(parse_effect("dead_time").get("tau_d_s"), 0.002);
@@ -82,24 +82,24 @@ TEST(ModelEffects, StribeckLowersKineticFrictionAtLowSpeed) {
   // Steady state: Kt i = Tc + (Ts - Tc) exp(-(w/v_s)^d) + P(w).
   const Params p = builtin_rig();
   const Friction& f = p.motor.friction;
-  const auto [w, i] = steady(with("stribeck:v_s_rad_s=8,shape_exp=1.5"), 0.6);
-  EXPECT_NEAR(p.motor.Kt_Nm_A * i, f.kinetic_Nm(w) + (f.Ts_Nm - f.Tc_Nm) * std::exp(-std::pow(w / 8.0, 1.5)), 1e-9);
+  const auto [w, i] = steady(with("stribeck:v_s_rad_s=12,shape_exp=2.2"), 0.6);
+  EXPECT_NEAR(p.motor.Kt_Nm_A * i, f.kinetic_Nm(w) + (f.Ts_Nm - f.Tc_Nm) * std::exp(-std::pow(w / 12.0, 2.2)), 1e-9);
   EXPECT_LT(w, steady(Model{}, 0.6).first);
 }
 
 TEST(ModelEffects, BrushDropOpposesTheCurrent) {
   // v = R i + Ke w + V_b tanh(i / 0.01 A) at steady state.
   const Params p = builtin_rig();
-  const auto [w, i] = steady(with("brush_drop:V_b_V=0.7"), 6.0);
-  EXPECT_NEAR(p.motor.R_ohm * i + p.motor.Ke_V_s_rad * w + 0.7 * std::tanh(i / 0.01), 6.0, 1e-6);
+  const auto [w, i] = steady(with("brush_drop:V_b_V=1.1"), 6.0);
+  EXPECT_NEAR(p.motor.R_ohm * i + p.motor.Ke_V_s_rad * w + 1.1 * std::tanh(i / 0.01), 6.0, 1e-6);
   EXPECT_NEAR(p.motor.Kt_Nm_A * i, p.motor.friction.kinetic_Nm(w), 1e-9);
 }
 
 TEST(ModelEffects, SupplySagDropsWithDutyAndCurrent) {
   // v_m = v - |v/20| R_s i.
   const Params p = builtin_rig();
-  const auto [w, i] = steady(with("supply_sag:R_s_ohm=1.5"), 10.0);
-  EXPECT_NEAR(p.motor.R_ohm * i + p.motor.Ke_V_s_rad * w, 10.0 - 0.5 * 1.5 * i, 1e-6);
+  const auto [w, i] = steady(with("supply_sag:R_s_ohm=2.6"), 10.0);
+  EXPECT_NEAR(p.motor.R_ohm * i + p.motor.Ke_V_s_rad * w, 10.0 - 0.5 * 2.6 * i, 1e-6);
 }
 
 TEST(ModelEffects, HbridgeDeadbandAndOnResistance) {
@@ -150,8 +150,8 @@ TEST(ModelEffects, CoggingShiftsTheBreakawayWithPosition) {
   // At theta = 0 the cogging torque is T_c sin(phase): with phase = pi/2 it adds T_c to the
   // drive, so breakaway needs Kt i > Ts - T_c, i.e. v > (Ts - T_c) R / Kt.
   const Params p = builtin_rig();
-  const double v_break = (p.motor.friction.Ts_Nm - 1.5e-3) * p.motor.R_ohm / p.motor.Kt_Nm_A;
-  const Model m = with("cogging:T_c_Nm=0.0015,N_per_rev=14,phase_rad=1.5707963267948966");
+  const double v_break = (p.motor.friction.Ts_Nm - 2.2e-3) * p.motor.R_ohm / p.motor.Kt_Nm_A;
+  const Model m = with("cogging:T_c_Nm=0.0022,N_per_rev=9,phase_rad=1.5707963267948966");
   EXPECT_EQ(simulate(m, constant(v_break * 0.99, 0.2, 1e-3, 0), {}).theta_rad.back(), 0.0);
   EXPECT_GT(simulate(m, constant(v_break * 1.01, 0.2, 1e-3, 0), {}).theta_rad.back(), 0.01);
   // At speed the ripple averages out: the mean speed is close to the nominal one.
@@ -213,8 +213,8 @@ TEST(ModelEffects, ClutchEngageLagSlipsThenLocks) {
 }
 
 TEST(ModelEffects, ModelIniCarriesEffects) {
-  Model m = with("supply_sag:R_s_ohm=1.5");
-  EXPECT_EQ(get_parameter(m, "supply_sag.R_s_ohm"), 1.5);
+  Model m = with("supply_sag:R_s_ohm=2.6");
+  EXPECT_EQ(get_parameter(m, "supply_sag.R_s_ohm"), 2.6);
   const auto list = parameters(m);
   EXPECT_EQ(list.back().name, "supply_sag.R_s_ohm");
   EXPECT_EQ(list.back().unit, "ohm");
