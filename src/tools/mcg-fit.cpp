@@ -117,7 +117,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (tfc->parsed()) {
-      mcg::fit::run_tf(tf, std::cout);
+      mcg::fit::run_tf(tf, std::cout, std::cerr);
       return 0;
     }
     return mcg::fit::run_model(model, std::cout, std::cerr);

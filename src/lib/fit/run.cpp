@@ -187,9 +187,59 @@ void run_friction(const FrictionRunOptions& options, std::ostream& out) {
   ini.write(out);
 }
 
-void run_tf(const TfRunOptions& options, std::ostream& out) {
+namespace {
+
+/// Phase RMS (degrees) above which a fit without a delay is checked against the alternatives.
+constexpr double k_tf_phase_warn_deg = 5.0;
+
+/// The mcg-fit tf command line of `o` on `file`.
+std::string tf_command(const TfFitOptions& o, const std::string& file) {
+  std::string cmd = fmt::format("mcg-fit tf --poles {}", o.poles);
+  if (o.zeros > 0) cmd += fmt::format(" --zeros {}", o.zeros);
+  if (o.f_min_hz > 0.0) cmd += fmt::format(" --f-min {}", config::format_number(o.f_min_hz));
+  if (o.f_max_hz < 1e300) cmd += fmt::format(" --f-max {}", config::format_number(o.f_max_hz));
+  if (!o.use_coherence) cmd += " --no-coherence";
+  if (o.fit_delay) cmd += " --delay";
+  return cmd + (file == "-" ? "" : " " + file);
+}
+
+void check_phase_residual(const FrequencyResponse& fr, const TfRunOptions& options, const TfFit& fit, std::ostream& err) {
+  if (options.fit.fit_delay || !(fit.rms_phase_deg > k_tf_phase_warn_deg)) return;
+  std::vector<TfFitOptions> alternatives;
+  TfFitOptions delayed = options.fit;
+  delayed.fit_delay = true;
+  alternatives.push_back(delayed);
+  if (options.fit.poles < 12) {
+    TfFitOptions more = options.fit;
+    ++more.poles;
+    alternatives.push_back(more);
+  }
+  double best_rms = fit.rms_phase_deg;
+  std::string best;
+  for (const TfFitOptions& alt : alternatives) {
+    try {
+      const TfFit f = fit_tf(fr, alt);
+      if (f.rms_phase_deg < 0.5 * best_rms) {
+        best_rms = f.rms_phase_deg;
+        best = tf_command(alt, options.file);
+      }
+    } catch (const Error&) {
+      // An alternative that cannot be fitted (too few points for more poles) is no advice.
+    }
+  }
+  if (best.empty()) return;
+  err << fmt::format(
+      "mcg-fit: warning: the fit leaves {:.3g} degrees RMS of phase (sampled data lag: a zero-order hold alone "
+      "by half a sample period); `{}` leaves {:.3g}\n",
+      fit.rms_phase_deg, best, best_rms);
+}
+
+}  // namespace
+
+void run_tf(const TfRunOptions& options, std::ostream& out, std::ostream& err) {
   const FrequencyResponse fr = read_frequency_response(table::read_path(options.file));
   const TfFit fit = fit_tf(fr, options.fit);
+  check_phase_residual(fr, options, fit, err);
   config::Ini ini;
   ini.set("plant", "tf", format_factored(fit), "omega/v, rad/s per V");
   std::string num;

@@ -36,7 +36,11 @@ struct TfRunOptions {
 
 /// Writes [plant] (tf in the syntax mcg-design reads, num/den in descending powers of s,
 /// domain = s, delay_s when a delay was fitted) and [fit.tf] (gain, corners and dampings with standard errors, RMS errors).
-void run_tf(const TfRunOptions& options, std::ostream& out);
+/// Without --delay, a fit that leaves more than k_tf_phase_warn_deg of phase RMS is refitted
+/// with a delay and with one more pole; if either halves the phase residual, `err` gets a
+/// warning naming the command that fits better (sampled data lag: a zero-order hold alone by
+/// half a sample period, a speed from counts over one period by another half).
+void run_tf(const TfRunOptions& options, std::ostream& out, std::ostream& err);
 
 /// Options of `mcg-fit model`.
 struct ModelRunOptions {
