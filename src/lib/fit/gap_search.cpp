@@ -36,9 +36,23 @@ struct EffectPlan {
   std::vector<std::vector<double>> grid;          ///< per free key, starting values tried
 };
 
+/// The grids span what the physics allows on a small DC machine sampled at 1 kHz, roughly
+/// evenly in log space, each value a start only (the fit moves it):
+///   stribeck    v_s from slow creep (2 rad/s) to a tenth of the no-load speed; shape 1
+///               (Tustin's exponential) and 2 (the Gaussian form), the classical two
+///   dead_time   half a sample to 16 samples (a slow PWM or filter chain)
+///   supply_sag  a bench supply's leads (0.3 ohm) to a small battery's 3 ohm
+///   hbridge     MOSFET to bipolar on-resistance; deadbands of 0.5-6 % of the PWM period
+///   brush_drop  metal-graphite (0.2 V) to carbon brushes (2 V for the pair)
+///   clutch_compliance  two-rotor modes from 4 to 60 Hz with the rig's rotors; zeta from a
+///               bare steel spring (0.03) to an elastomer (0.3)
+///   clutch_engage_lag  capacities from below the friction to ten times it; a relay's 5 ms
+///               to a slow solenoid's 100 ms
+///   cogging     amplitudes from a quarter to the whole Coulomb level; eight phases
+///   thermal     a small can motor's R_th of 5-60 K/W; winding time constants 5-60 s
 const std::vector<EffectPlan>& effect_plans() {
   static const std::vector<EffectPlan> plans = {
-      {"stribeck", {"v_s_rad_s", "shape_exp"}, {{2.0, 5.0, 12.0, 30.0, 80.0}, {1.5}}},
+      {"stribeck", {"v_s_rad_s", "shape_exp"}, {{2.0, 5.0, 12.0, 30.0, 80.0}, {1.0, 2.0}}},
       {"dead_time", {"tau_d_s"}, {{0.0005, 0.001, 0.002, 0.004, 0.008, 0.016}}},
       {"supply_sag", {"R_s_ohm"}, {{0.3, 1.0, 3.0}}},
       {"hbridge", {"R_on_ohm", "deadband"}, {{0.1, 0.5}, {0.005, 0.02, 0.06}}},

@@ -11,6 +11,19 @@
 
 namespace mcg::model {
 
+// Defaults are typical values for a small brushed DC motor, not any example's:
+//   stribeck        v_s 10 rad/s (about 3 % of the rig's no-load speed), shape 1.5 between
+//                   Tustin's exponential (1) and the Gaussian form (2)
+//   dead_time       2 ms: two samples of a 1 kHz loop
+//   supply_sag      1 ohm: a bench supply's leads and sense resistor
+//   hbridge         0.2 ohm per switch, 2 % of the PWM period lost to dead time
+//   brush_drop      0.5 V for the pair of metal-graphite brushes
+//   clutch_compliance k 0.1 N m/rad: the two rotors' mode at 27 Hz, between the 16 ms
+//                   mechanical pole and the 1 kHz sampling; zeta 0.1, a lightly damped coupling
+//   clutch_engage_lag 0.05 N m: ten times the rig's friction; 20 ms build-up
+//   cogging         1 mN m, 14 per revolution: the least common multiple of 7 slots and 2
+//                   poles, the usual small-motor armature
+//   thermal         10 K/W and 30 s: a small can motor's winding
 const std::vector<EffectSpec>& effect_catalog() {
   static const std::vector<EffectSpec> catalog = {
       {"stribeck",
