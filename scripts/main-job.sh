@@ -30,12 +30,12 @@ mcg-sweep step --column rpm_cmd --level 420 --at 0.05 --then 520@1 --duration 2 
   | mcg-sim --config pi.ini > verify.csv
 mcg-plot-gnuplot -y rpm,rpm_cmd --title "PI on the nonlinear model" -o verify.png < verify.csv
 
-# 5. The sim-to-real gap: "measured" runs from a rig whose supply sags (1.5 ohm source), the
+# 5. The sim-to-real gap: "measured" runs from a rig whose supply sags (a 2.4 ohm source), the
 #    diagnosis told nothing about it.
 mcg-sweep prbs --bias 6 --amp 3 --clock 0.05 --duration 8 --clutch 2 --seed 3 \
-  | mcg-sim --encoder --adc --noise-i 0.003 --seed 3 --effect supply_sag:R_s_ohm=1.5 > gap-train.csv
+  | mcg-sim --encoder --adc --noise-i 0.003 --seed 3 --effect supply_sag:R_s_ohm=2.4 > gap-train.csv
 mcg-sweep step --level 4 --at 0.2 --then 9@1.5,14@3,6@4.5 --duration 6 --clutch 2 \
-  | mcg-sim --encoder --adc --noise-i 0.003 --seed 4 --effect supply_sag:R_s_ohm=1.5 > gap-validate.csv
+  | mcg-sim --encoder --adc --noise-i 0.003 --seed 4 --effect supply_sag:R_s_ohm=2.4 > gap-validate.csv
 mcg-fit gap --train gap-train.csv --validate gap-validate.csv > gap.csv 2> gap.txt
 
 # The summary.
