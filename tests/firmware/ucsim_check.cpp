@@ -243,7 +243,7 @@ class Sim {
   std::optional<Frame> request(std::uint8_t cmd, const Bytes& payload = {}) {
     send_bytes(fwtest::encode(cmd, payload));
     const std::uint8_t want = static_cast<std::uint8_t>(cmd | MCG_REPLY_BIT);
-    for (const Frame& f : receive(5000, want)) {
+    for (const Frame& f : receive(20000, want)) {
       if (f.cmd == want) {
         return f;
       }
