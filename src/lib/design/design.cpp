@@ -230,8 +230,18 @@ Design design_lag(const Setup& setup, double pm_deg, double k_dc, double ratio) 
     const double wp = wz / beta;
     return s_tf({k_dc / wz, k_dc}, {1.0 / wp, 1.0});
   };
+  // A continuous lag C = k_dc (1 + s/ω_z)/(1 + s/ω_p), ω_z = ω_c/ratio, ω_p = ω_z/β, has at ω_c
+  // |C| = k_dc·|1 + j·ratio|/|1 + j·ratio·β| and ∠C = atan(ratio) − atan(ratio·β): β and the
+  // phase follow from the plant's response alone, without building the loop for every trial.
+  const bool continuous = !(setup.dt_s > 0.0);
+  const LoopEval plant({setup.plant});
   // β >= 1 with |L(jω_c)| = 1, or nan when K0·|P| < 1 there (no lag needed to cross).
   auto beta_at = [&](double wc) {
+    if (continuous) {
+      const double m = k_dc * std::exp(plant.log_mag(wc)) * std::hypot(1.0, ratio);
+      const double beta = std::sqrt(std::max(0.0, m * m - 1.0)) / ratio;
+      return beta > 1.0 && beta <= 1e12 ? beta : std::nan("");
+    }
     auto lm = [&](double log_beta) { return LoopEval(loop_factors(setup, shape(wc, std::exp(log_beta)))).log_mag(wc); };
     if (lm(0.0) <= 0.0) return std::nan("");
     const double top = std::log(1e12);
@@ -241,11 +251,14 @@ Design design_lag(const Setup& setup, double pm_deg, double k_dc, double ratio) 
   auto err = [&](double wc) {
     const double beta = beta_at(wc);
     if (!std::isfinite(beta)) return std::nan("");
+    if (continuous) {
+      return std::remainder(plant.phase_rad(wc) + std::atan(ratio) - std::atan(ratio * beta) - target, 2.0 * k_pi);
+    }
     return phase_error(LoopEval(loop_factors(setup, shape(wc, beta))), wc, target);
   };
   double lo = 0.0;
   double hi = 0.0;
-  LoopEval({setup.plant}).range(lo, hi);
+  plant.range(lo, hi);
   const int steps = 300;
   double prev_w = lo;
   double prev = err(lo);
