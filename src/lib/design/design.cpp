@@ -391,16 +391,22 @@ Design tune(const Setup& setup, const std::string& structure, const TuneLimits& 
   double lo = 0.0;
   double hi = 0.0;
   plant.range(lo, hi);
+  // A continuous shape (s + ρω_c)/s has at ω_c the magnitude √(1 + ρ²) and the phase
+  // atan2(1, ρ) − π/2 (1 and 0 for P): no loop needs building to know them.
+  const bool continuous = !(setup.dt_s > 0.0);
   auto candidate = [&](double wc, double rho) {
     const Tf shape = rho > 0.0 ? s_tf({1.0, rho * wc}, {1.0, 0.0}) : s_tf({1.0}, {1.0});
-    const double k = std::exp(-LoopEval(loop_factors(setup, shape)).log_mag(wc));
-    return linsys::scaled(shape, k);
+    const double log_mag = continuous ? plant.log_mag(wc) + (rho > 0.0 ? 0.5 * std::log1p(rho * rho) : 0.0)
+                                      : LoopEval(loop_factors(setup, shape)).log_mag(wc);
+    return linsys::scaled(shape, std::exp(-log_mag));
   };
   // The cheap test first: the phase margin at the designed crossover itself.
   auto feasible = [&](double wc, double& rho_out) {
     for (double rho : rhos) {
       const Tf c = candidate(wc, rho);
-      const double pm = deg(std::remainder(LoopEval(loop_factors(setup, c)).phase_rad(wc) + k_pi, 2.0 * k_pi));
+      const double phase = continuous ? plant.phase_rad(wc) + (rho > 0.0 ? std::atan2(1.0, rho) - k_pi / 2.0 : 0.0)
+                                      : LoopEval(loop_factors(setup, c)).phase_rad(wc);
+      const double pm = deg(std::remainder(phase + k_pi, 2.0 * k_pi));
       if (pm < limits.pm_min_deg) continue;
       if (meets(setup, c, limits)) {
         rho_out = rho;
