@@ -1,6 +1,7 @@
 // Unit tests of the INI parameter sets.
 #include "common/error.hpp"
 #include "config/ini.hpp"
+#include "test_support_error.hpp"
 
 #include <gtest/gtest.h>
 
@@ -16,12 +17,7 @@ Ini parse(const std::string& text, const std::string& name = "p.ini") {
 }
 
 std::string error_of(const std::string& text) {
-  try {
-    parse(text);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
+  return test::error_of([&] { parse(text); });
 }
 
 TEST(Ini, SectionsKeysCommentsAndNumbers) {

@@ -3,6 +3,7 @@
 
 #include "common/error.hpp"
 #include "test_fit_support.hpp"
+#include "test_support_error.hpp"
 
 #include <gtest/gtest.h>
 
@@ -148,12 +149,7 @@ TEST(FitFrictionNoStatic, RunThatNeverRests) {
 }
 
 std::string error_of(const std::vector<table::Table>& runs, const FrictionOptions& options = {}) {
-  try {
-    fit_friction(runs, model::builtin_rig(), options);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
+  return test::error_of([&] { fit_friction(runs, model::builtin_rig(), options); });
 }
 
 TEST(FitFrictionErrors, BadDataIsNamed) {

@@ -4,6 +4,7 @@
 #include "common/error.hpp"
 #include "config/ini.hpp"
 #include "test_fit_support.hpp"
+#include "test_support_error.hpp"
 
 #include <gtest/gtest.h>
 
@@ -92,14 +93,7 @@ TEST(FitGreybox, ChangedParametersComeBack) {
   EXPECT_GT(result.runs[0].fit_percent[1], 90.0);
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
-}
+using test::error_of;
 
 TEST(FitGreybox, BudgetSpentSaysNotConverged) {
   FitProblem problem;

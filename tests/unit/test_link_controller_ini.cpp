@@ -6,6 +6,7 @@
 #include "common/error.hpp"
 #include "config/ini.hpp"
 #include "link/connection.hpp"
+#include "test_support_error.hpp"
 
 namespace mcg::link {
 namespace {
@@ -24,12 +25,7 @@ double value_of(const std::vector<std::pair<const RegisterInfo*, double>>& regs,
 }
 
 std::string error_of(const std::string& text) {
-  try {
-    regs_of(text);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
+  return test::error_of([&] { regs_of(text); });
 }
 
 TEST(LinkControllerIni, ReportPiMapsToBoardUnits) {

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "link/pty.hpp"
+#include "test_support_error.hpp"
 
 namespace mcg::link {
 namespace {
@@ -20,14 +21,7 @@ std::string temp_link(const char* name) {
   return ::testing::TempDir() + "mcg_port_" + std::to_string(::getpid()) + "_" + name;
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using test::error_of;
 
 TEST(LinkPort, OpenErrorsSayWhatToDo) {
   EXPECT_EQ(open_error_message("/dev/ttyUSB0", EACCES),

@@ -5,19 +5,12 @@
 
 #include "common/error.hpp"
 #include "mcg_protocol.h"
+#include "test_support_error.hpp"
 
 namespace mcg::link {
 namespace {
 
-template <typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using test::error_of;
 
 TEST(LinkRegisters, EveryProtocolRegisterHasOneEntry) {
   ASSERT_EQ(registers().size(), MCG_REG_COUNT - 1u);

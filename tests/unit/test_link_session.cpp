@@ -11,6 +11,7 @@
 #include "common/error.hpp"
 #include "link/frame.hpp"
 #include "mcg_protocol.h"
+#include "test_support_error.hpp"
 
 namespace mcg::link {
 namespace {
@@ -55,14 +56,7 @@ Bytes version_answer(unsigned protocol) {
   return encode(MCG_CMD_VERSION | MCG_REPLY_BIT, Bytes{MCG_ST_OK, static_cast<std::uint8_t>(protocol), 0, 9, 0, MCG_BOARD_C515});
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using test::error_of;
 
 SessionOptions quick() {
   SessionOptions o;

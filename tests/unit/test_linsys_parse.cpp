@@ -1,6 +1,7 @@
 // The plant text parser: the report's expressions, and errors that point at the character.
 #include "common/error.hpp"
 #include "linsys/parse.hpp"
+#include "test_support_error.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,12 +12,7 @@ namespace mcg::linsys {
 namespace {
 
 std::string error_of(const char* text) {
-  try {
-    parse_tf(text, "--plant");
-  } catch (const mcg::Error& e) {
-    return e.what();
-  }
-  return "no error";
+  return test::error_of([&] { parse_tf(text, "--plant"); });
 }
 
 TEST(LinsysParse, ReportPlantsEvaluateAsWritten) {

@@ -6,6 +6,7 @@
 
 #include "common/error.hpp"
 #include "model/model.hpp"
+#include "test_support_error.hpp"
 
 namespace mcg::model {
 namespace {
@@ -29,12 +30,7 @@ Model with(const std::string& spec) {
 }
 
 std::string error_of(const std::string& spec) {
-  try {
-    parse_effect(spec, "--effect");
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
+  return test::error_of([&] { parse_effect(spec, "--effect"); });
 }
 
 TEST(ModelEffects, CatalogHasTheFixedNamesInOrder) {
@@ -219,6 +215,15 @@ TEST(ModelEffects, ModelIniCarriesEffects) {
   EXPECT_EQ(list.back().name, "supply_sag.R_s_ohm");
   EXPECT_EQ(list.back().unit, "ohm");
   EXPECT_EQ(list.back().upper, 20.0);
+}
+
+TEST(ModelEffects, UnknownEffectOrKeyIsAnErrorInEveryBuild) {
+  Effect e = default_effect("stribeck");
+  EXPECT_EQ(e.get("v_s_rad_s"), 10.0);
+  EXPECT_EQ(test::error_of([&] { e.get("tau_d_s"); }), "effect 'stribeck' has no parameter 'tau_d_s'");
+  EXPECT_EQ(test::error_of([&] { e.set("tau_d_s", 1.0); }), "effect 'stribeck' has no parameter 'tau_d_s'");
+  const Effect unknown{"warp_drive", {}};
+  EXPECT_EQ(test::error_of([&] { unknown.get("x"); }), "unknown effect 'warp_drive'");
 }
 
 }  // namespace

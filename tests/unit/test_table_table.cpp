@@ -1,6 +1,7 @@
 // Unit tests of the CSV reader and writer against the data contract.
 #include "common/error.hpp"
 #include "table/table.hpp"
+#include "test_support_error.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -21,12 +22,7 @@ Table parse(const std::string& text) {
 }
 
 std::string error_of(const std::string& text) {
-  try {
-    parse(text);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
+  return test::error_of([&] { parse(text); });
 }
 
 TEST(TableRead, MetadataHeaderAndRows) {

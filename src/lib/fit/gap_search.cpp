@@ -3,16 +3,16 @@
 #include "fit/gap_parts.hpp"
 
 #include "common/error.hpp"
+#include "common/parallel.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <complex>
 #include <mutex>
 #include <numbers>
-#include <thread>
+#include <limits>
 
 namespace mcg::fit {
 
@@ -232,42 +232,27 @@ std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& 
                                    unsigned threads, const std::vector<double>& cogging_n, std::size_t& done,
                                    std::size_t total) {
   std::vector<GapCandidate> out(jobs.size());
-  std::atomic<std::size_t> next{0};
   std::mutex mutex;
-  std::exception_ptr error;
-  const unsigned workers = std::max(1U, std::min<unsigned>(threads, static_cast<unsigned>(jobs.size())));
+  const unsigned workers = parallel::worker_count(threads, jobs.size());
   const unsigned jac_threads = std::max(1U, threads / workers);
-  auto work = [&] {
-    while (true) {
-      const std::size_t k = next.fetch_add(1);
-      if (k >= jobs.size()) return;
-      try {
-        out[k] = run_job(jobs[k], data, floors, settings, jac_threads, cogging_n);
-      } catch (const Error& e) {
-        // A candidate the data cannot fit is reported as such; the others go on.
-        GapCandidate& c = out[k];
-        c.name = jobs[k].name;
-        c.effects = jobs[k].effects;
-        c.model = jobs[k].start;
-        c.status = fmt::format("fit failed: {}", e.what());
-        c.score = k_nan;
-        c.rms.assign(floors.size(), k_nan);
-        c.train_rms_rpm = k_nan;
-      } catch (...) {
-        std::lock_guard lock(mutex);
-        if (!error) error = std::current_exception();
-        return;
-      }
-      std::lock_guard lock(mutex);
-      ++done;
-      if (settings.progress) settings.progress(fmt::format("fitted {} ({}/{})", jobs[k].name, done, total));
+  parallel::for_each(jobs.size(), workers, [&](std::size_t k) {
+    try {
+      out[k] = run_job(jobs[k], data, floors, settings, jac_threads, cogging_n);
+    } catch (const Error& e) {
+      // A candidate the data cannot fit is reported as such; the others go on.
+      GapCandidate& c = out[k];
+      c.name = jobs[k].name;
+      c.effects = jobs[k].effects;
+      c.model = jobs[k].start;
+      c.status = fmt::format("fit failed: {}", e.what());
+      c.score = k_nan;
+      c.rms.assign(floors.size(), k_nan);
+      c.train_rms_rpm = k_nan;
     }
-  };
-  std::vector<std::thread> pool;
-  for (unsigned w = 1; w < workers; ++w) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
+    const std::lock_guard lock(mutex);
+    ++done;
+    if (settings.progress) settings.progress(fmt::format("fitted {} ({}/{})", jobs[k].name, done, total));
+  });
   return out;
 }
 
@@ -354,7 +339,7 @@ double training_rms_rpm(const model::Model& model, const std::vector<Run>& runs)
 
 Candidates search_candidates(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors,
                              const Evaluation& before, bool gap, const GapSettings& settings) {
-  const unsigned threads = settings.threads > 0 ? settings.threads : std::max(1U, std::thread::hardware_concurrency());
+  const unsigned threads = parallel::worker_count(settings.threads, std::numeric_limits<std::size_t>::max());
   const std::size_t outputs = floors.size();
   const auto n_val = static_cast<double>(validation_count(data) * outputs);
   auto fpe = [&](double score, std::size_t k) { return gap_detail::fpe(score, k, n_val); };

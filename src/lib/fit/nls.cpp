@@ -2,6 +2,7 @@
 #include "fit/nls.hpp"
 
 #include "common/error.hpp"
+#include "common/parallel.hpp"
 
 #include <Eigen/SVD>
 #include <unsupported/Eigen/LevenbergMarquardt>
@@ -9,7 +10,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <thread>
 
 namespace mcg::fit {
 
@@ -97,20 +97,9 @@ struct Functor : Eigen::DenseFunctor<double> {
     Eigen::VectorXd r0;
     if (!options.central_differences) evaluate(u, r0);
     jac.resize(values(), inputs());
-    const auto n = static_cast<unsigned>(inputs());
-    const unsigned workers = std::max(1U, std::min(options.threads, n));
-    if (workers == 1) {
-      for (Eigen::Index j = 0; j < inputs(); ++j) column(u, r0, j, jac);
-    } else {
-      std::vector<std::thread> pool;
-      pool.reserve(workers);
-      for (unsigned w = 0; w < workers; ++w) {
-        pool.emplace_back([&, w] {
-          for (unsigned j = w; j < n; j += workers) column(u, r0, static_cast<Eigen::Index>(j), jac);
-        });
-      }
-      for (auto& t : pool) t.join();
-    }
+    const auto n = static_cast<std::size_t>(inputs());
+    parallel::for_each(n, std::max(1U, options.threads),
+                       [&](std::size_t j) { column(u, r0, static_cast<Eigen::Index>(j), jac); });
     const int per_column = options.central_differences ? 2 : 1;
     return per_column * inputs() + (options.central_differences ? 0 : 1);
   }

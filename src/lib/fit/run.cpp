@@ -2,6 +2,7 @@
 #include "fit/run.hpp"
 
 #include "common/error.hpp"
+#include "common/parallel.hpp"
 #include "common/tool.hpp"
 #include "config/ini.hpp"
 #include "fit/greybox.hpp"
@@ -17,7 +18,6 @@
 #include <iostream>
 #include <mutex>
 #include <optional>
-#include <thread>
 #include <tuple>
 
 namespace mcg::fit {
@@ -74,11 +74,6 @@ std::string unit_of(const std::vector<model::ParamInfo>& infos, const std::strin
     if (p.name == name) return p.unit;
   }
   return {};
-}
-
-unsigned worker_count(unsigned requested, std::size_t jobs) {
-  unsigned n = requested != 0 ? requested : std::max(1U, std::thread::hardware_concurrency());
-  return static_cast<unsigned>(std::min<std::size_t>(n, std::max<std::size_t>(jobs, 1)));
 }
 
 void write_model_ini(const FitResult& r, const FitProblem& problem, std::ostream& out) {
@@ -358,7 +353,7 @@ int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& e
     } else {
       problem.free = options.free;
     }
-    problem.nls.threads = worker_count(options.threads, problem.free.size());
+    problem.nls.threads = parallel::worker_count(options.threads, problem.free.size());
     const FitResult result = fit_model(problem);
     write_model_ini(result, problem, out);
     report_untrustworthy(result, "", err);
@@ -382,7 +377,6 @@ int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& e
   };
   const std::size_t count = options.files.size();
   std::vector<Outcome> outcomes(count);
-  std::atomic<std::size_t> next{0};
   std::atomic<std::size_t> done{0};
   std::mutex progress_mutex;
   const bool progress = stderr_is_terminal() && &err == &std::cerr;
@@ -398,29 +392,22 @@ int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& e
     }
   }
   problem.free = options.free.empty() ? default_free(loaded, fixed, problem.ties) : options.free;
-  const auto work = [&] {
-    for (std::size_t k = next++; k < count; k = next++) {
-      try {
-        if (runs[k]) {
-          FitProblem p = problem;
-          p.runs.push_back(*runs[k]);
-          outcomes[k].result = fit_model(p);
-        }
-      } catch (const Error& e) {
-        outcomes[k].error = e.what();
+  parallel::for_each(count, options.threads, [&](std::size_t k) {
+    try {
+      if (runs[k]) {
+        FitProblem p = problem;
+        p.runs.push_back(*runs[k]);
+        outcomes[k].result = fit_model(p);
       }
-      const std::size_t finished = ++done;
-      if (progress) {
-        const std::lock_guard<std::mutex> lock(progress_mutex);
-        err << fmt::format("\rmcg-fit: model: {}/{} files", finished, count) << std::flush;
-      }
+    } catch (const Error& e) {
+      outcomes[k].error = e.what();
     }
-  };
-  const unsigned workers = worker_count(options.threads, count);
-  std::vector<std::thread> pool;
-  for (unsigned w = 1; w < workers; ++w) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
+    const std::size_t finished = ++done;
+    if (progress) {
+      const std::lock_guard<std::mutex> lock(progress_mutex);
+      err << fmt::format("\rmcg-fit: model: {}/{} files", finished, count) << std::flush;
+    }
+  });
   if (progress) err << '\n';
 
   std::vector<std::string> outputs = options.outputs;

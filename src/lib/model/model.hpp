@@ -75,8 +75,9 @@ struct Effect {
   std::vector<std::pair<std::string, double>> params;
 
   /// Value of parameter `key` (the catalog's default when not listed); the key must belong
-  /// to the effect (assert).
+  /// to the effect: an unknown effect or key throws mcg::Error (in every build type).
   double get(std::string_view key) const;
+  /// Sets `key` (one of the effect's catalog parameters; anything else throws mcg::Error).
   void set(std::string_view key, double value);
 };
 

@@ -1,7 +1,7 @@
 // The effect catalog: names, parameters with units, defaults and bounds, and the physics of each.
 // The dynamics of every effect live in model/plant.cpp; this file is their documentation and
 // the parser of "NAME:key=value,..." specifications.
-#include <cassert>
+#include <algorithm>
 #include <cmath>
 
 #include "common/error.hpp"
@@ -130,14 +130,11 @@ double Effect::get(std::string_view key) const {
   }
   // Not set: the catalog's default (an Effect built by hand may list only some parameters).
   const EffectSpec* spec = find_effect(name);
-  assert(spec != nullptr && "effect not in the catalog");
-  if (spec != nullptr) {
-    for (const auto& p : spec->params) {
-      if (p.name == key) return p.default_value;
-    }
+  if (spec == nullptr) fail("unknown effect '{}'", name);
+  for (const auto& p : spec->params) {
+    if (p.name == key) return p.default_value;
   }
-  assert(false && "effect parameter not in the catalog");
-  return 0.0;
+  fail("effect '{}' has no parameter '{}'", name, key);
 }
 
 void Effect::set(std::string_view key, double value) {
@@ -146,6 +143,11 @@ void Effect::set(std::string_view key, double value) {
       v = value;
       return;
     }
+  }
+  const EffectSpec* spec = find_effect(name);
+  if (spec == nullptr) fail("unknown effect '{}'", name);
+  if (std::none_of(spec->params.begin(), spec->params.end(), [&](const auto& p) { return p.name == key; })) {
+    fail("effect '{}' has no parameter '{}'", name, key);
   }
   params.emplace_back(std::string(key), value);
 }
