@@ -1,10 +1,13 @@
 // The one error path: bad input (data, options, files, devices) throws mcg::Error.
 #pragma once
 
+#include "common/quote.hpp"
+
 #include <fmt/format.h>
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 
 namespace mcg {
@@ -15,7 +18,9 @@ namespace mcg {
 /// Broken invariants are asserts, never this type.
 class Error : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  /// The message passes through printable() uncut: whatever a site forgot to quote through
+  /// quote(), a hostile byte still cannot split the line or reach the terminal raw.
+  explicit Error(std::string_view what) : std::runtime_error(printable(what, what.size())) {}
 };
 
 /// Thrown by output writers when the reader of stdout went away (EPIPE). Not an error:

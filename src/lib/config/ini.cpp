@@ -57,7 +57,7 @@ Ini Ini::parse(std::istream& in, const std::string& source) {
       continue;
     }
     const auto eq = line.find('=');
-    if (eq == std::string_view::npos) fail("{}:{}: expected 'key = value', found '{}'", source, line_no, line);
+    if (eq == std::string_view::npos) fail("{}:{}: expected 'key = value', found {}", source, line_no, quote(line));
     const std::string_view key = trim(line.substr(0, eq));
     if (key.empty()) fail("{}:{}: empty key", source, line_no);
     const std::string_view value = trim(strip_comment(line.substr(eq + 1)));
@@ -65,7 +65,7 @@ Ini Ini::parse(std::istream& in, const std::string& source) {
     auto it = std::find_if(ini.m_entries.begin(), ini.m_entries.end(),
                            [&](const Entry& x) { return x.section == e.section && x.key == e.key; });
     if (it != ini.m_entries.end()) {
-      fail("{}: [{}] {}: given twice (first at {})", e.origin, section, key, it->origin);
+      fail("{}: [{}] {}: given twice (first at {})", e.origin, printable(section), printable(key), it->origin);
     }
     ini.m_entries.push_back(std::move(e));
   }
@@ -118,7 +118,7 @@ std::optional<std::string> Ini::get(std::string_view section, std::string_view k
 void Ini::reject(std::string_view section, std::string_view key, std::string_view what) const {
   const Entry* e = find(section, key);
   const std::string where = e && !e->origin.empty() ? e->origin + ": " : std::string();
-  fail("{}[{}] {}: {}", where, section, key, what);
+  fail("{}[{}] {}: {}", where, printable(section), printable(key), what);
 }
 
 std::optional<double> Ini::number(std::string_view section, std::string_view key) const {
@@ -126,7 +126,7 @@ std::optional<double> Ini::number(std::string_view section, std::string_view key
   if (!e) return std::nullopt;
   double v = 0;
   if (e->value.empty() || !table::parse_number(e->value, v)) {
-    reject(section, key, fmt::format("invalid number '{}'", e->value));
+    reject(section, key, fmt::format("invalid number {}", quote(e->value)));
   }
   return v;
 }
@@ -145,7 +145,7 @@ std::optional<std::vector<double>> Ini::numbers(std::string_view section, std::s
     const std::string_view tok = rest.substr(0, sep);
     if (!tok.empty()) {
       double v = 0;
-      if (!table::parse_number(tok, v)) reject(section, key, fmt::format("invalid number '{}'", tok));
+      if (!table::parse_number(tok, v)) reject(section, key, fmt::format("invalid number {}", quote(tok)));
       out.push_back(v);
     }
     if (sep == std::string_view::npos) break;

@@ -383,7 +383,7 @@ bool meets(const Setup& setup, const Tf& cont, const TuneLimits& limits) {
 
 Design tune(const Setup& setup, const std::string& structure, const TuneLimits& limits) {
   check_setup(setup);
-  if (structure != "p" && structure != "pi") fail("tuning structure must be p or pi, got '{}'", structure);
+  if (structure != "p" && structure != "pi") fail("tuning structure must be p or pi, got {}", quote(structure));
   const bool pi = structure == "pi";
   std::vector<double> rhos{0.0};
   if (pi) rhos = linsys::log_grid(1.0, 0.01, 13);

@@ -68,7 +68,7 @@ std::vector<double> parse_list(const std::string& text, const std::string& where
   std::istringstream words(normalised);
   while (words >> token) {
     double v = 0.0;
-    if (!table::parse_number(token, v) || !std::isfinite(v)) fail("{}: invalid number '{}'", where, token);
+    if (!table::parse_number(token, v) || !std::isfinite(v)) fail("{}: invalid number {}", where, quote(token));
     out.push_back(v);
   }
   if (out.empty()) fail("{}: empty coefficient list", where);

@@ -66,7 +66,7 @@ void run_gap(const GapOptions& options, std::ostream& out, std::ostream& err) {
   const GapReport report = diagnose_gap(model, data, settings);
   if (!options.residuals.empty()) {
     std::ofstream file(options.residuals);
-    if (!file) fail("--residuals: cannot open '{}' for writing", options.residuals);
+    if (!file) fail("--residuals: cannot open {} for writing", quote(options.residuals));
     write_gap_residuals(file, report, data);
   }
   if (options.format == "text") {

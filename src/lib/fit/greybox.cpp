@@ -108,7 +108,7 @@ Run make_run(const table::Table& table, const std::vector<std::string>& outputs,
   } else {
     for (const auto& name : outputs) {
       if (std::find(measurable_columns().begin(), measurable_columns().end(), name) == measurable_columns().end()) {
-        fail("unknown output '{}' (one of rpm, i, i_gen, v_gen, omega)", name);
+        fail("unknown output {} (one of rpm, i, i_gen, v_gen, omega)", quote(name));
       }
       run.outputs.push_back(name);
     }
@@ -162,13 +162,13 @@ std::vector<std::string> fix_parameters(model::Model& model, const std::vector<s
   const auto infos = model::parameters(model);
   for (const auto& item : items) {
     const auto eq = item.find('=');
-    if (eq == std::string::npos || eq == 0) fail("--fix: expected NAME=VALUE: '{}'", item);
+    if (eq == std::string::npos || eq == 0) fail("--fix: expected NAME=VALUE: {}", quote(item));
     const std::string name = item.substr(0, eq);
     const std::string text = item.substr(eq + 1);
     double value = 0.0;
-    if (!table::parse_number(text, value) || !std::isfinite(value)) fail("--fix: {}: invalid number '{}'", name, text);
+    if (!table::parse_number(text, value) || !std::isfinite(value)) fail("--fix: {}: invalid number {}", name, quote(text));
     if (std::none_of(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; })) {
-      fail("--fix: unknown parameter '{}' (see mcg-fit model --list)", name);
+      fail("--fix: unknown parameter {} (see mcg-fit model --list)", quote(name));
     }
     model::set_parameter(model, name, value);
     names.push_back(name);
@@ -342,11 +342,11 @@ FitResult fit_model(const FitProblem& problem) {
   for (const auto& [follower, leader] : problem.ties) {
     for (const auto& name : {follower, leader}) {
       if (std::none_of(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; })) {
-        fail("unknown parameter '{}' (see mcg-fit model --list)", name);
+        fail("unknown parameter {} (see mcg-fit model --list)", quote(name));
       }
     }
     if (std::find(problem.free.begin(), problem.free.end(), follower) != problem.free.end()) {
-      fail("parameter '{}' is tied to '{}' and cannot be free too", follower, leader);
+      fail("parameter {} is tied to {} and cannot be free too", quote(follower), quote(leader));
     }
   }
   std::vector<std::string> units;
@@ -354,11 +354,11 @@ FitResult fit_model(const FitProblem& problem) {
   std::vector<std::pair<double, double>> bounds;
   std::set<std::string> seen;
   for (const auto& name : problem.free) {
-    if (!seen.insert(name).second) fail("parameter '{}' is listed twice", name);
+    if (!seen.insert(name).second) fail("parameter {} is listed twice", quote(name));
     const auto it = std::find_if(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; });
-    if (it == infos.end()) fail("unknown parameter '{}' (see mcg-fit model --list)", name);
+    if (it == infos.end()) fail("unknown parameter {} (see mcg-fit model --list)", quote(name));
     if (!(it->value >= it->lower && it->value <= it->upper)) {
-      fail("parameter '{}': initial value {} is outside [{}, {}]", name, it->value, it->lower, it->upper);
+      fail("parameter {}: initial value {} is outside [{}, {}]", quote(name), it->value, it->lower, it->upper);
     }
     ParameterSpec spec{name, it->value, Transform::linear, 0.0};
     if (it->lower >= 0.0 && it->value > 0.0) {
@@ -388,7 +388,7 @@ FitResult fit_model(const FitProblem& problem) {
         if (std::isfinite(y)) sq += (y - mean) * (y - mean);
       }
       if (count < 2 || sq == 0.0) {
-        fail("{}: column '{}' is constant: no excitation to fit", run.source, run.outputs[o]);
+        fail("{}: column {} is constant: no excitation to fit", run.source, quote(run.outputs[o]));
       }
       norm[r].push_back(std::sqrt(sq));
       total += run.measured[o].size();

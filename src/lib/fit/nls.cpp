@@ -189,9 +189,9 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
   if (m < n) fail("too little data: {} residuals for {} free parameters", m, n);
   for (const auto& spec : specs) {
     if (spec.transform == Transform::log && !(spec.initial > 0.0)) {
-      fail("parameter '{}' must start positive (initial value {})", spec.name, spec.initial);
+      fail("parameter {} must start positive (initial value {})", quote(spec.name), spec.initial);
     }
-    if (!std::isfinite(spec.initial)) fail("parameter '{}' has a non-finite initial value", spec.name);
+    if (!std::isfinite(spec.initial)) fail("parameter {} has a non-finite initial value", quote(spec.name));
   }
   const Coordinates coords(specs);
   Functor functor(coords, residuals, options, n, m);

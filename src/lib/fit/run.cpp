@@ -282,7 +282,7 @@ std::vector<std::pair<std::string, std::string>> parse_ties(const std::vector<st
   std::vector<std::pair<std::string, std::string>> ties;
   for (const auto& item : items) {
     const auto eq = item.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size()) fail("--tie: expected FOLLOWER=LEADER: '{}'", item);
+    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size()) fail("--tie: expected FOLLOWER=LEADER: {}", quote(item));
     ties.emplace_back(item.substr(0, eq), item.substr(eq + 1));
   }
   return ties;
@@ -318,9 +318,9 @@ int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& e
   const auto check_names = [&](const std::vector<std::string>& names) {
     for (const auto& name : names) {
       if (std::none_of(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; })) {
-        fail("unknown parameter '{}' (see mcg-fit model --list)", name);
+        fail("unknown parameter {} (see mcg-fit model --list)", quote(name));
       }
-      if (std::find(fixed.begin(), fixed.end(), name) != fixed.end()) fail("parameter '{}' is fixed (--fix) and free", name);
+      if (std::find(fixed.begin(), fixed.end(), name) != fixed.end()) fail("parameter {} is fixed (--fix) and free", quote(name));
     }
   };
   check_names(options.free);

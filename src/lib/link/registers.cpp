@@ -77,7 +77,7 @@ const RegisterInfo& require_register(std::string_view name) {
   if (const auto* reg = find_register(name)) return *reg;
   std::string names;
   for (const auto& reg : k_registers) names += fmt::format("{}{}", names.empty() ? "" : ", ", reg.name);
-  fail("unknown register '{}' (registers: {})", name, names);
+  fail("unknown register {} (registers: {})", quote(name), names);
 }
 
 std::string_view unit_suffix(Unit unit) {
@@ -143,7 +143,7 @@ double parse_value(const RegisterInfo& reg, std::string_view text, std::string_v
     if (reg.unit == Unit::SeqState) hint = " (stop, play, loop)";
     if (reg.unit == Unit::Switch) hint = " (0, 1, off, on)";
     if (reg.unit == Unit::Clutch) hint = " (1 or disengaged, 2 or engaged)";
-    fail("{}: {}: invalid value '{}'{}", where, reg.name, text, hint);
+    fail("{}: {}: invalid value {}{}", where, reg.name, quote(text), hint);
   }
   if (reg.unit == Unit::Clutch && number == 0.0) {
     fail("{}: clutch 0 (motor alone) is not a state of the board: its clutch is mounted (1 attached and "

@@ -156,7 +156,7 @@ C2dMethod parse_method(const std::string& text, const std::string& where) {
   for (C2dMethod m : {C2dMethod::zoh, C2dMethod::foh, C2dMethod::tustin, C2dMethod::matched, C2dMethod::impulse}) {
     if (text == method_name(m)) return m;
   }
-  fail("{}: unknown discretisation method '{}' (zoh, foh, tustin, matched, impulse)", where, text);
+  fail("{}: unknown discretisation method {} (zoh, foh, tustin, matched, impulse)", where, quote(text));
 }
 
 StateSpace realise(const Tf& g) {

@@ -42,7 +42,7 @@ class Parser {
     skip_blanks();
     if (m_pos < m_text.size()) {
       if (m_text[m_pos] == ')') error_at(m_pos, "unexpected ')'");
-      error_at(m_pos, fmt::format("unexpected '{}'", m_text[m_pos]));
+      error_at(m_pos, fmt::format("unexpected {}", quote(m_text[m_pos])));
     }
     if (is_zero(v.num)) {
       Tf zero;
@@ -244,7 +244,7 @@ class Parser {
       skip_blanks();
       if (!accept(')')) {
         if (m_pos >= m_text.size()) error_at(at, "unbalanced '('");
-        error_at(m_pos, fmt::format("unexpected '{}'", m_text[m_pos]));
+        error_at(m_pos, fmt::format("unexpected {}", quote(m_text[m_pos])));
       }
       return v;
     }
@@ -264,10 +264,10 @@ class Parser {
         return v;
       }
       if (name == "exp") return exponential(at);
-      error_at(at, fmt::format("unknown symbol '{}'", name));
+      error_at(at, fmt::format("unknown symbol {}", quote(name)));
     }
     if (c == ')') error_at(at, "unexpected ')'");
-    error_at(at, fmt::format("unexpected '{}'", c));
+    error_at(at, fmt::format("unexpected {}", quote(c)));
   }
 
   Value exponential(std::size_t at) {
@@ -278,7 +278,7 @@ class Parser {
     skip_blanks();
     if (!accept(')')) {
       if (m_pos >= m_text.size()) error_at(open, "unbalanced '('");
-      error_at(m_pos, fmt::format("unexpected '{}'", m_text[m_pos]));
+      error_at(m_pos, fmt::format("unexpected {}", quote(m_text[m_pos])));
     }
     const Poly den = trim(arg.den);
     const Poly num = trim(arg.num);

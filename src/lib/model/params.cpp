@@ -199,7 +199,7 @@ Model model_from_ini(const config::Ini& ini, Model base) {
       const std::string where = entries.empty() || entries.front()->origin.empty()
                                     ? std::string("config")
                                     : entries.front()->origin;
-      fail("{}: [{}]: unknown effect '{}'", where, section, name);
+      fail("{}: [{}]: unknown effect {}", where, section, quote(name));
     }
     Effect effect = default_effect(name);
     for (const auto& existing : base.effects) {
@@ -336,7 +336,7 @@ void set_parameter(Model& model, std::string_view name, double value) {
     *slot = value;
     return;
   }
-  fail("unknown model parameter '{}'", name);
+  fail("unknown model parameter {}", quote(name));
 }
 
 double get_parameter(const Model& model, std::string_view name) {
@@ -346,7 +346,7 @@ double get_parameter(const Model& model, std::string_view name) {
   }
   Model copy = model;
   if (double* slot = effect_slot(copy, name)) return *slot;
-  fail("unknown model parameter '{}'", name);
+  fail("unknown model parameter {}", quote(name));
 }
 
 }  // namespace mcg::model

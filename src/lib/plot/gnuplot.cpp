@@ -133,7 +133,7 @@ class Child {
 
 void require_gnuplot(const std::string& program) {
   if (!executable_exists(program)) {
-    fail("gnuplot not found ('{}'; install gnuplot-nox, or set MCG_GNUPLOT)", program);
+    fail("gnuplot not found ({}; install gnuplot-nox, or set MCG_GNUPLOT)", quote(program));
   }
 }
 

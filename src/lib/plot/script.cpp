@@ -83,7 +83,7 @@ Selection select(const Spec& spec, const table::Table& first) {
       if (name != s.x && std::find(s.y2.begin(), s.y2.end(), name) == s.y2.end()) s.y.push_back(name);
     }
   }
-  if (s.y.empty() && s.y2.empty()) fail("{}: no column to plot besides '{}'", first.source, s.x);
+  if (s.y.empty() && s.y2.empty()) fail("{}: no column to plot besides {}", first.source, quote(s.x));
   return s;
 }
 
@@ -93,7 +93,7 @@ void append_block(std::string& out, std::size_t index, const table::Table& tbl, 
   for (std::size_t c = 0; c < columns.size(); ++c) {
     const auto& values = *columns[c];
     if (std::none_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); })) {
-      fail("{}: column '{}' has no finite value to plot", tbl.source, c == 0 ? s.x : joined_names(s.y, s.y2)[c - 1]);
+      fail("{}: column {} has no finite value to plot", tbl.source, quote(c == 0 ? s.x : joined_names(s.y, s.y2)[c - 1]));
     }
   }
   // Rows grouped by branch (in their order within it), a blank line where a branch ends.
@@ -271,7 +271,7 @@ Output::Kind kind_from_path(std::string_view path) {
   if (ext == "png") return Output::Kind::png;
   if (ext == "svg") return Output::Kind::svg;
   if (ext == "pdf") return Output::Kind::pdf;
-  fail("-o: unknown format '{}' (use .png, .svg or .pdf)", path);
+  fail("-o: unknown format {} (use .png, .svg or .pdf)", quote(path));
 }
 
 std::optional<std::string> title_of(const Spec& spec, const std::vector<Input>& inputs) {

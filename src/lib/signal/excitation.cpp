@@ -51,18 +51,18 @@ std::vector<Change> parse_schedule(std::string_view text, std::string_view optio
     if (comma == std::string_view::npos) comma = text.size();
     const std::string_view item = trim(text.substr(start, comma - start));
     const std::size_t at = item.find('@');
-    if (item.empty()) fail("{}: empty item in '{}' (expected value@time, e.g. 6@0.5)", option, text);
-    if (at == std::string_view::npos) fail("{}: '{}' is not value@time (e.g. 6@0.5)", option, item);
+    if (item.empty()) fail("{}: empty item in {} (expected value@time, e.g. 6@0.5)", option, quote(text));
+    if (at == std::string_view::npos) fail("{}: {} is not value@time (e.g. 6@0.5)", option, quote(item));
     Change change{};
     if (!parse_double(item.substr(0, at), change.value) || std::isnan(change.value)) {
-      fail("{}: invalid value '{}' in '{}'", option, trim(item.substr(0, at)), item);
+      fail("{}: invalid value {} in {}", option, quote(trim(item.substr(0, at))), quote(item));
     }
     if (!parse_double(item.substr(at + 1), change.time_s) || !std::isfinite(change.time_s)) {
-      fail("{}: invalid time '{}' in '{}'", option, trim(item.substr(at + 1)), item);
+      fail("{}: invalid time {} in {}", option, quote(trim(item.substr(at + 1))), quote(item));
     }
-    if (change.time_s < 0) fail("{}: negative time in '{}'", option, item);
+    if (change.time_s < 0) fail("{}: negative time in {}", option, quote(item));
     if (!changes.empty() && change.time_s <= changes.back().time_s) {
-      fail("{}: times must increase ('{}' after {}@{})", option, item, changes.back().value,
+      fail("{}: times must increase ({} after {}@{})", option, quote(item), changes.back().value,
            changes.back().time_s);
     }
     changes.push_back(change);

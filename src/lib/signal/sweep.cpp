@@ -199,10 +199,10 @@ std::vector<double> parse_list(const std::string& text, const char* option) {
   std::string item;
   while (std::getline(in, item, ',')) {
     double v = 0;
-    if (!table::parse_number(item, v) || !std::isfinite(v)) fail("{}: invalid number '{}'", option, item);
+    if (!table::parse_number(item, v) || !std::isfinite(v)) fail("{}: invalid number {}", option, quote(item));
     values.push_back(v);
   }
-  if (values.empty()) fail("{}: no numbers in '{}'", option, text);
+  if (values.empty()) fail("{}: no numbers in {}", option, quote(text));
   return values;
 }
 
@@ -404,10 +404,10 @@ void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
     }
   }
   if (keep.empty() && f_min == 0.0 && std::isinf(f_max)) {
-    fail("{}: no excitation in column '{}'", tbl.source, o.in_column);
+    fail("{}: no excitation in column {}", tbl.source, quote(o.in_column));
   }
   if (keep.empty()) {
-    fail("{}: no excitation in column '{}' between {} and {} Hz", tbl.source, o.in_column, format_number(f_min),
+    fail("{}: no excitation in column {} between {} and {} Hz", tbl.source, quote(o.in_column), format_number(f_min),
          format_number(f_max));
   }
   std::vector<std::complex<double>> h;

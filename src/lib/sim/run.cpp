@@ -43,7 +43,7 @@ std::string coefficient_list(const std::vector<double>& v) {
 /// Throws the contract's message for a value that must be finite.
 void require_finite_value(double x, const table::Reader& in, std::string_view name) {
   if (!std::isfinite(x)) {
-    fail("{}:{}: column '{}': {} is not allowed here", in.source(), in.line(), name,
+    fail("{}:{}: column {}: {} is not allowed here", in.source(), in.line(), quote(name),
          std::isnan(x) ? "an unmeasured value (nan or empty)" : "an infinite value");
   }
 }

@@ -154,7 +154,7 @@ void Effect::set(std::string_view key, double value) {
 
 Effect default_effect(std::string_view name) {
   const EffectSpec* spec = find_effect(name);
-  if (spec == nullptr) fail("unknown effect '{}' (known: {})", name, known_names());
+  if (spec == nullptr) fail("unknown effect {} (known: {})", quote(name), known_names());
   Effect e;
   e.name = spec->name;
   for (const auto& p : spec->params) e.params.emplace_back(p.name, p.default_value);
@@ -165,17 +165,17 @@ Effect parse_effect(std::string_view text, std::string_view where) {
   const auto colon = text.find(':');
   const std::string_view name = trim(text.substr(0, colon));
   const EffectSpec* spec = find_effect(name);
-  if (spec == nullptr) fail("{}: unknown effect '{}' (known: {})", where, name, known_names());
+  if (spec == nullptr) fail("{}: unknown effect {} (known: {})", where, quote(name), known_names());
   Effect effect = default_effect(name);
   if (colon == std::string_view::npos) return effect;
   std::string_view rest = text.substr(colon + 1);
-  if (trim(rest).empty()) fail("{}: no parameters after ':' in '{}'", where, text);
+  if (trim(rest).empty()) fail("{}: no parameters after ':' in {}", where, quote(text));
   std::vector<std::string_view> seen;
   while (true) {
     const auto comma = rest.find(',');
     const std::string_view item = trim(rest.substr(0, comma));
     const auto eq = item.find('=');
-    if (eq == std::string_view::npos) fail("{}: expected key=value, got '{}'", where, item);
+    if (eq == std::string_view::npos) fail("{}: expected key=value, got {}", where, quote(item));
     const std::string_view key = trim(item.substr(0, eq));
     const std::string_view value_text = trim(item.substr(eq + 1));
     const EffectParamSpec* ps = nullptr;
@@ -183,15 +183,15 @@ Effect parse_effect(std::string_view text, std::string_view where) {
       if (p.name == key) ps = &p;
     }
     if (ps == nullptr) {
-      fail("{}: effect '{}' has no parameter '{}' (has: {})", where, spec->name, key, known_keys(*spec));
+      fail("{}: effect {} has no parameter {} (has: {})", where, quote(spec->name), quote(key), known_keys(*spec));
     }
     for (auto s : seen) {
-      if (s == key) fail("{}: parameter '{}' given twice", where, key);
+      if (s == key) fail("{}: parameter {} given twice", where, quote(key));
     }
     seen.push_back(key);
     double value = 0.0;
     if (value_text.empty() || !table::parse_number(value_text, value) || !std::isfinite(value)) {
-      fail("{}: {}.{}: invalid number '{}'", where, spec->name, key, value_text);
+      fail("{}: {}.{}: invalid number {}", where, spec->name, key, quote(value_text));
     }
     if (value < ps->lower || value > ps->upper) {
       fail("{}: {}.{} = {} is out of range [{}, {}] {}", where, spec->name, key, value_text,
