@@ -20,6 +20,7 @@ namespace mcg::table {
 
 namespace {
 
+constexpr std::size_t k_first_block = 4096;
 constexpr std::size_t k_read_block = 1 << 20;
 constexpr std::size_t k_write_block = 1 << 18;
 constexpr int k_default_digits = 10;
@@ -31,19 +32,16 @@ std::string_view trim(std::string_view s) {
 }
 
 /// Shortens a field for an error message so one line stays one readable line.
-std::string quote_field(std::string_view text) {
-  std::string out;
-  for (char c : text.substr(0, 40)) out += (static_cast<unsigned char>(c) < 0x20) ? '?' : c;
-  if (text.size() > 40) out += "...";
-  return out;
-}
-
+/// The header's names for a message, each through printable(); a long header is cut after
+/// 16 names with the count of the rest.
 std::string column_list(const std::vector<std::string>& names) {
+  constexpr std::size_t k_max_names = 16;
   std::string out;
-  for (const auto& n : names) {
+  for (std::size_t i = 0; i < names.size() && i < k_max_names; ++i) {
     if (!out.empty()) out += ',';
-    out += n;
+    out += printable(names[i]);
   }
+  if (names.size() > k_max_names) out += fmt::format(",... ({} columns)", names.size());
   return out;
 }
 
@@ -110,11 +108,11 @@ Reader::Reader(std::istream& in, std::string source) : m_in(in), m_source(std::m
     const std::string_view name = trim(line.substr(start, comma == std::string_view::npos ? line.npos : comma - start));
     if (name.empty()) fail("{}:{}: header: empty column name (column {})", m_source, m_line, m_columns.size() + 1);
     if (std::find(m_columns.begin(), m_columns.end(), name) != m_columns.end()) {
-      fail("{}:{}: header: duplicate column '{}'", m_source, m_line, quote_field(name));
+      fail("{}:{}: header: duplicate column {}", m_source, m_line, quote(name));
     }
     double probe = 0;
     if (parse_number(name, probe)) {
-      fail("{}:{}: header: expected column names, found the number '{}'", m_source, m_line, quote_field(name));
+      fail("{}:{}: header: expected column names, found the number {}", m_source, m_line, quote(name));
     }
     m_columns.emplace_back(name);
     if (comma == std::string_view::npos) break;
@@ -128,7 +126,7 @@ Reader::~Reader() = default;
 bool Reader::read_line(std::string_view& line) {
   while (true) {
     const char* begin = m_buffer.data() + m_pos;
-    const std::size_t avail = m_buffer.size() - m_pos;
+    const std::size_t avail = m_end - m_pos;
     if (const void* nl = std::memchr(begin, '\n', avail)) {
       const auto len = static_cast<std::size_t>(static_cast<const char*>(nl) - begin);
       line = std::string_view(begin, len);
@@ -141,19 +139,31 @@ bool Reader::read_line(std::string_view& line) {
       if (avail == 0) return false;
       line = std::string_view(begin, avail);
       if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-      m_pos = m_buffer.size();
+      m_pos = m_end;
       ++m_line;
       return true;
     }
-    m_buffer.erase(0, m_pos);
-    m_pos = 0;
-    const std::size_t old = m_buffer.size();
-    m_buffer.resize(old + k_read_block);
-    const auto got = m_in.rdbuf()->sgetn(m_buffer.data() + old, static_cast<std::streamsize>(k_read_block));
-    m_buffer.resize(old + static_cast<std::size_t>(std::max<std::streamsize>(got, 0)));
+    // Keep the unfinished line, then read into the free space. The buffer starts small and
+    // doubles when a read fills it (a long line, or a large input arriving fast), up to
+    // k_read_block per read: a three-line file costs 4 KiB, a large one reads in 1 MiB blocks.
+    if (m_pos > 0) {
+      std::memmove(m_buffer.data(), m_buffer.data() + m_pos, avail);
+      m_end = avail;
+      m_pos = 0;
+    }
+    const bool cramped = m_buffer.size() - m_end < m_buffer.size() / 2;
+    if (m_buffer.empty() || cramped || (m_filled && m_buffer.size() < k_read_block)) {
+      const std::size_t grown = m_buffer.empty() ? k_first_block : m_buffer.size() + std::min(m_buffer.size(), k_read_block);
+      m_buffer.resize(grown);
+    }
+    const std::size_t room = m_buffer.size() - m_end;
+    const auto got = m_in.rdbuf()->sgetn(m_buffer.data() + m_end, static_cast<std::streamsize>(room));
     if (got <= 0) {
       if (m_in.bad()) fail("{}: read error: {}", m_source, std::strerror(errno));
       m_eof = true;
+    } else {
+      m_end += static_cast<std::size_t>(got);
+      m_filled = static_cast<std::size_t>(got) == room;
     }
   }
 }
@@ -168,7 +178,7 @@ void Reader::parse_row(std::string_view line) {
       fail("{}:{}: more fields than the {} columns of the header", m_source, m_line, m_columns.size());
     }
     if (!parse_number(field, m_row[column])) {
-      fail("{}:{}: column '{}': invalid number '{}'", m_source, m_line, m_columns[column], quote_field(trim(field)));
+      fail("{}:{}: column {}: invalid number {}", m_source, m_line, quote(m_columns[column]), quote(trim(field)));
     }
     ++column;
     if (comma == std::string_view::npos) break;
@@ -200,7 +210,7 @@ std::optional<std::size_t> Reader::find(std::string_view name) const {
 
 std::size_t Reader::require(std::string_view name) const {
   if (auto i = find(name)) return *i;
-  fail("{}: missing column '{}' (has: {})", m_source, name, column_list(m_columns));
+  fail("{}: missing column {} (has: {})", m_source, quote(name), column_list(m_columns));
 }
 
 std::optional<std::size_t> Table::find(std::string_view name) const {
@@ -211,7 +221,7 @@ std::optional<std::size_t> Table::find(std::string_view name) const {
 
 const std::vector<double>& Table::col(std::string_view name) const {
   if (auto i = find(name)) return columns[*i];
-  fail("{}: missing column '{}' (has: {})", source, name, column_list(names));
+  fail("{}: missing column {} (has: {})", source, quote(name), column_list(names));
 }
 
 std::vector<double>& Table::col(std::string_view name) {
@@ -255,7 +265,7 @@ void require_finite(const Table& table, std::string_view name) {
   const auto& v = table.col(name);
   for (std::size_t r = 0; r < v.size(); ++r) {
     if (!std::isfinite(v[r])) {
-      fail("{}:{}: column '{}': {} is not allowed here", table.source, table.line_of(r), name,
+      fail("{}:{}: column {}: {} is not allowed here", table.source, table.line_of(r), quote(name),
            std::isnan(v[r]) ? "an unmeasured value (nan or empty)" : "an infinite value");
     }
   }
@@ -266,7 +276,7 @@ void require_increasing(const Table& table, std::string_view name) {
   const auto& v = table.col(name);
   for (std::size_t r = 1; r < v.size(); ++r) {
     if (!(v[r] > v[r - 1])) {
-      fail("{}:{}: column '{}': {} does not increase (previous row: {})", table.source, table.line_of(r), name,
+      fail("{}:{}: column {}: {} does not increase (previous row: {})", table.source, table.line_of(r), quote(name),
            fmt::format("{:.10g}", v[r]), fmt::format("{:.10g}", v[r - 1]));
     }
   }

@@ -67,7 +67,9 @@ class Reader {
   Metadata m_meta;
   std::vector<std::string> m_columns;
   std::vector<double> m_row;
-  std::string m_buffer;
+  std::string m_buffer;     ///< storage; bytes [m_pos, m_end) are read and not yet consumed
+  std::size_t m_end = 0;
+  bool m_filled = false;    ///< the last read filled the free space: the input comes fast, grow
   std::size_t m_pos = 0;
   std::size_t m_line = 0;
   bool m_eof = false;
