@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Installs what mcg needs from Debian 12's packages, if anything is missing. Run as root.
+# --fuzz: also clang 14 and its libFuzzer runtime, for the MCG_FUZZ build (scripts/fuzz.sh).
 set -euo pipefail
 packages=(
   build-essential cmake pkg-config
@@ -8,6 +9,9 @@ packages=(
   sdcc sdcc-ucsim
   gnuplot-nox mandoc groff-base socat parallel
 )
+if [ "${1:-}" = --fuzz ]; then
+  packages+=(clang-14 libclang-rt-14-dev)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

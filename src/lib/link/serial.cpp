@@ -123,8 +123,7 @@ void run_set(const LinkOptions& link, const std::string& name, const std::string
   write_verified(*c, reg, v, "set", err);
 }
 
-void run_load(const LinkOptions& link, const std::string& path, std::ostream& out, std::ostream& err) {
-  const config::Ini ini = config::Ini::load(path);
+LoadPlan load_plan(const config::Ini& ini, const std::string& path) {
   std::vector<std::pair<const RegisterInfo*, double>> writes;
   std::vector<std::string> origins;
   const auto add = [&](const RegisterInfo& reg, double value, const std::string& origin) {
@@ -150,23 +149,29 @@ void run_load(const LinkOptions& link, const std::string& path, std::ostream& ou
   std::stable_sort(order.begin(), order.end(),
                    [&](std::size_t a, std::size_t b) { return load_rank(*writes[a].first) < load_rank(*writes[b].first); });
 
+  LoadPlan plan;
+  for (const std::size_t i : order) plan.push_back({writes[i].first, writes[i].second, origins[i]});
+  return plan;
+}
+
+void run_load(const LinkOptions& link, const std::string& path, std::ostream& out, std::ostream& err) {
+  const LoadPlan plan = load_plan(config::Ini::load(path), path);
   auto c = connect(link);
   // duty_min and duty_max are checked against each other: when raising the floor above the
   // old ceiling (or the reverse) the other one has to move first; one more pass settles it.
-  std::vector<std::size_t> deferred;
-  for (const std::size_t i : order) {
-    const auto& [reg, value] = writes[i];
+  std::vector<const LoadWrite*> deferred;
+  for (const LoadWrite& w : plan) {
     try {
-      write_verified(*c, *reg, value, origins[i], err);
+      write_verified(*c, *w.reg, w.value, w.origin, err);
     } catch (const Error&) {
-      if (!reg->name.starts_with("duty_m")) throw;
-      deferred.push_back(i);
+      if (!w.reg->name.starts_with("duty_m")) throw;
+      deferred.push_back(&w);
     }
   }
-  for (const std::size_t i : deferred) write_verified(*c, *writes[i].first, writes[i].second, origins[i], err);
+  for (const LoadWrite* w : deferred) write_verified(*c, *w->reg, w->value, w->origin, err);
 
   std::vector<const RegisterInfo*> regs;
-  for (const std::size_t i : order) regs.push_back(writes[i].first);
+  for (const LoadWrite& w : plan) regs.push_back(w.reg);
   out << fmt::format("; mcg-serial load {}: {} on {}, every register read back\n", path, c->board_text(), link.port);
   print_board_section(*c, regs, out);
 }
@@ -218,8 +223,7 @@ void run_dump(const LinkOptions& link, const DumpOptions& options, std::ostream&
   w.finish();
 }
 
-void run_send(const LinkOptions& link, const SendOptions& options, std::ostream& out) {
-  const table::Table tbl = table::read_path(options.path);
+std::vector<SeqEntry> send_plan(const table::Table& tbl, int frac_bits) {
   const std::string src = tbl.source;
   table::require_increasing(tbl, "t");
   const auto& t = tbl.col("t");
@@ -228,13 +232,12 @@ void run_send(const LinkOptions& link, const SendOptions& options, std::ostream&
     if (tbl.names[k] == "t") continue;
     const RegisterInfo* reg = find_register(tbl.names[k]);
     if (reg == nullptr || reg->name != tbl.names[k]) continue;
-    if (!reg->writable) fail("{}: column '{}': read-only register", src, tbl.names[k]);
+    if (!reg->writable) fail("{}: column {}: read-only register", src, quote(tbl.names[k]));
     cols.emplace_back(reg, &tbl.columns[k]);
   }
   if (cols.empty()) fail("{}: no column names a writable register (e.g. rpm_cmd, duty, mode)", src);
   if (!tbl.rows()) fail("{}: no rows", src);
 
-  auto c = connect(link);
   std::vector<SeqEntry> entries;
   std::vector<double> last(cols.size(), std::nan(""));
   std::int64_t prev_ms = 0;
@@ -245,6 +248,11 @@ void run_send(const LinkOptions& link, const SendOptions& options, std::ostream&
       if (std::isnan(v) || v == last[k]) continue;
       last[k] = v;
       if (t[row] < 0.0) fail("{}:{}: t = {} s: a sequence starts at t = 0", src, tbl.line_of(row), t[row]);
+      // Bounded before the conversion: llround of a huge or infinite t has no defined result.
+      if (!(t[row] * 1e3 - static_cast<double>(prev_ms) <= 65535.5)) {
+        fail("{}:{}: t = {} s: more than 65535 ms after the previous change; the board waits at most 65535 ms",
+             src, tbl.line_of(row), t[row]);
+      }
       const auto at_ms = static_cast<std::int64_t>(std::llround(t[row] * 1e3));
       if (at_ms - prev_ms > 0xFFFF) {
         fail("{}:{}: {} ms after the previous change; the board waits at most 65535 ms", src, tbl.line_of(row),
@@ -252,7 +260,7 @@ void run_send(const LinkOptions& link, const SendOptions& options, std::ostream&
       }
       // The data contract's duty is a fraction of full scale; the register's unit is %.
       const double value = reg.unit == Unit::Percent ? v * 100.0 : v;
-      const int frac = reg.unit == Unit::Gain ? c->frac_bits() : 0;
+      const int frac = reg.unit == Unit::Gain ? frac_bits : 0;
       std::int16_t raw = 0;
       try {
         raw = to_raw(reg, value, frac);
@@ -267,6 +275,16 @@ void run_send(const LinkOptions& link, const SendOptions& options, std::ostream&
       }
     }
   }
+  return entries;
+}
+
+void run_send(const LinkOptions& link, const SendOptions& options, std::ostream& out) {
+  const table::Table tbl = table::read_path(options.path);
+  send_plan(tbl, 0);  // every input error before the port is opened
+  auto c = connect(link);
+  const std::vector<SeqEntry> entries = send_plan(tbl, c->frac_bits());
+  std::int64_t prev_ms = 0;
+  for (const SeqEntry& e : entries) prev_ms += e.delay_ms;
   Session& s = *c->session;
   s.write_sequence(entries);
   const RegisterInfo& len = require_register("seq_len");

@@ -6,7 +6,11 @@
 #include <string>
 #include <vector>
 
+#include "config/ini.hpp"
 #include "link/capture_meta.hpp"  // RigOptions
+#include "link/registers.hpp"
+#include "link/session.hpp"  // SeqEntry
+#include "table/table.hpp"
 
 namespace mcg::link {
 
@@ -38,6 +42,17 @@ void run_set(const LinkOptions& link, const std::string& name, const std::string
 /// and prints what the board holds as a [board] section.
 void run_load(const LinkOptions& link, const std::string& path, std::ostream& out, std::ostream& err);
 
+/// One register write of load FILE.ini and the file:line it came from.
+struct LoadWrite {
+  const RegisterInfo* reg;
+  double value;
+  std::string origin;
+};
+using LoadPlan = std::vector<LoadWrite>;
+/// The writes of load FILE.ini ([board] registers, the [controller] section) without the board,
+/// in the order they are written. Throws mcg::Error naming file:line.
+LoadPlan load_plan(const config::Ini& ini, const std::string& path);
+
 struct StreamOptions {
   double seconds = 0.0;            ///< stop after this much stream time (0: see samples)
   std::int64_t samples = 0;        ///< stop after this many samples (0 with seconds 0: until Ctrl-C)
@@ -65,6 +80,10 @@ struct SendOptions {
   std::string path;         ///< CSV: t and one column per register to change
   std::string then;         ///< "", "play" or "loop": start playback after loading
 };
+/// The sequence of send FILE.csv without the board: an entry wherever a register column
+/// changes, gains in `frac_bits` fixed point. Throws mcg::Error naming file:line.
+std::vector<SeqEntry> send_plan(const table::Table& tbl, int frac_bits);
+
 /// send FILE.csv: turns a table of register values over time into the board's command
 /// sequence (an entry wherever a register column changes) and loads it into the board's RAM.
 void run_send(const LinkOptions& link, const SendOptions& options, std::ostream& out);

@@ -1,0 +1,35 @@
+// The firmware's frame receiver and command dispatcher, on the host board layer: the bytes
+// arrive on the serial line a chunk per 1 ms tick; the board must keep running and answering.
+#include "fuzz.hpp"
+#include "host_board.h"
+#include "link/frame.hpp"
+
+#include <algorithm>
+#include <vector>
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  host_board_reset();
+  std::uint8_t out[256];
+  std::size_t at = 0;
+  int idle = 0;
+  // Every byte is offered; ticks run until the line took them all and the board went quiet.
+  while ((at < size || idle < 20) && host_board_time_ms() < 60000u) {
+    if (at < size) at += host_board_rx(data + at, std::min<std::size_t>(size - at, 8));
+    host_board_tick(static_cast<std::uint16_t>(at < size ? data[at] & 0x0fu : 0u));
+    if (host_board_tx(out, sizeof out) == 0 && at >= size) ++idle;
+  }
+  // Still alive: a version request gets its answer.
+  const std::vector<std::uint8_t> ask = mcg::link::encode(MCG_CMD_VERSION, {});
+  host_board_rx(ask.data(), ask.size());
+  mcg::link::Decoder decoder(1e9);
+  std::vector<mcg::link::Frame> frames;
+  bool answered = false;
+  for (int t = 0; t < 200 && !answered; ++t) {
+    host_board_tick(0);
+    const std::size_t n = host_board_tx(out, sizeof out);
+    decoder.feed({out, n}, 0.0, frames);
+    for (const auto& f : frames) answered = answered || f.cmd == (MCG_CMD_VERSION | MCG_REPLY_BIT);
+  }
+  if (!answered) mcg::fuzz::finding("the board stopped answering after the input");
+  return 0;
+}
