@@ -613,7 +613,7 @@ linsys::StepLimits step_limits(const Options& o) {
   if (!o.rise_pct.empty()) {
     const std::vector<double> v = parse_list(o.rise_pct, "--rise");
     if (v.size() != 2 || !(v[0] >= 0.0 && v[0] < v[1] && v[1] <= 100.0)) {
-      fail("--rise: expected LOW,HIGH with 0 <= LOW < HIGH <= 100 (percent), got '{}'", o.rise_pct);
+      fail("--rise: expected LOW,HIGH with 0 <= LOW < HIGH <= 100 (percent), got {}", quote(o.rise_pct));
     }
     lim.rise_low = v[0] / 100.0;
     lim.rise_high = v[1] / 100.0;

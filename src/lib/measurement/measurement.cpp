@@ -68,16 +68,16 @@ CountEstimator parse_rpm_estimator(std::string_view text, std::string_view where
   std::string_view s = text;
   CountEstimator e;
   const auto bad = [&]() {
-    fail("{}: expected 'counts over <W> s window, <N> counts/rev', got '{}'", where, text);
+    fail("{}: expected 'counts over <W> s window, <N> counts/rev', got {}", where, quote(text));
   };
   if (next_word(s) != "counts" || next_word(s) != "over") bad();
   if (!table::parse_number(next_word(s), e.window_s)) bad();
   if (next_word(s) != "s" || next_word(s) != "window") bad();
   if (!table::parse_number(next_word(s), e.counts_per_rev)) bad();
   if (next_word(s) != "counts/rev" || !next_word(s).empty()) bad();
-  if (!(e.window_s > 0.0) || !std::isfinite(e.window_s)) fail("{}: window must be > 0 s in '{}'", where, text);
+  if (!(e.window_s > 0.0) || !std::isfinite(e.window_s)) fail("{}: window must be > 0 s in {}", where, quote(text));
   if (!(e.counts_per_rev >= 1.0) || !std::isfinite(e.counts_per_rev)) {
-    fail("{}: counts/rev must be >= 1 in '{}'", where, text);
+    fail("{}: counts/rev must be >= 1 in {}", where, quote(text));
   }
   return e;
 }
@@ -129,7 +129,7 @@ CurrentChain parse_i_measurement(std::string_view text, std::string_view where) 
   bool seen_adc = false;
   bool seen_sigma = false;
   const auto bad = [&](std::string_view clause, std::string_view expected) {
-    fail("{}: clause '{}' of '{}': expected {}", where, clause, text, expected);
+    fail("{}: clause {} of {}: expected {}", where, quote(clause), quote(text), expected);
   };
   const auto once = [&](bool& seen, std::string_view clause) {
     if (seen) bad(clause, "each clause at most once");

@@ -130,11 +130,11 @@ double Effect::get(std::string_view key) const {
   }
   // Not set: the catalog's default (an Effect built by hand may list only some parameters).
   const EffectSpec* spec = find_effect(name);
-  if (spec == nullptr) fail("unknown effect '{}'", name);
+  if (spec == nullptr) fail("unknown effect {}", quote(name));
   for (const auto& p : spec->params) {
     if (p.name == key) return p.default_value;
   }
-  fail("effect '{}' has no parameter '{}'", name, key);
+  fail("effect {} has no parameter {}", quote(name), quote(key));
 }
 
 void Effect::set(std::string_view key, double value) {
@@ -145,9 +145,9 @@ void Effect::set(std::string_view key, double value) {
     }
   }
   const EffectSpec* spec = find_effect(name);
-  if (spec == nullptr) fail("unknown effect '{}'", name);
+  if (spec == nullptr) fail("unknown effect {}", quote(name));
   if (std::none_of(spec->params.begin(), spec->params.end(), [&](const auto& p) { return p.name == key; })) {
-    fail("effect '{}' has no parameter '{}'", name, key);
+    fail("effect {} has no parameter {}", quote(name), quote(key));
   }
   params.emplace_back(std::string(key), value);
 }
