@@ -63,6 +63,12 @@ check "stream: the columns of mcg-csv(5)" eval '[ "$(grep -v "^#" "$work/live.cs
 check "stream: the PI holds the speed command" eval 'grep -v "^#" "$work/live.csv" | awk -F, "NR>20 && \$2!=\"nan\" {s+=\$2; n++} END {m=s/n; exit !(m>440 && m<460)}"'
 check "stream: rpm_cmd, clutch and r_load are reported" eval 'tail -1 "$work/live.csv" | grep -q ",450,2,inf$"'
 check "stream --seconds 0.256 gives 64 samples" eval 'S stream --seconds 0.256 > "$work/s.csv" && [ "$(rows "$work/s.csv")" = 64 ]'
+# The emulator stalled by the scheduler inside a frame: the host must not see a partial frame.
+(for i in $(seq 10); do sleep 0.13; kill -STOP "$board_pid"; sleep 0.15; kill -CONT "$board_pid"; done) &
+stall_pid=$!
+check "a stalled emulator loses no sample" eval 'S stream --samples 400 > "$work/stall.csv" 2> "$work/err" &&
+  [ "$(rows "$work/stall.csv")" = 400 ] && [ ! -s "$work/err" ]'
+wait "$stall_pid"
 check "the stream is off again" eval 'S get stream > "$work/v" && same "$work/v" 0'
 
 # Ctrl-C keeps what was captured and ends cleanly

@@ -20,6 +20,7 @@
 #include "common/tool.hpp"    // stderr_is_terminal
 #include "link/interrupt.hpp" // InterruptGuard
 #include "link/pty.hpp"       // PtyLink
+#include "mcg_protocol.h"     // MCG_SYNC, MCG_FRAME_OVERHEAD
 
 namespace mcg::board {
 
@@ -28,6 +29,44 @@ namespace {
 /// Ticks run back to back at most this far behind the wall clock; a longer stall of the host
 /// (the machine busy) is skipped instead of replayed in a burst.
 constexpr double k_max_lag_s = 0.25;
+
+/// Bytes the board sent that the host has not read yet, beyond which whole frames are dropped,
+/// as on a line nobody reads (about 4 s of the 9600 baud line).
+constexpr std::size_t k_max_unread_bytes = 4096;
+
+/// Length of the prefix of `line` made of complete frames (SYNC LEN CMD PAYLOAD CRC CRC). The
+/// emulator hands the pseudo-terminal whole frames only: a stall of this process inside a frame
+/// must not look to the host like a silence on the line, which drops the partial frame.
+std::size_t complete_frames(const std::vector<std::uint8_t>& line) {
+  std::size_t end = 0;
+  while (end < line.size()) {
+    if (line[end] != MCG_SYNC) {
+      ++end;  // not a frame start: passed on as it is, as the line would
+      continue;
+    }
+    if (end + 1 >= line.size()) break;
+    const std::size_t frame = line[end + 1] + std::size_t{MCG_FRAME_OVERHEAD};
+    if (end + frame > line.size()) break;
+    end += frame;
+  }
+  return end;
+}
+
+/// Writes the complete frames of `line` that the pseudo-terminal takes now and keeps the rest;
+/// what a pseudo-terminal without a reader refuses is lost, as on a line nobody reads.
+void write_frames(int fd, std::vector<std::uint8_t>& line) {
+  const std::size_t ready = complete_frames(line);
+  if (ready == 0) return;
+  const ssize_t n = ::write(fd, line.data(), ready);
+  const std::size_t written = n >= 0 ? static_cast<std::size_t>(n) : errno == EAGAIN ? 0 : ready;
+  line.erase(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(written));
+  if (line.size() > k_max_unread_bytes) {
+    // Drops from the first frame start past the excess, so the host resynchronises on a SYNC.
+    const auto cut = std::find(line.begin() + static_cast<std::ptrdiff_t>(line.size() - k_max_unread_bytes),
+                               line.end(), std::uint8_t{MCG_SYNC});
+    line.erase(line.begin(), cut);
+  }
+}
 
 }  // namespace
 
@@ -84,6 +123,7 @@ void serve(const ServeOptions& options) {
   auto start = Clock::now();
   std::uint64_t ticks = 0;
   std::vector<std::uint8_t> rx_pending;
+  std::vector<std::uint8_t> tx_pending;
   std::uint8_t buf[4096];
   while (!link::InterruptGuard::interrupted() && (limit_ticks == 0 || ticks < limit_ticks)) {
     for (;;) {
@@ -106,10 +146,10 @@ void serve(const ServeOptions& options) {
       }
       board.tick();
       ++ticks;
-      // What does not fit into the pseudo-terminal is lost, as on a line nobody reads.
       const std::size_t n = board.tx(buf);
-      if (n > 0 && ::write(pty.fd(), buf, n) < 0 && errno != EAGAIN) break;
+      tx_pending.insert(tx_pending.end(), buf, buf + n);
     }
+    write_frames(pty.fd(), tx_pending);
     wall_s = std::chrono::duration<double>(Clock::now() - start).count();
     const double wait_s = static_cast<double>(ticks + 1) * tick_s - wall_s;
     pollfd p{pty.fd(), POLLIN, 0};
