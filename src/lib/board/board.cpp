@@ -1,7 +1,7 @@
 // The firmware core's host layer, stepped against the plant.
 #include "board/board.hpp"
 
-#include <cassert>
+#include "common/demand.hpp"
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -25,7 +25,7 @@ double encoder_position(double theta_rad) {
 
 EmulatedBoard::EmulatedBoard(const BoardOptions& options)
     : m_options(options), m_plant(options.model, model::SimOptions{options.max_step_s}, 1) {
-  assert(!g_board_alive);
+  MCG_DEMAND(!g_board_alive);
   g_board_alive = true;
   host_board_reset();
   host_board_set_baud(options.baud);

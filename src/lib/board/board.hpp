@@ -21,7 +21,7 @@ struct BoardOptions {
 };
 
 /// One board per process (the core keeps its state in globals, as on the 8051): a second
-/// instance while one lives is a programming error (assert).
+/// instance while one lives is a programming error (MCG_DEMAND).
 ///
 /// Per 1 ms tick: the core's PWM duty d (1/1000) drives the plant with v = d / 1000 * supply_V
 /// for 1 ms; the clutch output selects clutch state 2 (engaged) or 1 (attached, disengaged);

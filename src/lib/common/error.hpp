@@ -15,7 +15,7 @@ namespace mcg {
 /// Bad input of any kind: malformed CSV, a missing column, an out-of-range option, a port
 /// that vanished. The message is one line that names where ("<stdin>:12: column 'rpm': ...").
 /// Tools catch it once in tool_main(), print "mcg-TOOL: error: <what>" and exit 1.
-/// Broken invariants are asserts, never this type.
+/// Broken invariants are MCG_DEMAND (common/demand.hpp), never this type.
 class Error : public std::runtime_error {
  public:
   /// The message passes through printable() uncut: whatever a site forgot to quote through

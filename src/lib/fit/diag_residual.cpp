@@ -5,7 +5,7 @@
 #include <unsupported/Eigen/FFT>
 
 #include <algorithm>
-#include <cassert>
+#include "common/demand.hpp"
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -80,9 +80,9 @@ std::vector<bool> transient_mask(const model::Inputs& inputs) {
 }
 
 std::vector<RegimeStat> regime_breakdown(const RegimeContext& context, std::span<const double> residual) {
-  assert(context.inputs != nullptr);
+  MCG_DEMAND(context.inputs != nullptr);
   const model::Inputs& in = *context.inputs;
-  assert(residual.size() == in.t_s.size() && context.rpm_measured.size() == in.t_s.size());
+  MCG_DEMAND(residual.size() == in.t_s.size() && context.rpm_measured.size() == in.t_s.size());
   const std::vector<bool> transient = transient_mask(in);
   const double stuck_rpm = 0.5 * context.rpm_resolution;
 
@@ -130,7 +130,7 @@ const std::vector<double>& band_edges_hz() {
 }
 
 std::vector<RegimeStat> band_breakdown(std::span<const double> residual, double dt_s) {
-  assert(dt_s > 0.0);
+  MCG_DEMAND(dt_s > 0.0);
   const std::vector<double>& edges = band_edges_hz();
   std::vector<Accumulator> bands(edges.size());
   const std::size_t n = residual.size();
@@ -177,7 +177,7 @@ std::vector<RegimeStat> band_breakdown(std::span<const double> residual, double 
 
 Whiteness whiteness(std::span<const double> residual, std::span<const double> input, std::size_t max_lag,
                     std::size_t first_lag) {
-  assert(residual.size() == input.size() && first_lag >= 1);
+  MCG_DEMAND(residual.size() == input.size() && first_lag >= 1);
   const std::size_t n = residual.size();
   std::vector<double> r(n, 0.0);
   std::vector<double> u(n, 0.0);
@@ -245,7 +245,7 @@ Whiteness whiteness(std::span<const double> residual, std::span<const double> in
 
 NoiseFloor rpm_noise_floor(std::span<const double> rpm_measured, const std::vector<bool>& transient,
                            double window_s, double counts_per_rev) {
-  assert(window_s > 0.0 && counts_per_rev > 0.0 && transient.size() == rpm_measured.size());
+  MCG_DEMAND(window_s > 0.0 && counts_per_rev > 0.0 && transient.size() == rpm_measured.size());
   const double q = 60.0 / (window_s * counts_per_rev);
   std::size_t moving = 0;
   std::size_t finite = 0;
@@ -265,7 +265,7 @@ NoiseFloor rpm_noise_floor(std::span<const double> rpm_measured, const std::vect
 
 NoiseFloor current_noise_floor(std::span<const double> i_measured, const std::vector<bool>& transient,
                                double adc_step_A, double sigma_A) {
-  assert(transient.size() == i_measured.size());
+  MCG_DEMAND(transient.size() == i_measured.size());
   NoiseFloor nf;
   nf.chain = std::sqrt(sigma_A * sigma_A + adc_step_A * adc_step_A / 12.0);
   nf.data = second_difference_noise(i_measured, [&](std::size_t n) { return !transient[n]; });
@@ -273,7 +273,7 @@ NoiseFloor current_noise_floor(std::span<const double> i_measured, const std::ve
 }
 
 double chi_square_quantile(double dof, double z_p) {
-  assert(dof > 0.0);
+  MCG_DEMAND(dof > 0.0);
   const double a = 2.0 / (9.0 * dof);
   const double c = 1.0 - a + z_p * std::sqrt(a);
   return dof * c * c * c;

@@ -6,7 +6,7 @@
 #include "config/ini.hpp"
 #include "table/table.hpp"
 
-#include <cassert>
+#include "common/demand.hpp"
 #include <fstream>
 #include <ostream>
 
@@ -15,7 +15,7 @@ namespace mcg::fit {
 using namespace gap_detail;
 
 GapReport diagnose_gap(const model::Model& model, const GapData& data, const GapSettings& settings) {
-  assert(!data.train.empty() && !data.validate.empty());
+  MCG_DEMAND(!data.train.empty() && !data.validate.empty());
   GapReport report;
   report.split_note = data.split_note;
   report.validation_samples = validation_count(data);

@@ -5,7 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cassert>
+#include "common/demand.hpp"
 #include <cmath>
 #include <limits>
 
@@ -64,7 +64,7 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
   std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.fpe < b.fpe; });
   for (auto& c : skipped) all.push_back(std::move(c));
   const auto it = std::find_if(all.begin(), all.end(), [&](const auto& c) { return c.name == diagnosis; });
-  assert(it != all.end());
+  MCG_DEMAND(it != all.end());
   std::rotate(all.begin(), it, it + 1);
   if (diagnosis == "none") all.front().significant = false;
   report.candidates = std::move(all);

@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cassert>
+#include "common/demand.hpp"
 #include <cmath>
 #include <ostream>
 
@@ -23,7 +23,7 @@ std::vector<RegimeStat> pool(const std::vector<std::vector<RegimeStat>>& parts) 
   std::vector<double> sum_sq(out.size(), 0.0);
   for (auto& s : out) s.samples = 0;
   for (const auto& part : parts) {
-    assert(part.size() == out.size());
+    MCG_DEMAND(part.size() == out.size());
     for (std::size_t k = 0; k < part.size(); ++k) {
       if (part[k].samples == 0) continue;
       out[k].samples += part[k].samples;

@@ -2,7 +2,7 @@
 #include "link/frame.hpp"
 
 #include <algorithm>
-#include <cassert>
+#include "common/demand.hpp"
 
 namespace mcg::link {
 
@@ -13,7 +13,7 @@ std::uint16_t crc16(std::span<const std::uint8_t> bytes, std::uint16_t crc) {
 }
 
 std::vector<std::uint8_t> encode(std::uint8_t cmd, std::span<const std::uint8_t> payload) {
-  assert(payload.size() <= MCG_MAX_PAYLOAD);
+  MCG_DEMAND(payload.size() <= MCG_MAX_PAYLOAD);
   std::vector<std::uint8_t> out;
   out.reserve(payload.size() + MCG_FRAME_OVERHEAD);
   out.push_back(static_cast<std::uint8_t>(MCG_SYNC));

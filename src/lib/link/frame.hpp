@@ -21,7 +21,7 @@ struct Frame {
 std::uint16_t crc16(std::span<const std::uint8_t> bytes, std::uint16_t crc = MCG_CRC_INIT);
 
 /// The wire bytes of a frame: SYNC LEN CMD PAYLOAD CRC_LO CRC_HI. The payload must not exceed
-/// MCG_MAX_PAYLOAD (assert).
+/// MCG_MAX_PAYLOAD (MCG_DEMAND).
 std::vector<std::uint8_t> encode(std::uint8_t cmd, std::span<const std::uint8_t> payload);
 
 /// What the decoder threw away, and why.

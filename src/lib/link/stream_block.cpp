@@ -3,7 +3,7 @@
 
 #include <algorithm>
 #include <array>
-#include <cassert>
+#include "common/demand.hpp"
 #include <cmath>
 #include <limits>
 
@@ -35,7 +35,7 @@ StreamSample decode_stream_sample(std::span<const std::uint8_t, 3> b) {
 
 StreamAssembler::StreamAssembler(int window_samples)
     : m_window(window_samples), m_rpm_cmd(k_nan), m_prev_counts(k_nan) {
-  assert(window_samples >= 1);
+  MCG_DEMAND(window_samples >= 1);
 }
 
 std::uint64_t StreamAssembler::lost_samples() const { return m_lost_blocks * MCG_STREAM_SAMPLES; }

@@ -4,7 +4,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
-#include <cassert>
+#include "common/demand.hpp"
 #include <cstddef>
 
 namespace mcg::linsys {
@@ -49,7 +49,7 @@ Poly scale(const Poly& p, double k) {
 }
 
 Poly monomial(int n) {
-  assert(n >= 0);
+  MCG_DEMAND(n >= 0);
   Poly r(static_cast<std::size_t>(n) + 1, 0.0);
   r[0] = 1.0;
   return r;
@@ -114,7 +114,7 @@ int zeros_at_origin(const Poly& p0) {
 }
 
 Poly drop_origin(const Poly& p, int n) {
-  assert(n >= 0 && static_cast<std::size_t>(n) <= p.size());
+  MCG_DEMAND(n >= 0 && static_cast<std::size_t>(n) <= p.size());
   Poly r = trim(p);
   r.resize(r.size() - static_cast<std::size_t>(n));
   return r;

@@ -225,7 +225,7 @@ struct Outputs {
 
 /// Simulates the rows of `inputs` from rest at t_s[0] (initial clutch = clutch[0]).
 /// Inputs are validated by the caller (increasing finite t, finite v, clutch 0/1/2, r_load >= 0);
-/// asserts otherwise.
+/// stops (MCG_DEMAND) otherwise.
 Outputs simulate(const Model& model, const Inputs& inputs, const SimOptions& options = {});
 
 /// Checks `inputs` like mcg-sim does; throws mcg::Error naming `source` and the row's line

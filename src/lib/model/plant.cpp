@@ -8,7 +8,7 @@
 // in the step (cubic Hermite interpolation of the speed, secant on the torque), the step is
 // redone up to the event, the mode switches and integration continues.
 #include <algorithm>
-#include <cassert>
+#include "common/demand.hpp"
 #include <cmath>
 #include <deque>
 #include <numbers>
@@ -159,9 +159,9 @@ class PlantImpl {
   }
 
   void step(double dt, const Drive& drive) {
-    assert(dt > 0.0);
-    assert(drive.clutch >= 0 && drive.clutch <= 2);
-    assert(drive.r_load_ohm >= 0.0);
+    MCG_DEMAND(dt > 0.0);
+    MCG_DEMAND(drive.clutch >= 0 && drive.clutch <= 2);
+    MCG_DEMAND(drive.r_load_ohm >= 0.0);
     set_clutch(drive.clutch);
     set_load(drive.r_load_ohm);
     const double t_end = m_t + dt;

@@ -1,5 +1,5 @@
 // Open-loop simulation of a table of rows, and the checks on its inputs.
-#include <cassert>
+#include "common/demand.hpp"
 #include <cmath>
 #include <numbers>
 
@@ -28,7 +28,7 @@ void Outputs::store(std::size_t row, const State& s) {
 
 Outputs simulate(const Model& model, const Inputs& in, const SimOptions& options) {
   const std::size_t n = in.t_s.size();
-  assert(in.v_V.size() == n && in.clutch.size() == n && in.r_load_ohm.size() == n);
+  MCG_DEMAND(in.v_V.size() == n && in.clutch.size() == n && in.r_load_ohm.size() == n);
   Outputs out;
   out.resize(n);
   if (n == 0) return out;

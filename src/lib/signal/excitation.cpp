@@ -5,7 +5,7 @@
 
 #include <algorithm>
 #include <array>
-#include <cassert>
+#include "common/demand.hpp"
 #include <charconv>
 #include <cmath>
 #include <numbers>
@@ -81,7 +81,7 @@ double schedule_value(double initial, std::span<const Change> changes, double t_
 }
 
 std::vector<double> time_grid(double dt_s, double duration_s) {
-  assert(dt_s > 0 && duration_s > 0);
+  MCG_DEMAND(dt_s > 0 && duration_s > 0);
   const auto n = static_cast<std::size_t>(std::floor(duration_s / dt_s + 1e-9));
   std::vector<double> t(n);
   for (std::size_t k = 0; k < n; ++k) t[k] = static_cast<double>(k) * dt_s;
@@ -107,7 +107,7 @@ std::vector<double> step_signal(std::span<const double> t_s, double level, doubl
 }
 
 std::vector<double> staircase_levels(double amp, int steps) {
-  assert(steps >= 1);
+  MCG_DEMAND(steps >= 1);
   const double n = static_cast<double>(steps);
   std::vector<double> levels;
   levels.reserve(static_cast<std::size_t>(4 * steps + 1));
@@ -118,7 +118,7 @@ std::vector<double> staircase_levels(double amp, int steps) {
 }
 
 std::vector<double> staircase_signal(std::span<const double> t_s, double amp, int steps, double hold_s) {
-  assert(hold_s > 0);
+  MCG_DEMAND(hold_s > 0);
   const std::vector<double> levels = staircase_levels(amp, steps);
   std::vector<double> x(t_s.size());
   for (std::size_t k = 0; k < t_s.size(); ++k) {
@@ -131,7 +131,7 @@ std::vector<double> staircase_signal(std::span<const double> t_s, double amp, in
 
 std::vector<double> chirp_signal(std::span<const double> t_s, double amp, double f0_hz, double f1_hz,
                                  double duration_s, ChirpSpacing spacing) {
-  assert(f0_hz > 0 && f1_hz > 0 && duration_s > 0);
+  MCG_DEMAND(f0_hz > 0 && f1_hz > 0 && duration_s > 0);
   std::vector<double> x(t_s.size());
   const double k = f1_hz / f0_hz;
   const bool linear = spacing == ChirpSpacing::linear || std::abs(k - 1.0) < 1e-12;
@@ -147,7 +147,7 @@ std::vector<double> chirp_signal(std::span<const double> t_s, double amp, double
 
 std::vector<int> multisine_harmonics(double f0_hz, double f1_hz, int lines, double period_s,
                                      ChirpSpacing spacing) {
-  assert(lines >= 1 && period_s > 0 && f1_hz >= f0_hz);
+  MCG_DEMAND(lines >= 1 && period_s > 0 && f1_hz >= f0_hz);
   const double h0 = f0_hz * period_s;
   const double h1 = f1_hz * period_s;
   if (h0 < 1.0 - 1e-9) {
@@ -187,7 +187,7 @@ std::vector<double> schroeder_phases(std::size_t count) {
 
 std::vector<double> multisine_signal(std::size_t samples, double amp, std::size_t period_samples,
                                      std::span<const int> harmonics, std::span<const double> phases_rad) {
-  assert(harmonics.size() == phases_rad.size() && period_samples > 0);
+  MCG_DEMAND(harmonics.size() == phases_rad.size() && period_samples > 0);
   const double np = static_cast<double>(period_samples);
   std::vector<double> period(period_samples, 0.0);
   for (std::size_t j = 0; j < harmonics.size(); ++j) {
@@ -218,9 +218,9 @@ double crest_factor(std::span<const double> x) {
 
 Lfsr::Lfsr(int order, std::uint32_t state)
     : m_order(order), m_mask(static_cast<std::uint32_t>((std::uint64_t{1} << order) - 1)), m_state(state) {
-  assert(order >= k_prbs_min_order && order <= k_prbs_max_order);
+  MCG_DEMAND(order >= k_prbs_min_order && order <= k_prbs_max_order);
   m_state &= m_mask;
-  assert(m_state != 0);
+  MCG_DEMAND(m_state != 0);
 }
 
 int Lfsr::next() {
@@ -243,7 +243,7 @@ std::uint32_t prbs_initial_state(int order, std::mt19937_64& rng) {
 
 std::vector<double> prbs_signal(std::size_t samples, double amp, int order, std::size_t clock_samples,
                                 std::uint32_t state) {
-  assert(clock_samples >= 1);
+  MCG_DEMAND(clock_samples >= 1);
   Lfsr lfsr(order, state);
   std::vector<double> x(samples);
   double value = 0.0;
@@ -256,7 +256,7 @@ std::vector<double> prbs_signal(std::size_t samples, double amp, int order, std:
 
 std::vector<double> aprbs_signal(std::size_t samples, double amp, int order, std::size_t clock_samples,
                                  std::uint32_t state, std::mt19937_64& rng) {
-  assert(clock_samples >= 1);
+  MCG_DEMAND(clock_samples >= 1);
   Lfsr lfsr(order, state);
   std::uniform_real_distribution<double> level(-amp, amp);
   std::vector<double> x(samples);

@@ -76,7 +76,7 @@ inline constexpr int k_prbs_max_order = 24;
 /// Fibonacci linear-feedback shift register with the maximal-length taps of order n.
 class Lfsr {
  public:
-  /// `state` must be nonzero in the low n bits (asserted).
+  /// `state` must be nonzero in the low n bits (MCG_DEMAND).
   Lfsr(int order, std::uint32_t state);
   /// The next output bit (0 or 1).
   int next();

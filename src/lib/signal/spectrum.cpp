@@ -8,7 +8,7 @@
 #include <unsupported/Eigen/FFT>
 
 #include <algorithm>
-#include <cassert>
+#include "common/demand.hpp"
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -36,7 +36,7 @@ std::size_t default_segment(std::size_t samples) {
 
 Response welch_h1(std::span<const double> x, std::span<const double> y, double dt_s, std::size_t segment,
                   double overlap) {
-  assert(x.size() == y.size() && dt_s > 0 && overlap >= 0 && overlap < 1);
+  MCG_DEMAND(x.size() == y.size() && dt_s > 0 && overlap >= 0 && overlap < 1);
   const std::size_t n = x.size();
   if (segment < 16) fail("--segment {}: needs at least 16 samples", segment);
   if (n < segment) fail("record too short: {} samples, one segment needs {}", n, segment);
@@ -98,7 +98,7 @@ Response welch_h1(std::span<const double> x, std::span<const double> y, double d
 
 Response line_response(std::span<const double> x, std::span<const double> y, double dt_s,
                        std::size_t period_samples, std::span<const int> harmonics) {
-  assert(x.size() == y.size() && dt_s > 0 && period_samples > 0);
+  MCG_DEMAND(x.size() == y.size() && dt_s > 0 && period_samples > 0);
   const std::size_t total_periods = x.size() / period_samples;
   if (total_periods == 0) {
     fail("record too short: {} samples, one multisine period needs {}", x.size(), period_samples);
@@ -170,7 +170,7 @@ std::vector<double> unwrapped_phase_deg(std::span<const std::complex<double>> h)
 }
 
 Spacing spacing_of(std::span<const double> t_s) {
-  assert(t_s.size() >= 2);
+  MCG_DEMAND(t_s.size() >= 2);
   std::vector<double> steps(t_s.size() - 1);
   for (std::size_t k = 0; k + 1 < t_s.size(); ++k) steps[k] = t_s[k + 1] - t_s[k];
   const auto [lo, hi] = std::minmax_element(steps.begin(), steps.end());
@@ -186,7 +186,7 @@ Spacing spacing_of(std::span<const double> t_s) {
 }
 
 std::vector<double> resample_linear(std::span<const double> t_s, std::span<const double> y, double dt_s) {
-  assert(t_s.size() == y.size() && t_s.size() >= 2 && dt_s > 0);
+  MCG_DEMAND(t_s.size() == y.size() && t_s.size() >= 2 && dt_s > 0);
   const double t0 = t_s.front();
   const auto n = static_cast<std::size_t>(std::floor((t_s.back() - t0) / dt_s + 1e-9)) + 1;
   std::vector<double> out(n);

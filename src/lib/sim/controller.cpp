@@ -2,7 +2,7 @@
 #include "sim/controller.hpp"
 
 #include <algorithm>
-#include <cassert>
+#include "common/demand.hpp"
 #include <cmath>
 
 #include "common/error.hpp"
@@ -89,7 +89,7 @@ void controller_to_ini(const Controller& c, config::Ini& ini) {
 
 ControllerState::ControllerState(const Controller& controller)
     : m_c(controller), m_e(controller.b.size(), 0.0), m_y(controller.a.size() > 1 ? controller.a.size() - 1 : 0, 0.0) {
-  assert(!m_c.b.empty() && !m_c.a.empty() && m_c.a[0] != 0.0);
+  MCG_DEMAND(!m_c.b.empty() && !m_c.a.empty() && m_c.a[0] != 0.0);
 }
 
 double ControllerState::step(double error_rpm) {
@@ -149,7 +149,7 @@ void ClosedLoop::row(double t_s, double rpm_cmd, int clutch, double r_load_ohm) 
     m_started = true;
     m_t0_s = t_s;
   } else {
-    assert(t_s > m_t_s);
+    MCG_DEMAND(t_s > m_t_s);
     // The previous row's interval: step to each tick inside it, tick there with its command.
     double t = m_t_s;
     bool first = true;
@@ -178,7 +178,7 @@ ClosedLoopOutputs simulate_closed_loop(const model::Model& model, const Controll
                                        const CountEstimator& estimator, const ClosedLoopInputs& in,
                                        const model::SimOptions& options) {
   const std::size_t n = in.t_s.size();
-  assert(in.rpm_cmd.size() == n && in.clutch.size() == n && in.r_load_ohm.size() == n);
+  MCG_DEMAND(in.rpm_cmd.size() == n && in.clutch.size() == n && in.r_load_ohm.size() == n);
   ClosedLoopOutputs out;
   out.plant.resize(n);
   out.duty.assign(n, 0.0);

@@ -78,7 +78,7 @@ class ClosedLoop {
 
   /// Takes row n: runs the plant over [t_{n-1}, t_s) under row n-1 (the ticks inside it
   /// with row n-1's command), then ticks at t_s if one is due there with `rpm_cmd`.
-  /// t_s must increase from row to row (assert; the caller checks its input).
+  /// t_s must increase from row to row (MCG_DEMAND; the caller checks its input).
   void row(double t_s, double rpm_cmd, int clutch, double r_load_ohm);
   /// The plant at the last row's time, before that row's inputs act.
   model::State state() const { return m_plant.state(); }

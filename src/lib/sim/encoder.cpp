@@ -1,7 +1,7 @@
 // Encoder count estimator shared by mcg-sim and the gap diagnosis.
 #include "sim/encoder.hpp"
 
-#include <cassert>
+#include "common/demand.hpp"
 #include <cmath>
 #include <numbers>
 
@@ -41,7 +41,7 @@ double StreamingRpmEstimator::push(double t_s, double theta_rad) {
 
 std::vector<double> estimate_rpm(const std::vector<double>& t, const std::vector<double>& theta,
                                  const CountEstimator& e) {
-  assert(t.size() == theta.size());
+  MCG_DEMAND(t.size() == theta.size());
   std::vector<double> rpm(t.size(), 0.0);
   StreamingRpmEstimator estimator(e);
   for (std::size_t k = 0; k < t.size(); ++k) rpm[k] = estimator.push(t[k], theta[k]);

@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cassert>
+#include "common/demand.hpp"
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -229,7 +229,7 @@ std::vector<double>& Table::col(std::string_view name) {
 }
 
 std::vector<double>& Table::set(std::string_view name, std::vector<double> values) {
-  assert(names.empty() || values.size() == rows());
+  MCG_DEMAND(names.empty() || values.size() == rows());
   if (auto i = find(name)) {
     columns[*i] = std::move(values);
     return columns[*i];
@@ -314,18 +314,18 @@ void Writer::header(const std::vector<std::string>& names) {
 }
 
 void Writer::set_digits(std::size_t column, int digits) {
-  assert(column < m_digits.size() && digits >= 1 && digits <= 17);
+  MCG_DEMAND(column < m_digits.size() && digits >= 1 && digits <= 17);
   m_digits[column] = digits;
 }
 
 void Writer::set_digits(std::string_view name, int digits) {
   const auto it = std::find(m_names.begin(), m_names.end(), name);
-  assert(it != m_names.end());
+  MCG_DEMAND(it != m_names.end());
   set_digits(static_cast<std::size_t>(it - m_names.begin()), digits);
 }
 
 void Writer::row(std::span<const double> values) {
-  assert(values.size() == m_names.size());
+  MCG_DEMAND(values.size() == m_names.size());
   char text[32];
   for (std::size_t c = 0; c < values.size(); ++c) {
     if (c) m_buffer += ',';
