@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
                            "samples received: {}\n"
                            "samples lost:     {}\n"
                            "damaged frames:   {} (noise bytes {})\n"
-                           "achieved rate:    {:.2f} samples/s ({:.1f} B/s of the line's 960 B/s; nominal 500 samples/s)\n"
+                           "achieved rate:    {:.2f} samples/s ({:.1f} B/s of the line's 960 B/s; nominal 250 samples/s)\n"
                            "longest gap between blocks: {:.1f} ms (nominal 64 ms)\n",
                            seconds, speed, received, assembler.lost_samples(), st.bad_crc + st.too_long + st.timeouts,
                            st.skipped_bytes, static_cast<double>(received) / wall_s,
