@@ -3,6 +3,7 @@
 #include "hal.h" /* hal_ticks_take, hal_uart_rx, hal_uart_tx_free, hal_board_id */
 
 uint8_t MCG_XDATA g_stream_seq;
+uint8_t MCG_XDATA g_count_neg;
 
 static MCG_XDATA uint8_t s_service_ms;   /* ticks since the last keypad service */
 static MCG_XDATA uint16_t s_lcd_ms;      /* ticks since the last LCD refresh */
@@ -12,7 +13,6 @@ static MCG_XDATA int16_t s_stream_pulses; /* signed pulses of the present sample
 static MCG_XDATA int16_t s_stream_duty;   /* sum of the duty over the present sample's ticks */
 static MCG_XDATA uint8_t s_stream_flags;  /* MCG_STREAM_BIT_CMD if rpm_cmd changed in the sample */
 static MCG_XDATA int16_t s_stream_cmd;    /* rpm_cmd seen by the last tick */
-static MCG_XDATA uint8_t s_stream_neg;    /* 1 if the last non-zero drive was negative */
 static uint8_t MCG_XDATA s_block[MCG_STREAM_PAYLOAD];
 static uint8_t MCG_XDATA s_data[MCG_LOGDATA_HEADER + 2u * MCG_LOG_DUMP_CHUNK];
 
@@ -37,7 +37,7 @@ void core_init(void) {
   s_stream_duty = 0;
   s_stream_flags = 0;
   s_stream_cmd = g_rpm_cmd;
-  s_stream_neg = 0;
+  g_count_neg = 0;
   hal_pwm_write(0);
   menu_refresh();
 }
@@ -50,9 +50,9 @@ static void stream_tick(uint8_t pulses) {
   uint8_t MCG_XDATA* MCG_SLOW p;
   MCG_SLOW int16_t v;
   if (g_duty_out > 0) {
-    s_stream_neg = 0;
+    g_count_neg = 0;
   } else if (g_duty_out < 0) {
-    s_stream_neg = 1;
+    g_count_neg = 1;
   }
   if (g_rpm_cmd != s_stream_cmd) {
     s_stream_cmd = g_rpm_cmd;
@@ -66,7 +66,7 @@ static void stream_tick(uint8_t pulses) {
     s_stream_flags = 0;
     return;
   }
-  s_stream_pulses = (int16_t)(s_stream_neg ? s_stream_pulses - pulses : s_stream_pulses + pulses);
+  s_stream_pulses = (int16_t)(g_count_neg ? s_stream_pulses - pulses : s_stream_pulses + pulses);
   s_stream_duty = (int16_t)(s_stream_duty + g_duty_out);
   if (++s_stream_phase < MCG_STREAM_PERIOD_MS) {
     return;

@@ -132,6 +132,9 @@ extern char MCG_XDATA g_lcd[2][17]; /* last text sent to the LCD, NUL-terminated
 
 /* app.c: streaming and the log dump ---------------------------------------------------------- */
 extern uint8_t MCG_XDATA g_stream_seq;
+/* 1 if the last non-zero drive was negative: the sign given to the direction-less encoder pulses
+ * by the stream and the RAM log (updated at the start of each tick, for the tick that ended). */
+extern uint8_t MCG_XDATA g_count_neg;
 /* 1 if the tick now running opens a stream sample (or the stream is off): a sequence starts on such
  * a tick, so that its entries fall on sample boundaries when their delays are multiples of
  * MCG_STREAM_PERIOD_MS. */

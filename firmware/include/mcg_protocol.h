@@ -235,7 +235,7 @@ typedef struct {
 
 /* ---- RAM log ---------------------------------------------------------------------------------- */
 #define MCG_LOG_XADDR 0x9500u  /* external RAM address of the log */
-#define MCG_LOG_POINTS 255u    /* points; each is u16 LE: encoder counts during its interval */
+#define MCG_LOG_POINTS 255u    /* points; each is i16 LE: encoder counts during its interval, signed with the drive */
 #define MCG_LOG_DUMP_CHUNK 16u /* points per MCG_MSG_LOG_DATA frame */
 #define MCG_LOG_DUMP_FRAMES 16u
 /* MCG_MSG_LOG_DATA payload: index u8 of the first point, n u8, then n x u16 points */

@@ -458,3 +458,18 @@ TEST(FwSequence, ChecksEntriesWhenStored) {
   EXPECT_EQ(b.request(MCG_CMD_SEQ_WRITE, Bytes{0, 1, 2})->payload, Bytes{MCG_ST_BAD_LENGTH});
   EXPECT_EQ(b.read(MCG_REG_SEQ_LEN), 0);
 }
+
+// The log signs the direction-less pulses with the drive, as the stream does.
+TEST(FwLogger, PointsCarryTheDriveDirection) {
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_DUTY_MIN, -1000), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_DUTY, -300), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_LOG_INTERVAL, 4), MCG_ST_OK);
+  b.set_pulses(5);
+  b.run(10, 5);
+  ASSERT_EQ(b.request(MCG_CMD_LOG_START)->payload.at(0), MCG_ST_OK);
+  b.run(4 * static_cast<int>(MCG_LOG_POINTS) + 10, 5);
+  for (std::size_t k = 0; k < MCG_LOG_POINTS; ++k) {
+    ASSERT_EQ(static_cast<std::int16_t>(host_board_log()[k]), -20) << k;
+  }
+}

@@ -12,6 +12,7 @@
 
 #include "common/error.hpp"     // mcg::fail
 #include "config/ini.hpp"       // Ini
+#include "link/capture_meta.hpp"  // board_config, k_encoder_text
 #include "link/connection.hpp"  // Connection
 #include "link/interrupt.hpp"   // InterruptGuard
 #include "mcg/version.hpp"      // k_version
@@ -213,11 +214,19 @@ void run_dump(const LinkOptions& link, const DumpOptions& options, std::ostream&
   est.window_s = interval_s;
   est.counts_per_rev = MCG_COUNTS_PER_REV;
   w.meta("rpm_estimator", measurement::format_rpm_estimator(est));
-  w.meta("encoder", "512 lines, x4 quadrature decoding = 2048 counts/rev");
-  w.meta("timing", "counts and rpm over (t - sample_period, t]; t = 0 when the recording started");
+  w.meta("encoder", k_encoder_text);
+  w.meta("timing",
+         "counts and rpm over (t - sample_period, t]; t = 0 when the recording started; speed signed with the "
+         "direction of the last non-zero drive");
+  w.meta("board_config", [&] {
+    std::string text;
+    for (const auto& [name, value] : board_config(*c)) text += fmt::format("{}{}={}", text.empty() ? "" : " ", name, value);
+    return text;
+  }());
   w.header({"t", "rpm", "counts"});
   for (std::size_t i = 0; i < dump.counts.size(); ++i) {
-    const double counts = dump.counts[i];
+    // Points are i16: pulses signed with the direction of the last non-zero drive.
+    const double counts = static_cast<std::int16_t>(dump.counts[i]);
     w.row({static_cast<double>(i + 1) * interval_s, counts * k_pulses_to_rev / interval_s * 60.0, counts});
   }
   w.finish();
