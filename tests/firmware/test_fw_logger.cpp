@@ -161,7 +161,8 @@ struct StreamSample {
 };
 StreamSample sample_at(const Bytes& payload, std::size_t k) {
   const std::size_t at = MCG_STREAM_HEADER + MCG_STREAM_SAMPLE_BYTES * k;
-  const unsigned w = payload.at(at) | payload.at(at + 1) << 8 | payload.at(at + 2) << 16;
+  const unsigned w = static_cast<unsigned>(payload.at(at)) | static_cast<unsigned>(payload.at(at + 1)) << 8 |
+                     static_cast<unsigned>(payload.at(at + 2)) << 16;
   const auto sext = [](unsigned v, unsigned bits) {
     const unsigned m = 1u << (bits - 1);
     return static_cast<int>((v & ((1u << bits) - 1)) ^ m) - static_cast<int>(m);
