@@ -86,10 +86,15 @@ void frame_rx_tick(void) {
     return;
   }
   if (++s_idle_ms > MCG_FRAME_TIMEOUT_MS) {
+    /* Every byte held arrived before the silence: a candidate the rescan finds that still needs
+     * more bytes is as stale as the one dropped, so all of them go now (one timeout per SYNC in
+     * the junk kept the link deaf for 21 ms times their number). */
     s_idle_ms = 0;
     report_error(MCG_ST_TIMEOUT);
-    drop(1);
-    scan();
+    do {
+      drop(1);
+      scan();
+    } while (s_fill > 0);
   }
 }
 

@@ -209,6 +209,22 @@ TEST(FwProtocol, ResynchronisesAfterRandomGarbage) {
   EXPECT_EQ(answered, rounds);
 }
 
+// Junk full of SYNC bytes, each claiming a long frame: one silence longer than the frame timeout
+// ends all the partial frames it holds, not one per timeout (fuzz finding: 30 of them kept the
+// board deaf for 630 ms).
+TEST(FwProtocol, OneSilenceEndsEveryStalePartialFrame) {
+  Board b;
+  Bytes junk;
+  for (int i = 0; i < 30; ++i) {
+    junk.insert(junk.end(), {MCG_SYNC, 60});
+  }
+  b.send(junk);
+  b.run(MCG_FRAME_TIMEOUT_MS + 2);
+  const auto f = b.request(MCG_CMD_VERSION);
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->payload.at(0), MCG_ST_OK);
+}
+
 // A frame that starts inside a damaged one is found without waiting for the timeout: the parser
 // rescans the bytes it already holds from the next SYNC on.
 TEST(FwProtocol, FindsFrameHiddenInsideDamagedFrame) {

@@ -38,11 +38,13 @@ double wrap_pi(double x) {
   return r;
 }
 
-void add_unique(std::vector<double>& v, double x) {
-  for (double y : v) {
-    if (std::abs(x - y) <= 1e-10 * std::max(std::abs(x), std::abs(y))) return;
-  }
-  v.push_back(x);
+/// Sorts `v` and keeps one of each run of values equal within 1e-10 relative: the same crossing
+/// found from two grid intervals. O(n log n): a long delay has a phase crossing per 2 pi / tau.
+void sort_unique(std::vector<double>& v) {
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end(),
+                      [](double a, double b) { return std::abs(b - a) <= 1e-10 * std::max(std::abs(a), std::abs(b)); }),
+          v.end());
 }
 
 /// Dense scan grid for crossovers of `le` on [lo, hi].
@@ -229,26 +231,26 @@ Margins margins(const std::vector<Tf>& factors) {
   }
   for (std::size_t i = 0; i + 1 < w.size(); ++i) {
     if (std::isfinite(lm[i]) && std::isfinite(lm[i + 1]) && (lm[i] > 0.0) != (lm[i + 1] > 0.0)) {
-      add_unique(m.gain_crossovers_rad_s, bisect([&](double x) { return fe.log_mag(x); }, w[i], w[i + 1]));
+      m.gain_crossovers_rad_s.push_back(bisect([&](double x) { return fe.log_mag(x); }, w[i], w[i + 1]));
     } else if (lm[i] == 0.0) {
-      add_unique(m.gain_crossovers_rad_s, w[i]);
+      m.gain_crossovers_rad_s.push_back(w[i]);
     }
     const double u0 = std::floor((ph[i] + k_pi) / (2.0 * k_pi));
     const double u1 = std::floor((ph[i + 1] + k_pi) / (2.0 * k_pi));
     if (u0 != u1) {
       const double target = 2.0 * k_pi * std::max(u0, u1) - k_pi;
       const double x = bisect([&](double v) { return fe.phase_rad(v) - target; }, w[i], w[i + 1]);
-      if (std::abs(fe.phase_rad(x) - target) < 1e-6) add_unique(m.phase_crossovers_rad_s, x);
+      if (std::abs(fe.phase_rad(x) - target) < 1e-6) m.phase_crossovers_rad_s.push_back(x);
     }
   }
   std::vector<double> axis_w;
   std::vector<double> axis_v;
   if (factors.size() == 1) real_axis_points(factors.front(), axis_w, axis_v);
   for (std::size_t i = 0; i < axis_w.size(); ++i) {
-    if (axis_v[i] < 0.0) add_unique(m.phase_crossovers_rad_s, axis_w[i]);
+    if (axis_v[i] < 0.0) m.phase_crossovers_rad_s.push_back(axis_w[i]);
   }
-  std::sort(m.gain_crossovers_rad_s.begin(), m.gain_crossovers_rad_s.end());
-  std::sort(m.phase_crossovers_rad_s.begin(), m.phase_crossovers_rad_s.end());
+  sort_unique(m.gain_crossovers_rad_s);
+  sort_unique(m.phase_crossovers_rad_s);
   for (double x : m.gain_crossovers_rad_s) {
     const double pm = wrap_pi(fe.phase_rad(x) + k_pi);
     const double pm_deg = pm * 180.0 / k_pi;
@@ -278,10 +280,23 @@ std::vector<Complex> closed_loop_poles(const Tf& loop, bool* padded) {
   if (l.discrete()) {
     l = fold_delay(l, "loop");
   } else if (l.delay_s > 0.0) {
-    const Tf p = pade(l.delay_s, 6);
+    // Solved in x = s tau, where the Pade coefficients are O(1): in s their tau^k spread (1e29
+    // for a day-long delay) left the companion matrix's roots meaningless.
+    const double tau_s = l.delay_s;
+    const auto in_x = [tau_s](const Poly& q) {  // q(x / tau)
+      Poly r = q;
+      double f = 1.0;
+      for (std::size_t i = r.size(); i-- > 0; f /= tau_s) r[i] *= f;
+      return r;
+    };
+    l.num = in_x(l.num);
+    l.den = in_x(l.den);
     l.delay_s = 0.0;
-    l = series(l, p);
+    l = series(l, pade(1.0, 6));
     if (padded) *padded = true;
+    std::vector<Complex> poles = roots(add(l.den, l.num));
+    for (Complex& x : poles) x /= tau_s;
+    return poles;
   }
   return roots(add(l.den, l.num));
 }
@@ -298,7 +313,7 @@ std::vector<double> boundary_gains(const Tf& loop) {
   if (is_zero(loop.num)) return k;
   const Margins m = margins(loop);
   for (double gm : m.gain_margins) {
-    if (gm > 0.0 && std::isfinite(gm)) add_unique(k, gm);
+    if (gm > 0.0 && std::isfinite(gm)) k.push_back(gm);
   }
   // A root through infinity: the leading coefficient of den + K·num vanishes.
   Tf l = loop.discrete() ? fold_delay(loop, "loop") : loop;
@@ -306,9 +321,9 @@ std::vector<double> boundary_gains(const Tf& loop) {
   const Poly den = trim(l.den);
   if (num.size() == den.size()) {
     const double kinf = -den.front() / num.front();
-    if (kinf > 0.0) add_unique(k, kinf);
+    if (kinf > 0.0) k.push_back(kinf);
   }
-  std::sort(k.begin(), k.end());
+  sort_unique(k);
   return k;
 }
 
