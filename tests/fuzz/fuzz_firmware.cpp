@@ -11,15 +11,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   host_board_reset();
   std::uint8_t out[256];
   std::size_t at = 0;
-  int idle = 0;
-  // Every byte is offered; ticks run until the line took them all and the board went quiet for
-  // longer than the frame timeout, as a host does before it asks again (a request that follows
-  // garbage at once completes the garbage's partial frame and is lost with it; the host retries).
+  // Every byte is offered, a chunk per tick; then the line stays quiet for longer than the frame
+  // timeout, as a host does before it asks again (a request that follows garbage at once
+  // completes the garbage's partial frame and is lost with it; the host retries).
   constexpr int k_quiet_ticks = 2 * static_cast<int>(MCG_FRAME_TIMEOUT_MS);
-  while ((at < size || idle < k_quiet_ticks) && host_board_time_ms() < 60000u) {
-    if (at < size) at += host_board_rx(data + at, std::min<std::size_t>(size - at, 8));
+  while (at < size && host_board_time_ms() < 60000u) {
+    at += host_board_rx(data + at, std::min<std::size_t>(size - at, 8));
     host_board_tick(static_cast<std::uint16_t>(at < size ? data[at] & 0x0fu : 0u));
-    if (host_board_tx(out, sizeof out) == 0 && at >= size) ++idle;
+    host_board_tx(out, sizeof out);
+  }
+  for (int t = 0; t < k_quiet_ticks; ++t) {
+    host_board_tick(0);
+    host_board_tx(out, sizeof out);
   }
   // Still alive: a version request gets its answer.
   const std::vector<std::uint8_t> ask = mcg::link::encode(MCG_CMD_VERSION, {});
