@@ -2,7 +2,6 @@
 #include "common/error.hpp"
 #include "config/ini.hpp"
 #include "design/design.hpp"
-#include "design/fixed_point.hpp"
 #include "link/connection.hpp"
 #include "link/registers.hpp"
 #include "linsys/parse.hpp"
@@ -171,67 +170,6 @@ TEST(DesignDesign, TuneMeetsItsLimitsAndCannotGoFaster) {
     any = any || meets(su, linsys::scaled(shape, k), lim);
   }
   EXPECT_FALSE(any);
-}
-
-TEST(DesignFixedPoint, ReportPiInBoardRegisters) {
-  // The report's PI on 512-count/rev errors and 922 duty counts: on the board each coefficient
-  // scales by (512/2048) (1000/922); 3.1575 * 2^12 = 12933.3 fits int16, so F = 12.
-  const auto q = board_fixed_point({11.645, -6.987}, {1.0, -1.0}, DesignUnits{});
-  ASSERT_TRUE(q);
-  const double k = 0.25 * 1000.0 / 922.0;
-  EXPECT_DOUBLE_EQ(q->factor, k);
-  EXPECT_EQ(q->mode, "pi");
-  EXPECT_EQ(q->coef_frac, 12);
-  EXPECT_EQ(q->regs, (std::vector<std::int32_t>{12933, -7760, 0}));
-  EXPECT_EQ(std::lround(11.645 * k * 4096.0), 12933);
-  EXPECT_EQ(std::lround(-6.987 * k * 4096.0), -7760);
-  ASSERT_EQ(q->b.size(), 2U);
-  EXPECT_DOUBLE_EQ(q->b[0], 12933.0 / 4096.0 / k);
-  EXPECT_DOUBLE_EQ(q->b[1], -7760.0 / 4096.0 / k);
-  EXPECT_EQ(q->a, (std::vector<double>{1.0, -1.0}));
-  EXPECT_DOUBLE_EQ(q->acc_max, 1000.0 * std::ldexp(1.0, 20) + 8191.0 * (12933.0 + 7760.0));
-}
-
-TEST(DesignFixedPoint, SameRegistersAsMcgSerial) {
-  // mcg-serial quantises [controller] itself (src/lib/link/controller_ini.cpp): both must agree.
-  const std::vector<std::vector<double>> bs{{11.645, -6.987}, {644.0}, {40.0, -70.0, 31.0}, {0.3, -0.29}};
-  for (const auto& b : bs) {
-    const std::vector<double> a = b.size() == 1 ? std::vector<double>{1.0} : std::vector<double>{1.0, -1.0};
-    const auto q = board_fixed_point(b, a, DesignUnits{});
-    ASSERT_TRUE(q);
-    std::istringstream text(fmt::format("[controller]\nb = {}\na = {}\n", linsys::list_text(b), linsys::list_text(a)));
-    const auto regs = link::controller_registers(config::Ini::parse(text, "c.ini"));
-    int frac = -1;
-    std::vector<std::int32_t> raw;
-    for (const auto& [reg, value] : regs) {
-      if (reg->name == "coef_frac") frac = static_cast<int>(value);
-    }
-    for (const auto& [reg, value] : regs) {
-      if (reg->unit == link::Unit::Gain) raw.push_back(link::to_raw(*reg, value, frac));
-    }
-    EXPECT_EQ(frac, q->coef_frac) << linsys::list_text(b);
-    EXPECT_EQ(raw, q->regs) << linsys::list_text(b);
-  }
-}
-
-TEST(DesignFixedPoint, PGainGetsFewerFractionalBits) {
-  // 644 (the report's P design) * 0.27115 = 174.62: Q8.7 holds it, Q7.8 does not.
-  const auto q = board_fixed_point({644.0}, {1.0}, DesignUnits{});
-  ASSERT_TRUE(q);
-  EXPECT_EQ(q->mode, "p");
-  EXPECT_EQ(q->coef_frac, 7);
-  EXPECT_EQ(q->regs, (std::vector<std::int32_t>{22351}));
-  EXPECT_EQ(q->a, (std::vector<double>{1.0}));
-}
-
-TEST(DesignFixedPoint, FormsTheBoardDoesNotRun) {
-  EXPECT_FALSE(board_fixed_point({1.0, -0.5}, {1.0, -0.9}, DesignUnits{}));  // lead/lag
-  EXPECT_FALSE(board_fixed_point({1.0, -0.5}, {1.0}, DesignUnits{}));        // FIR
-  DesignUnits slow;
-  slow.dt_s = 0.002;
-  EXPECT_FALSE(board_fixed_point({11.645, -6.987}, {1.0, -1.0}, slow));
-  EXPECT_THROW(board_fixed_point({2e5, -1.0}, {1.0, -1.0}, DesignUnits{}), mcg::Error);   // > 32767 at F = 0
-  EXPECT_THROW(board_fixed_point({1.0, -1e-6}, {1.0, -1.0}, DesignUnits{}), mcg::Error);  // b1 rounds to 0
 }
 
 }  // namespace

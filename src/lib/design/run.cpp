@@ -4,6 +4,8 @@
 
 #include "design/rig.hpp"
 
+#include "boardunits/controller.hpp"
+
 #include "common/error.hpp"
 #include "config/ini.hpp"
 #include "linsys/parse.hpp"
@@ -31,21 +33,7 @@ constexpr double k_pi = std::numbers::pi;
 /// The report's identified plant, ω_internal/V_in in rad/s per V (Figure 16-1).
 constexpr const char* k_report_plant = "16.557/((s/65+1)*(s/950+1))";
 
-/// The chain of the report's Figure 17-1 around the plant G (V → rad/s):
-/// duty counts --PWM--> logic volts --H-bridge--> motor volts --G--> rad/s --encoder--> counts/rad
-/// --software conversion (counts over one period T)--> counts per sample.
-struct Chain {
-  double pwm_full_counts = 922.0;  ///< duty counts at 100 % duty
-  double pwm_logic_v = 5.0;        ///< PWM output at 100 % duty, V (the report's .00542 = 5/922)
-  double hbridge_gain = 4.0;       ///< V/V: 20 V supply switched by 5 V logic
-  double counts_per_rev = 512.0;   ///< encoder counts per revolution (the report's 81.5 = 512/2π)
-  double dt_s = 0.001;             ///< sample period: counts are summed over one period
-
-  double pwm_v_per_count() const { return pwm_logic_v / pwm_full_counts; }
-  double counts_per_rad() const { return counts_per_rev / (2.0 * k_pi); }
-  /// K = (V_logic/N_full)·K_hb·(N_rev/2π)·T: counts per sample per (rad/s) per duty count.
-  double gain() const { return pwm_v_per_count() * hbridge_gain * counts_per_rad() * dt_s; }
-};
+using Chain = boardunits::LoopChain;
 
 struct Resolved {
   Ini ini;
@@ -423,11 +411,11 @@ void write_design(const Options& o, const Resolved& r, const Design& d, std::ost
     // The board keeps its accumulator exact: the output is rounded, the state is not.
     ini.set("controller", "round_output", 0.0, "the board keeps an exact accumulator");
 
-    DesignUnits units;
+    boardunits::ControllerUnits units;
     units.input_scale = cpr / 60.0 * su.dt_s;
     units.duty_full_scale = full;
     units.dt_s = su.dt_s;
-    if (const auto q = board_fixed_point(b, a, units)) {
+    if (const auto q = boardunits::board_fixed_point(b, a, units)) {
       const double lsb = std::ldexp(1.0, -q->coef_frac);
       ini.set("fixed_point", "mode", q->mode);
       ini.set("fixed_point", "coef_frac", static_cast<double>(q->coef_frac),
@@ -469,15 +457,7 @@ std::optional<Tf> analysis_controller(const Options& o, const Resolved& r) {
     if (r.setup.plant.discrete()) fail("--controller: a continuous controller on a sampled plant needs --dt");
     return c;
   }
-  if (r.ini.has_section("controller")) {
-    const auto b = r.ini.numbers("controller", "b");
-    const auto a = r.ini.numbers("controller", "a");
-    if (!b || b->empty()) r.ini.reject("controller", "a", "needs b in [controller] too");
-    if (!a || a->empty() || (*a)[0] == 0.0) r.ini.reject("controller", "b", "needs a with a_0 != 0 in [controller]");
-    const double dt = r.ini.number("controller", "dt_s").value_or(r.dt_s);
-    if (!(dt > 0.0)) r.ini.reject("controller", "b", "needs dt_s");
-    return controller_from_coefficients(*b, *a, dt);
-  }
+  if (const auto c = boardunits::controller_from_ini(r.ini)) return controller_from_coefficients(c->b, c->a, c->dt_s);
   return std::nullopt;
 }
 

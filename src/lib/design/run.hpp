@@ -2,7 +2,6 @@
 #pragma once
 
 #include "design/design.hpp"
-#include "design/fixed_point.hpp"
 
 #include <cmath>
 #include <iosfwd>

@@ -6,6 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include "boardunits/chain.hpp"  // k_board_encoder_text
+
 namespace mcg::table {
 class Writer;
 }
@@ -15,7 +17,7 @@ namespace mcg::link {
 struct Connection;
 
 /// The encoder behind every count the board reports (mcg-csv(5) `encoder`).
-inline constexpr const char* k_encoder_text = "512 lines, x4 quadrature decoding = 2048 counts/rev";
+inline constexpr const char* k_encoder_text = boardunits::k_board_encoder_text;
 
 /// The resistor the rig's load relay switches across the generator, ohm (the report's 5.6 ohm).
 inline constexpr double k_load_resistor_ohm = 5.6;

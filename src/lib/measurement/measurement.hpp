@@ -7,13 +7,15 @@
 #include <string>
 #include <string_view>
 
+#include "boardunits/chain.hpp"  // k_board_counts_per_rev
+
 namespace mcg::measurement {
 
 /// `# rpm_estimator: counts over W s window, N counts/rev`: the count is floor(theta N / (2 pi))
 /// as a real up/down counter holds it, and rpm(t) = (count(t) - count(t - W)) / N / W * 60.
 struct CountEstimator {
   double window_s = 0.005;
-  double counts_per_rev = 2048.0;   ///< 512-line encoder, x4 quadrature decoding
+  double counts_per_rev = boardunits::k_board_counts_per_rev;  ///< 512-line encoder, x4 quadrature decoding
 
   /// Speed resolution, rpm per count: 60 / (N W).
   double rpm_per_count() const { return 60.0 / (counts_per_rev * window_s); }

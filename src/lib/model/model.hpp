@@ -19,6 +19,8 @@
 #include <utility>
 #include <vector>
 
+#include "boardunits/chain.hpp"  // k_supply_V
+
 namespace mcg::config {
 class Ini;
 }
@@ -54,7 +56,7 @@ struct Params {
   Machine generator;
   Friction clutch_disengaged;   ///< clutch attached, not engaged (state 1), on the motor shaft
   Friction clutch_engaged;      ///< clutch engaged (state 2), on the coupled shaft
-  double supply_V = 20.0;       ///< H-bridge supply: v = duty * supply_V, saturated at +-supply_V
+  double supply_V = boardunits::k_supply_V;  ///< H-bridge supply: v = duty * supply_V, saturated at +-supply_V
   double dead_time_s = 0.0;     ///< transport delay of the applied voltage (clutch/relay not delayed)
 };
 

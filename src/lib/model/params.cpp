@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "boardunits/chain.hpp"
 #include "common/error.hpp"
 #include "config/ini.hpp"
 
@@ -158,7 +159,7 @@ Params builtin_rig() {
   p.clutch_engaged.Ts_Nm = 6.8967e-3;
   p.clutch_engaged.Tc_Nm = 2.8518e-3;
   p.clutch_engaged.viscous = {-4.785e-6, 3.6899e-9, 0.0};
-  p.supply_V = 20.0;
+  p.supply_V = boardunits::k_supply_V;
   p.dead_time_s = 0.0;
   return p;
 }

@@ -6,41 +6,16 @@
 #include <string>
 #include <vector>
 
+#include "boardunits/controller.hpp"  // Controller, the [controller] section
 #include "model/model.hpp"
 #include "sim/encoder.hpp"
 
-namespace mcg::config {
-class Ini;
-}
-
 namespace mcg::sim {
 
-/// The [controller] section of an INI parameter set (docs/formats.md):
-///   sum_{k=0}^{na} a_k y_{n-k} = sum_{k=0}^{nb} b_k e_{n-k},  a_0 != 0,
-///   e_n = input_scale (rpm_cmd_n - rpm_n)        (rpm_n: the encoder estimate at tick n)
-///   y_n clamped to [-duty_full_scale, duty_full_scale], rounded to whole counts when
-///   round_output, and stored clamped (anti-windup: the recursion sees the applied value);
-///   duty = y_n / duty_full_scale, quantised to duty_resolution; v = duty supply_V.
-/// The report's PI: b = 11.645 -6.987, a = 1 -1, input_scale = 512/60000 counts per rpm
-/// (the error in encoder counts per 1 ms at 512 counts/rev), duty_full_scale = 922.
-struct Controller {
-  std::string type = "pi";                 ///< informational (p, pi, pid, lead, ...)
-  std::vector<double> b{11.645, -6.987};   ///< numerator on e, b_0 first
-  std::vector<double> a{1.0, -1.0};        ///< denominator on y, a_0 first
-  double dt_s = 0.001;                     ///< sampling period
-  double input_scale = 512.0 / 60000.0;    ///< error units per rpm
-  double duty_full_scale = 922.0;          ///< output units at 100 % duty
-  bool round_output = true;                ///< y in whole counts, as the firmware holds it
-  double duty_resolution = 0.002;          ///< PWM duty step (fraction of full scale), 0 = none
-};
-
-/// The report's PI controller (section "Proportional-Integral Controller").
-Controller report_pi();
-
-/// The [controller] section of `ini`, or nullopt when there is none. Throws mcg::Error
-/// naming file, line and key for a bad value (a_0 = 0, dt_s <= 0, unknown output, ...).
-std::optional<Controller> controller_from_ini(const config::Ini& ini);
-void controller_to_ini(const Controller& controller, config::Ini& ini);
+using boardunits::Controller;
+using boardunits::controller_from_ini;
+using boardunits::controller_to_ini;
+using boardunits::report_pi;
 
 /// The difference equation with its state; step() is one sampling instant.
 class ControllerState {

@@ -11,6 +11,7 @@
 
 #include <unistd.h>
 
+#include "boardunits/chain.hpp"
 #include "common/error.hpp"
 #include "common/fd_input.hpp"
 #include "config/ini.hpp"
@@ -147,8 +148,8 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   meta.erase("seed");
   if (opt.encoder) {
     meta.set("rpm_estimator", format_rpm_estimator(estimator));
-    meta.set("encoder", opt.counts_per_rev == 2048.0
-                            ? std::string("512 lines, x4 quadrature decoding = 2048 counts/rev")
+    meta.set("encoder", opt.counts_per_rev == boardunits::k_board_counts_per_rev
+                            ? std::string(boardunits::k_board_encoder_text)
                             : fmt::format("{} counts/rev", config::format_number(opt.counts_per_rev)));
   }
   if (noisy || opt.adc) {

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "boardunits/chain.hpp"  // k_board_counts_per_rev
+
 namespace mcg::sim {
 
 struct RunOptions {
@@ -16,7 +18,7 @@ struct RunOptions {
   double r_load_ohm = std::numeric_limits<double>::infinity();   ///< when it has no 'r_load' column
   bool encoder = false;               ///< rpm as the board measures it; true speed in rpm_true
   double window_s = 0.005;            ///< encoder count window
-  double counts_per_rev = 2048.0;     ///< 512 lines, x4 quadrature
+  double counts_per_rev = boardunits::k_board_counts_per_rev;  ///< 512 lines, x4 quadrature
   bool open_loop = false;             ///< ignore an 'rpm_cmd' column, drive with v/duty
   double noise_i_A = 0.0;             ///< Gaussian noise on i, standard deviation
   double noise_v_gen_V = 0.0;         ///< Gaussian noise on v_gen, standard deviation

@@ -1,31 +1,30 @@
 // Quantisation of a designed controller into the board's registers.
-#include "design/fixed_point.hpp"
+#include "boardunits/fixed_point.hpp"
 
 #include "common/error.hpp"
 #include "config/ini.hpp"
-#include "mcg_protocol.h"  // MCG_COUNTS_PER_REV, MCG_DUTY_FULL, MCG_COEF_FRAC_BITS_MAX, MCG_TICK_US
+#include "mcg_protocol.h"  // MCG_COEF_FRAC_BITS_MAX, MCG_ERR_LIMIT, MCG_ERR_FRAC_BITS
 
 #include <cmath>
 #include <cstddef>
 
-namespace mcg::design {
+namespace mcg::boardunits {
 
 namespace {
 
 constexpr double k_coef_max = 32767.0;   ///< int16 register
-constexpr double k_e_max_q8 = 8191.0;    ///< |e| bound in Q8 pulses per tick (-8191 <= e <= r <= 6291)
+constexpr double k_e_max_q8 = MCG_ERR_LIMIT;    ///< |e| bound in Q8 pulses per tick (-8191 <= e <= r <= 6291)
 constexpr double k_acc_limit = 2147483647.0;
 
 }  // namespace
 
-double DesignUnits::factor() const {
-  // The same expression as mcg-serial's (src/lib/link/controller_ini.cpp), so both round alike.
-  return input_scale * (60000.0 / MCG_COUNTS_PER_REV) * (MCG_DUTY_FULL / duty_full_scale);
+double ControllerUnits::factor() const {
+  return input_scale * (k_ms_per_min / k_board_counts_per_rev) * (k_board_duty_full / duty_full_scale);
 }
 
 std::optional<BoardFixedPoint> board_fixed_point(const std::vector<double>& b, const std::vector<double>& a,
-                                                 const DesignUnits& units) {
-  if (std::fabs(units.dt_s - MCG_TICK_US * 1e-6) > 1e-12) return std::nullopt;
+                                                 const ControllerUnits& units) {
+  if (std::fabs(units.dt_s - k_tick_s) > 1e-12) return std::nullopt;
   if (a.empty() || a[0] == 0.0 || b.empty()) return std::nullopt;
   const bool incremental = a.size() == 2 && a[1] == -a[0];
   if (!(a.size() == 1 || incremental)) return std::nullopt;
@@ -63,11 +62,11 @@ std::optional<BoardFixedPoint> board_fixed_point(const std::vector<double>& b, c
   }
   if (incremental && q.regs.size() == 2) q.regs.push_back(0);
   q.a = incremental ? std::vector<double>{1.0, -1.0} : std::vector<double>{1.0};
-  q.acc_max = MCG_DUTY_FULL * std::ldexp(1.0, f + 8) + k_e_max_q8 * sum;
+  q.acc_max = k_board_duty_full * std::ldexp(1.0, f + static_cast<int>(MCG_ERR_FRAC_BITS)) + k_e_max_q8 * sum;
   if (q.acc_max > k_acc_limit) {
     fail("fixed point: the accumulator can reach {} > 2^31 - 1 at coef_frac = {}", config::format_number(q.acc_max), f);
   }
   return q;
 }
 
-}  // namespace mcg::design
+}  // namespace mcg::boardunits

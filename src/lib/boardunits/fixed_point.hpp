@@ -7,14 +7,16 @@
 #include <string>
 #include <vector>
 
-namespace mcg::design {
+#include "boardunits/chain.hpp"
 
-/// The design's units: e = input_scale · rpm error (counts per sample), y in duty counts with
-/// duty_full_scale counts at 100 %.
-struct DesignUnits {
-  double input_scale = 512.0 / 60000.0;  ///< counts per sample per rpm (512 counts/rev, 1 ms)
-  double duty_full_scale = 922.0;        ///< duty counts at 100 %
-  double dt_s = 0.001;                   ///< sample period, s
+namespace mcg::boardunits {
+
+/// A controller's units: e = input_scale · rpm error (counts per sample), y in duty counts with
+/// duty_full_scale counts at 100 %. The defaults are the report's chain.
+struct ControllerUnits {
+  double input_scale = LoopChain{}.input_scale();  ///< counts per sample per rpm (512 counts/rev, 1 ms)
+  double duty_full_scale = k_pwm_full_counts;      ///< duty counts at 100 %
+  double dt_s = k_tick_s;                          ///< sample period, s
 
   /// c_board = c · factor(): the board counts e in pulses per 1 ms at 2048 pulses/rev and u in
   /// 1/1000 duty, so factor = input_scale · (60000/2048) · (1000/duty_full_scale)
@@ -45,6 +47,6 @@ struct BoardFixedPoint {
 /// F = 0, when a non-zero coefficient rounds to 0 (the controller would change structure),
 /// or when the worst-case accumulator exceeds 2^31 − 1.
 std::optional<BoardFixedPoint> board_fixed_point(const std::vector<double>& b, const std::vector<double>& a,
-                                                 const DesignUnits& units);
+                                                 const ControllerUnits& units);
 
-}  // namespace mcg::design
+}  // namespace mcg::boardunits
