@@ -90,6 +90,7 @@ TEST(BoardunitsFixedPoint, ReportPiInBoardRegisters) {
   EXPECT_EQ(q->regs, (std::vector<std::int32_t>{12933, -7760, 0}));
   EXPECT_EQ(std::lround(11.645 * k * 4096.0), 12933);
   EXPECT_EQ(std::lround(-6.987 * k * 4096.0), -7760);
+  EXPECT_EQ(q->wanted, (std::vector<double>{11.645 * k, -6.987 * k, 0.0}));  // what load notes the rounding of
   ASSERT_EQ(q->b.size(), 2U);
   EXPECT_DOUBLE_EQ(q->b[0], 12933.0 / 4096.0 / k);
   EXPECT_DOUBLE_EQ(q->b[1], -7760.0 / 4096.0 / k);

@@ -42,6 +42,7 @@ BoardFixedPoint fixed_point_from_ini(const config::Ini& ini, const Controller& c
     const double v = ini.number_or(k_fixed, key, 0.0);
     if (v != std::floor(v) || v < -32768.0 || v > 32767.0) ini.reject(k_fixed, key, "not a 16-bit integer");
     q.regs.push_back(static_cast<std::int32_t>(v));
+    q.wanted.push_back(std::ldexp(v, -q.coef_frac));
     q.b.push_back(std::ldexp(v, -q.coef_frac) / q.factor);
   };
   if (q.mode == "p") {

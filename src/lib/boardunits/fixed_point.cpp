@@ -57,10 +57,14 @@ std::optional<BoardFixedPoint> board_fixed_point(const std::vector<double>& b, c
            config::format_number(b[k]), 15 - f, f);
     }
     q.regs.push_back(static_cast<std::int32_t>(v));
+    q.wanted.push_back(g[k]);
     sum += std::fabs(v);
     q.b.push_back(std::ldexp(v, -f) / q.factor);
   }
-  if (incremental && q.regs.size() == 2) q.regs.push_back(0);
+  if (incremental && q.regs.size() == 2) {
+    q.regs.push_back(0);
+    q.wanted.push_back(0.0);
+  }
   q.a = incremental ? std::vector<double>{1.0, -1.0} : std::vector<double>{1.0};
   q.acc_max = k_board_duty_full * std::ldexp(1.0, f + static_cast<int>(MCG_ERR_FRAC_BITS)) + k_e_max_q8 * sum;
   if (q.acc_max > k_acc_limit) {

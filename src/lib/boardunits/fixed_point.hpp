@@ -34,6 +34,7 @@ struct BoardFixedPoint {
   int coef_frac = 0;                ///< F, fractional bits of the coefficients (0..12)
   std::string mode;                 ///< "p", "pi" or "pid"
   std::vector<std::int32_t> regs;   ///< kp (P) or b0, b1, b2 (PI, PID; b2 = 0 for PI): int16 values
+  std::vector<double> wanted;       ///< c_board before rounding, as regs (what regs 2^-F approximates)
   double factor = 0.0;              ///< c_board = c_design · factor
   std::vector<double> b;            ///< the coefficients the board runs, in the design's units: c_q 2^−F / factor
   std::vector<double> a;            ///< (1) for P, (1, −1) for PI and PID

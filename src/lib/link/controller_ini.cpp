@@ -12,8 +12,8 @@ std::vector<std::pair<const RegisterInfo*, double>> controller_registers(const c
   std::vector<std::pair<const RegisterInfo*, double>> out;
   const std::optional<boardunits::BoardFixedPoint> q = boardunits::board_controller(ini);
   if (!q) return out;
-  // Engineering values raw 2^-F: to_raw gives the integers back exactly.
-  const auto gain = [&](std::size_t k) { return std::ldexp(static_cast<double>(q->regs[k]), -q->coef_frac); };
+  // The unrounded board gains: writing them at 2^-F rounds to q->regs, and load notes each rounding.
+  const auto gain = [&](std::size_t k) { return q->wanted[k]; };
   out.emplace_back(&require_register("coef_frac"), q->coef_frac);
   if (q->mode == "p") {
     out.emplace_back(&require_register("kp"), gain(0));
