@@ -35,7 +35,8 @@ TEST(LinkControllerIni, ReportPiMapsToBoardUnits) {
       "[controller]\ntype = pi\nb = 11.645 -6.987\na = 1 -1\ndt_s = 0.001\ninput_scale = 0.008533333333333333\n"
       "duty_full_scale = 922\n");
   const double k = 0.25 * 1000.0 / 922.0;
-  EXPECT_EQ(value_of(regs, "b0"), 12933.0 / 4096.0);  // quantised: round(11.645 k 2^12) 2^-12
+  // Unrounded: writing at 2^-12 rounds to round(11.645 k 2^12) = 12933, and load notes it.
+  EXPECT_DOUBLE_EQ(value_of(regs, "b0"), 11.645 * k);
   EXPECT_NEAR(value_of(regs, "b0"), 11.645 * k, 0.5 / 4096.0);
   EXPECT_NEAR(value_of(regs, "b1"), -6.987 * k, 0.5 / 4096.0);
   EXPECT_EQ(value_of(regs, "b2"), 0.0);
