@@ -27,6 +27,11 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1.0, 1e7))
       ->capture_default_str();
   app.add_flag("--open-loop", opt.open_loop, "ignore an 'rpm_cmd' column and drive with v or duty");
+  app.add_option("--loop", opt.loop,
+                 "the closed loop's controller: board (the firmware's core on the board's registers) or "
+                 "equation (the [controller] difference equation in double)")
+      ->check(CLI::IsMember({"board", "equation"}))
+      ->capture_default_str();
   app.add_option("--noise-i", opt.noise_i_A, "Gaussian noise on i, standard deviation in A")
       ->check(CLI::Range(0.0, 10.0));
   app.add_option("--noise-v-gen", opt.noise_v_gen_V, "Gaussian noise on v_gen, standard deviation in V")

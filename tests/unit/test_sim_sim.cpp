@@ -8,7 +8,11 @@
 #include <numbers>
 #include <sstream>
 
+#include "board/board.hpp"
+#include "boardunits/fixed_point.hpp"
 #include "common/error.hpp"
+#include "host_board.h"
+#include "mcg_protocol.h"
 #include "config/ini.hpp"
 #include "sim/controller.hpp"
 #include "sim/encoder.hpp"
@@ -132,9 +136,56 @@ ClosedLoopInputs step_command(double rpm, double duration_s) {
   return in;
 }
 
+boardunits::BoardFixedPoint report_pi_registers() {
+  const Controller c = report_pi();
+  return *boardunits::board_fixed_point(c.b, c.a, c.units());
+}
+
+/// The emulated board (firmware core + plant) tick by tick: its registers written as
+/// mcg-serial load writes them, rpm_cmd switching at `t_switch_s`; omega after each tick.
+std::vector<double> board_omega(const boardunits::BoardFixedPoint& q, const std::vector<double>& rpm_cmd) {
+  board::EmulatedBoard board(board::BoardOptions{});
+  const auto put = [](std::uint8_t reg, std::int32_t v) {
+    ASSERT_EQ(host_board_reg_write(reg, static_cast<std::int16_t>(v)), MCG_ST_OK);
+  };
+  put(MCG_REG_COEF_FRAC, q.coef_frac);
+  if (q.mode == "p") {
+    put(MCG_REG_KP, q.regs[0]);
+  } else {
+    put(MCG_REG_B0, q.regs[0]);
+    put(MCG_REG_B1, q.regs[1]);
+    put(MCG_REG_B2, q.regs[2]);
+  }
+  put(MCG_REG_CLUTCH, MCG_CLUTCH_ENGAGED);
+  put(MCG_REG_MODE, q.mode == "p" ? MCG_MODE_P : q.mode == "pi" ? MCG_MODE_PI : MCG_MODE_PID);
+  std::vector<double> omega;
+  for (double r : rpm_cmd) {
+    put(MCG_REG_RPM_CMD, static_cast<std::int32_t>(r));
+    board.tick();
+    omega.push_back(board.plant_state().omega_rad_s);
+  }
+  return omega;
+}
+
+TEST(SimClosedLoop, TheBoardLoopIsTheEmulatedBoardTickForTick) {
+  // A designed P (mcg-design p --pm 55) and the report's PI, 420 -> 520 rpm: mcg-sim's closed loop
+  // runs the same core on the same counts, so the two traces are the same.
+  for (const auto& q : {*boardunits::board_fixed_point({305.58319013538915}, {1.0}, {}), report_pi_registers()}) {
+    ClosedLoopInputs in = step_command(420.0, 1.5);
+    for (std::size_t k = 750; k < in.rpm_cmd.size(); ++k) in.rpm_cmd[k] = 520.0;
+    const std::vector<double> board = board_omega(q, in.rpm_cmd);
+    const auto model = simulate_closed_loop(model::Model{}, board_loop_controller(q), in);
+    for (std::size_t k = 0; k + 1 < in.t_s.size(); ++k) {
+      // Equal but for the rounding of the step lengths (t_n+1 - t_n is not exactly 1 ms in double).
+      ASSERT_NEAR(model.plant.omega_rad_s[k + 1], board[k], 1e-9) << q.mode << " at t = " << in.t_s[k + 1];
+    }
+    EXPECT_NEAR(model.plant.rpm.back(), q.mode == "p" ? 460.0 : 520.0, 10.0) << q.mode;
+  }
+}
+
 TEST(SimClosedLoop, ReportPiOvershootsA100RpmStepAndSettles) {
   // The report: "Overshoot of the simulation is approximately 30 %" (design: 16 %).
-  const auto out = simulate_closed_loop(model::Model{}, report_pi(), {}, step_command(100.0, 0.6));
+  const auto out = simulate_closed_loop(model::Model{}, equation_loop_controller(report_pi()), step_command(100.0, 0.6));
   const double peak = *std::max_element(out.plant.rpm.begin(), out.plant.rpm.end());
   EXPECT_GT(peak, 116.0);
   double mean = 0.0;
@@ -158,8 +209,8 @@ TEST(SimClosedLoop, RowsSparserThanTheTicksStillTickEveryMillisecond) {
     sparse.clutch.push_back(2);
     sparse.r_load_ohm.push_back(model::k_open_circuit);
   }
-  const auto a = simulate_closed_loop(model::Model{}, report_pi(), {}, dense);
-  const auto b = simulate_closed_loop(model::Model{}, report_pi(), {}, sparse);
+  const auto a = simulate_closed_loop(model::Model{}, board_loop_controller(report_pi_registers()), dense);
+  const auto b = simulate_closed_loop(model::Model{}, board_loop_controller(report_pi_registers()), sparse);
   for (std::size_t k = 0; k < sparse.t_s.size(); ++k) EXPECT_NEAR(b.plant.rpm[k], a.plant.rpm[5 * k], 1e-6);
 }
 

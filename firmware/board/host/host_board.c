@@ -204,3 +204,7 @@ const char* host_board_lcd(uint8_t row) { return s_lcd[row & 1u]; }
 const uint16_t* host_board_log(void) { return g_log; }
 
 uint32_t host_board_time_ms(void) { return s_time_ms; }
+
+uint8_t host_board_reg_write(uint8_t reg, int16_t value) { return regs_write(reg, value); }
+
+uint8_t host_board_reg_read(uint8_t reg, int16_t* value) { return regs_read(reg, value); }

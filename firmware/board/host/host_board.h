@@ -70,6 +70,12 @@ const uint16_t* host_board_log(void);
 /* Milliseconds (ticks) since reset. */
 uint32_t host_board_time_ms(void);
 
+/* The register table as the protocol's READ and WRITE commands reach it, without the serial line:
+ * for a host that runs the core as a controller only (mcg-sim's closed loop). Return MCG_ST_OK or
+ * the status the command would answer. */
+uint8_t host_board_reg_write(uint8_t reg, int16_t value);
+uint8_t host_board_reg_read(uint8_t reg, int16_t* value);
+
 #ifdef __cplusplus
 }
 #endif

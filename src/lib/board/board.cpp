@@ -1,7 +1,6 @@
 // The firmware core's host layer, stepped against the plant.
 #include "board/board.hpp"
 
-#include "common/demand.hpp"
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -13,8 +12,6 @@ namespace mcg::board {
 
 namespace {
 
-bool g_board_alive = false;
-
 constexpr double k_tick_s = MCG_TICK_US * 1e-6;
 
 double encoder_position(double theta_rad) {
@@ -24,16 +21,12 @@ double encoder_position(double theta_rad) {
 }  // namespace
 
 EmulatedBoard::EmulatedBoard(const BoardOptions& options)
-    : m_options(options), m_plant(options.model, model::SimOptions{options.max_step_s}, 1) {
-  MCG_DEMAND(!g_board_alive);
-  g_board_alive = true;
-  host_board_reset();
-  host_board_set_baud(options.baud);
+    : m_options(options), m_core(options.baud), m_plant(options.model, model::SimOptions{options.max_step_s}, 1) {
   m_state = m_plant.state();
   m_count = encoder_position(m_state.theta_rad);
 }
 
-EmulatedBoard::~EmulatedBoard() { g_board_alive = false; }
+EmulatedBoard::~EmulatedBoard() = default;
 
 std::size_t EmulatedBoard::rx(std::span<const std::uint8_t> bytes) {
   return host_board_rx(bytes.data(), bytes.size());
@@ -41,16 +34,15 @@ std::size_t EmulatedBoard::rx(std::span<const std::uint8_t> bytes) {
 
 std::size_t EmulatedBoard::tx(std::span<std::uint8_t> out) { return host_board_tx(out.data(), out.size()); }
 
-std::int16_t EmulatedBoard::duty_permille() const { return host_board_duty(); }
+std::int16_t EmulatedBoard::duty_permille() const { return m_core.duty_permille(); }
 
 double EmulatedBoard::time_s() const { return host_board_time_ms() * 1e-3; }
 
 void EmulatedBoard::tick() {
-  host_board_tick(m_pulses);
   model::Drive drive;
-  drive.v_V = static_cast<double>(host_board_duty()) / MCG_DUTY_FULL * m_options.model.params.supply_V;
-  drive.clutch = host_board_clutch() != 0 ? 2 : 1;
-  drive.r_load_ohm = host_board_load() != 0 ? m_options.r_load_ohm : model::k_open_circuit;
+  drive.v_V = static_cast<double>(m_core.tick(m_pulses)) / MCG_DUTY_FULL * m_options.model.params.supply_V;
+  drive.clutch = m_core.clutch_engaged() ? 2 : 1;
+  drive.r_load_ohm = m_core.load_closed() ? m_options.r_load_ohm : model::k_open_circuit;
   m_plant.step(k_tick_s, drive);
   m_state = m_plant.state();
   const double count = encoder_position(m_state.theta_rad);

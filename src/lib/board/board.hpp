@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "board/core.hpp"         // FirmwareCore
 #include "link/capture_meta.hpp"  // k_load_resistor_ohm
 #include "model/model.hpp"  // Model, Plant, State
 
@@ -50,6 +51,7 @@ class EmulatedBoard {
 
  private:
   BoardOptions m_options;
+  FirmwareCore m_core;
   model::Plant m_plant;
   model::State m_state;
   double m_count = 0.0;      ///< encoder position, counts (floor of theta N / 2 pi)

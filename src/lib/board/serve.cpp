@@ -87,7 +87,7 @@ model::Model load_model(const std::vector<std::string>& configs, const std::vect
 
 void refuse_unused_options(const std::vector<std::string>& options_given) {
   // What each mcg-sim option would mean on the emulated board, and why it does not apply.
-  static constexpr std::array<std::pair<std::string_view, std::string_view>, 9> k_refused{{
+  static constexpr std::array<std::pair<std::string_view, std::string_view>, 10> k_refused{{
       {"--encoder", "the board measures speed with its encoder; mcg-serial stream writes the rpm it counts"},
       {"--window", "the rpm window of a capture is mcg-serial stream --window"},
       {"--counts-per-rev", "the board's encoder has 2048 counts/rev (mcg-protocol(7))"},
@@ -97,6 +97,7 @@ void refuse_unused_options(const std::vector<std::string>& options_given) {
       {"--noise-v-gen", "the board measures no generator voltage, only the encoder"},
       {"--adc", "the board measures no current, only the encoder"},
       {"--seed", "nothing on the emulated board is random"},
+      {"--loop", "the board runs its own core on the registers mcg-serial load writes"},
   }};
   for (const auto& given : options_given) {
     for (const auto& [name, why] : k_refused) {

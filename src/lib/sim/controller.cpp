@@ -5,8 +5,13 @@
 #include "common/demand.hpp"
 #include <cmath>
 
+#include <cstdint>
+#include <limits>
+
+#include "board/core.hpp"  // FirmwareCore
 #include "common/error.hpp"
 #include "config/ini.hpp"
+#include "mcg_protocol.h"  // MCG_REG_*, MCG_MODE_*
 
 namespace mcg::sim {
 
@@ -33,37 +38,111 @@ double ControllerState::step(double error_rpm) {
   return std::clamp(duty, -1.0, 1.0);
 }
 
-double WindowCounter::push(double t, double theta) {
-  if (m_hist.empty()) m_hist.emplace_back(t, theta);
-  const double tol = 1e-9 + 1e-6 * m_e.window_s;
-  const double t_back = t - m_e.window_s;
-  m_hist.emplace_back(t, theta);
-  // Keep one sample at or before t - W (the oldest needed), drop older ones.
-  std::size_t drop = 0;
-  while (drop + 1 < m_hist.size() && m_hist[drop + 1].first <= t_back + tol) ++drop;
-  if (drop > 0) m_hist.erase(m_hist.begin(), m_hist.begin() + static_cast<std::ptrdiff_t>(drop));
-  double theta_back = m_hist.front().second;
-  const auto& [t0, th0] = m_hist.front();
-  if (t_back > t0 + tol && m_hist.size() > 1) {
-    const auto& [t1, th1] = m_hist[1];
-    theta_back = th0 + (t_back - t0) / (t1 - t0) * (th1 - th0);
+namespace {
+
+/// The board's encoder input: the pulses between two ticks, without direction.
+class BoardController final : public LoopController {
+ public:
+  explicit BoardController(const boardunits::BoardFixedPoint& q)
+      : m_mode(static_cast<std::int16_t>(q.mode == "p" ? MCG_MODE_P : q.mode == "pi" ? MCG_MODE_PI : MCG_MODE_PID)) {
+    m_core.write(MCG_REG_COEF_FRAC, static_cast<std::int16_t>(q.coef_frac));
+    if (q.mode == "p") {
+      m_core.write(MCG_REG_KP, static_cast<std::int16_t>(q.regs.at(0)));
+    } else {
+      m_core.write(MCG_REG_B0, static_cast<std::int16_t>(q.regs.at(0)));
+      m_core.write(MCG_REG_B1, static_cast<std::int16_t>(q.regs.at(1)));
+      m_core.write(MCG_REG_B2, static_cast<std::int16_t>(q.regs.at(2)));
+    }
   }
-  return (encoder_count(theta, m_e.counts_per_rev) - encoder_count(theta_back, m_e.counts_per_rev)) *
-         m_e.rpm_per_count();
+
+  double tick(double theta_rad, double rpm_cmd) override {
+    MCG_DEMAND(board_takes_command(rpm_cmd));
+    const double count = encoder_count(theta_rad, boardunits::k_board_counts_per_rev);
+    if (!m_started) {
+      m_started = true;
+      m_count = count;
+    }
+    const double pulses = std::fmin(std::fabs(count - m_count), std::numeric_limits<std::uint16_t>::max());
+    m_count = count;
+    // A command switches the controller on (bumpless, from duty 0) as `set rpm_cmd`, `set mode`
+    // would; 0 switches it off: mode open at duty 0, the board at rest.
+    const auto cmd = static_cast<std::int16_t>(rpm_cmd);
+    if (cmd != 0 && cmd != m_rpm_cmd) m_core.write(MCG_REG_RPM_CMD, cmd);
+    if ((cmd != 0) != (m_rpm_cmd > 0)) m_core.write(MCG_REG_MODE, cmd != 0 ? m_mode : std::int16_t{MCG_MODE_OPEN});
+    m_rpm_cmd = cmd;
+    return static_cast<double>(m_core.tick(static_cast<std::uint16_t>(pulses))) / boardunits::k_board_duty_full;
+  }
+
+  double dt_s() const override { return boardunits::k_tick_s; }
+
+ private:
+  board::FirmwareCore m_core;
+  std::int16_t m_mode;          ///< the controller's mode register while a command is in force
+  bool m_started = false;
+  double m_count = 0.0;
+  std::int16_t m_rpm_cmd = 0;   ///< 0: controller off (mode open, duty 0)
+};
+
+/// Signed counts over one sample period, the difference equation in double.
+class EquationController final : public LoopController {
+ public:
+  explicit EquationController(const Controller& c) : m_state(c), m_dt_s(c.dt_s) {}
+
+  double tick(double theta_rad, double rpm_cmd) override {
+    const double count = encoder_count(theta_rad, boardunits::k_board_counts_per_rev);
+    if (!m_started) {
+      m_started = true;
+      m_count = count;
+    }
+    const double rpm = (count - m_count) / boardunits::k_board_counts_per_rev / m_dt_s * 60.0;
+    m_count = count;
+    return m_state.step(rpm_cmd - rpm);
+  }
+
+  double dt_s() const override { return m_dt_s; }
+
+ private:
+  ControllerState m_state;
+  double m_dt_s;
+  bool m_started = false;
+  double m_count = 0.0;
+};
+
+}  // namespace
+
+bool board_takes_command(double rpm_cmd) {
+  // The register's range from its row of the protocol's one table.
+  struct Range {
+    unsigned id;
+    double lo, hi;
+  };
+#define MCG_RANGE_ROW(NAME, name, access, lo, hi, ...) Range{MCG_REG_##NAME, lo, hi},
+  static constexpr Range k_rows[] = {MCG_REGISTERS(MCG_RANGE_ROW)};
+#undef MCG_RANGE_ROW
+  const Range& r = k_rows[MCG_REG_RPM_CMD - 1u];
+  static_assert(k_rows[MCG_REG_RPM_CMD - 1u].id == MCG_REG_RPM_CMD);
+  return rpm_cmd == 0.0 || (rpm_cmd == std::floor(rpm_cmd) && rpm_cmd >= r.lo && rpm_cmd <= r.hi);
 }
 
-ClosedLoop::ClosedLoop(const model::Model& model, const Controller& controller, const CountEstimator& estimator,
+std::unique_ptr<LoopController> board_loop_controller(const boardunits::BoardFixedPoint& registers) {
+  return std::make_unique<BoardController>(registers);
+}
+
+std::unique_ptr<LoopController> equation_loop_controller(const Controller& controller) {
+  return std::make_unique<EquationController>(controller);
+}
+
+ClosedLoop::ClosedLoop(const model::Model& model, std::unique_ptr<LoopController> controller,
                        const model::SimOptions& options, int initial_clutch)
     : m_plant(model, options, initial_clutch),
-      m_ctl(controller),
-      m_counter(estimator),
-      m_dt_s(controller.dt_s),
-      m_tol_s(1e-9 * controller.dt_s),
+      m_ctl(std::move(controller)),
+      m_dt_s(m_ctl->dt_s()),
+      m_tol_s(1e-9 * m_dt_s),
       m_supply_V(model.params.supply_V) {}
 
 void ClosedLoop::tick(double t_s, double rpm_cmd) {
-  const double rpm = m_counter.push(t_s, m_plant.state().theta_rad);
-  m_duty = m_ctl.step(rpm_cmd - rpm);
+  (void)t_s;
+  m_duty = m_ctl->tick(m_plant.state().theta_rad, rpm_cmd);
   ++m_tick;
 }
 
@@ -97,9 +176,8 @@ void ClosedLoop::row(double t_s, double rpm_cmd, int clutch, double r_load_ohm) 
   m_drive = model::Drive{0.0, clutch, r_load_ohm};
 }
 
-ClosedLoopOutputs simulate_closed_loop(const model::Model& model, const Controller& controller,
-                                       const CountEstimator& estimator, const ClosedLoopInputs& in,
-                                       const model::SimOptions& options) {
+ClosedLoopOutputs simulate_closed_loop(const model::Model& model, std::unique_ptr<LoopController> controller,
+                                       const ClosedLoopInputs& in, const model::SimOptions& options) {
   const std::size_t n = in.t_s.size();
   MCG_DEMAND(in.rpm_cmd.size() == n && in.clutch.size() == n && in.r_load_ohm.size() == n);
   ClosedLoopOutputs out;
@@ -107,7 +185,7 @@ ClosedLoopOutputs simulate_closed_loop(const model::Model& model, const Controll
   out.duty.assign(n, 0.0);
   out.v_V.assign(n, 0.0);
   if (n == 0) return out;
-  ClosedLoop loop(model, controller, estimator, options, static_cast<int>(in.clutch[0]));
+  ClosedLoop loop(model, std::move(controller), options, static_cast<int>(in.clutch[0]));
   for (std::size_t row = 0; row < n; ++row) {
     loop.row(in.t_s[row], in.rpm_cmd[row], static_cast<int>(in.clutch[row]), in.r_load_ohm[row]);
     out.plant.store(row, loop.state());

@@ -1,7 +1,8 @@
-// The board's digital speed controller, emulated: a difference equation on encoder counts,
-// sampled every dt_s, with the PWM's saturation, anti-windup and duty resolution.
+// The closed loop's speed controller: the board's firmware core itself, or a difference
+// equation in double for designs the board cannot run.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,25 +31,41 @@ class ControllerState {
   std::vector<double> m_y;   ///< y_{n-1}, y_{n-2}, ...
 };
 
-/// Incremental form of the count estimator for a running loop: feed (t, theta) at each
-/// tick, read the rpm over the trailing window.
-class WindowCounter {
+/// The controller of a closed loop, sampled every dt_s(): at each tick it reads the shaft angle
+/// through the board's encoder (512 lines x4, 2048 counts/rev) and returns the duty to hold.
+class LoopController {
  public:
-  explicit WindowCounter(const CountEstimator& estimator) : m_e(estimator) {}
-  double push(double t_s, double theta_rad);
-
- private:
-  CountEstimator m_e;
-  std::vector<std::pair<double, double>> m_hist;   ///< (t, theta), trimmed to the window
+  virtual ~LoopController() = default;
+  /// The tick: the shaft at theta_rad, the command rpm_cmd in force; returns the duty (-1..1)
+  /// applied from now until the next tick.
+  virtual double tick(double theta_rad, double rpm_cmd) = 0;
+  virtual double dt_s() const = 0;
 };
+
+/// The board's own controller: the firmware's C core (host board layer, as the emulated board
+/// runs it) holding `registers` (coef_frac, kp or b0, b1, b2; the rest at power-on), fed the
+/// encoder pulses of each 1 ms tick without direction. A command (board_takes_command,
+/// MCG_DEMAND: the caller checks its input) is written to rpm_cmd with the registers' mode on, as
+/// `mcg-serial set` would; a command of 0 sets mode open at duty 0 (the board at rest).
+/// Its duty is the core's, in 1/1000. Uses the process's one firmware core while it lives.
+std::unique_ptr<LoopController> board_loop_controller(const boardunits::BoardFixedPoint& registers);
+
+/// The difference equation in double (ControllerState) on the signed encoder counts of each
+/// sample: rpm = (count(t) - count(t - dt_s)) / 2048 / dt_s * 60. Runs any [controller] (lead,
+/// lag, filtered PID, any dt_s) and any command, for designs the board cannot run.
+std::unique_ptr<LoopController> equation_loop_controller(const Controller& controller);
+
+/// Whether `rpm_cmd` is a command the board runs: 0 (controller off) or what its rpm_cmd register
+/// holds (a whole rpm, 120..720).
+bool board_takes_command(double rpm_cmd);
 
 /// The closed loop advanced one row at a time, as the rows arrive (row n acts over
 /// [t_n, t_{n+1}); its end is known only when row n+1 comes). Ticks at t_0 + k dt_s; at each
-/// tick the controller reads the encoder estimate and applies its duty at once (no
-/// computation delay). Its memory does not grow with the run.
+/// tick the controller reads the encoder and applies its duty at once (no computation delay),
+/// as the board's core does within its tick. Its memory does not grow with the run.
 class ClosedLoop {
  public:
-  ClosedLoop(const model::Model& model, const Controller& controller, const CountEstimator& estimator,
+  ClosedLoop(const model::Model& model, std::unique_ptr<LoopController> controller,
              const model::SimOptions& options, int initial_clutch);
 
   /// Takes row n: runs the plant over [t_{n-1}, t_s) under row n-1 (the ticks inside it
@@ -65,8 +82,7 @@ class ClosedLoop {
   double tick_time(long k) const { return m_t0_s + static_cast<double>(k) * m_dt_s; }
 
   model::Plant m_plant;
-  ControllerState m_ctl;
-  WindowCounter m_counter;
+  std::unique_ptr<LoopController> m_ctl;
   double m_dt_s;
   double m_tol_s;
   double m_supply_V;
@@ -95,8 +111,7 @@ struct ClosedLoopOutputs {
 };
 
 /// Runs the plant under the controller over a whole record (ClosedLoop row by row).
-ClosedLoopOutputs simulate_closed_loop(const model::Model& model, const Controller& controller,
-                                       const CountEstimator& estimator, const ClosedLoopInputs& inputs,
-                                       const model::SimOptions& options = {});
+ClosedLoopOutputs simulate_closed_loop(const model::Model& model, std::unique_ptr<LoopController> controller,
+                                       const ClosedLoopInputs& inputs, const model::SimOptions& options = {});
 
 }  // namespace mcg::sim

@@ -12,10 +12,13 @@
 #include <unistd.h>
 
 #include "boardunits/chain.hpp"
+#include "boardunits/controller.hpp"
+#include "common/demand.hpp"
 #include "common/error.hpp"
 #include "common/fd_input.hpp"
 #include "config/ini.hpp"
 #include "mcg/version.hpp"
+#include "mcg_protocol.h"  // MCG_FW_VERSION_*
 #include "model/model.hpp"
 #include "sim/controller.hpp"
 #include "measurement/measurement.hpp"
@@ -57,6 +60,32 @@ struct OutColumn {
   std::size_t input = 0;   ///< for Out::Input
 };
 
+std::string design_text(const Controller& c, bool configured) {
+  return fmt::format("{}{}: b = {}, a = {}, dt_s = {}, input_scale = {}, duty_full_scale = {}", c.type,
+                     configured ? "" : " (built-in: the report's PI)", coefficient_list(c.b), coefficient_list(c.a),
+                     config::format_number(c.dt_s), config::format_number(c.input_scale),
+                     config::format_number(c.duty_full_scale));
+}
+
+/// The `controller` metadata of --loop board: the core, its registers, what they came from.
+std::string board_text(const boardunits::BoardFixedPoint& q, const Controller& c, bool configured) {
+  const std::string regs = q.mode == "p" ? fmt::format("kp = {}", q.regs.at(0))
+                                         : fmt::format("b0 = {}, b1 = {}, b2 = {}", q.regs.at(0), q.regs.at(1),
+                                                       q.regs.at(2));
+  return fmt::format(
+      "board: the firmware core {}.{}.{} (host build), mode {}, coef_frac = {}, {}, other registers at power-on; "
+      "error from the encoder pulses of each 1 ms tick (2048 counts/rev, no direction); from {}",
+      MCG_FW_VERSION_MAJOR, MCG_FW_VERSION_MINOR, MCG_FW_VERSION_PATCH, q.mode, q.coef_frac, regs,
+      design_text(c, configured));
+}
+
+/// The `controller` metadata of --loop equation.
+std::string equation_text(const Controller& c, bool configured) {
+  return fmt::format("equation: the difference equation in double, {}, round_output = {}, duty_resolution = {}; "
+                     "error from the signed encoder counts of each sample (2048 counts/rev)",
+                     design_text(c, configured), c.round_output ? 1 : 0, config::format_number(c.duty_resolution));
+}
+
 }  // namespace
 
 void run(const RunOptions& opt, std::istream& in, const std::string& source, std::ostream& out) {
@@ -73,6 +102,19 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
     }
   }
   const std::optional<Controller> configured = controller_from_ini(ini);
+  const Controller controller = configured.value_or(report_pi());
+  const bool on_board = opt.loop == "board";
+  // What the board's core holds for the [controller] (or the report's PI): checked before any row.
+  std::optional<boardunits::BoardFixedPoint> registers;
+  if (on_board) {
+    try {
+      registers = configured ? boardunits::board_controller(ini)
+                             : boardunits::board_fixed_point(controller.b, controller.a, controller.units());
+    } catch (const Error& e) {
+      fail("{} (--loop equation runs any difference equation)", e.what());
+    }
+    MCG_DEMAND(registers.has_value());
+  }
 
   table::Reader reader(in, source);
   table::Writer writer(out);
@@ -127,7 +169,6 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
 
   table::Metadata meta = reader.metadata();
   const double t_first = reader[t_col];
-  const Controller controller = configured.value_or(report_pi());
   const CountEstimator estimator{opt.window_s, opt.counts_per_rev};
   const bool noisy = opt.noise_i_A > 0.0 || opt.noise_v_gen_V > 0.0;
   const measurement::CurrentChain adc = measurement::board_current_chain();
@@ -162,16 +203,8 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
     meta.set("v_gen_measurement", fmt::format("noise sigma {} V", config::format_number(opt.noise_v_gen_V)));
   }
   if (noisy) meta.set("seed", std::to_string(opt.seed));
-  if (closed) {
-    meta.set("controller",
-             fmt::format("{}{}: b = {}, a = {}, dt_s = {}, input_scale = {}, duty_full_scale = {}, "
-                         "duty_resolution = {}, rpm from {}",
-                         controller.type, configured ? "" : " (built-in: the report's PI)",
-                         coefficient_list(controller.b), coefficient_list(controller.a),
-                         config::format_number(controller.dt_s), config::format_number(controller.input_scale),
-                         config::format_number(controller.duty_full_scale),
-                         config::format_number(controller.duty_resolution), format_rpm_estimator(estimator)));
-  }
+  if (closed) meta.set("controller", on_board ? board_text(*registers, controller, configured.has_value())
+                                              : equation_text(controller, configured.has_value()));
   writer.metadata(meta);
   writer.header(names);
 
@@ -215,7 +248,15 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
     model::State s;
     double duty = 0.0;
     if (closed) {
-      if (!loop) loop.emplace(model, controller, estimator, sim_opt, clutch_state);
+      if (on_board && !board_takes_command(drive_value)) {
+        fail("{}:{}: column 'rpm_cmd': {} is not a command the board takes (0 = off, or a whole rpm in "
+             "120..720; --loop equation takes any)",
+             source, reader.line(), config::format_number(drive_value));
+      }
+      if (!loop) {
+        loop.emplace(model, on_board ? board_loop_controller(*registers) : equation_loop_controller(controller),
+                     sim_opt, clutch_state);
+      }
       loop->row(t, drive_value, clutch_state, r_load);
       s = loop->state();
       duty = loop->duty();

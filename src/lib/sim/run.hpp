@@ -20,6 +20,9 @@ struct RunOptions {
   double window_s = 0.005;            ///< encoder count window
   double counts_per_rev = boardunits::k_board_counts_per_rev;  ///< 512 lines, x4 quadrature
   bool open_loop = false;             ///< ignore an 'rpm_cmd' column, drive with v/duty
+  /// The closed loop's controller: "board" (the firmware's core on the board's registers, as the
+  /// emulated board runs it) or "equation" (the [controller] difference equation in double).
+  std::string loop = "board";
   double noise_i_A = 0.0;             ///< Gaussian noise on i, standard deviation
   double noise_v_gen_V = 0.0;         ///< Gaussian noise on v_gen, standard deviation
   bool adc = false;                   ///< i through the board's 10-bit ADC (1 ohm shunt, 2.5 V offset)
