@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "boardunits/fixed_point.hpp"
 #include "model/model.hpp"
 #include "sim/controller.hpp"
 
@@ -44,13 +45,30 @@ void BM_ClosedLoopPi60s(benchmark::State& state) {
   const auto in = pi_program();
   const mcg::model::Model model;
   for (auto _ : state) {
-    auto out = mcg::sim::simulate_closed_loop(model, mcg::sim::report_pi(), {}, in, {});
+    auto out = mcg::sim::simulate_closed_loop(model, mcg::sim::equation_loop_controller(mcg::sim::report_pi()), in, {});
     benchmark::DoNotOptimize(out.plant.omega_rad_s.back());
   }
   state.counters["realtime_x"] = benchmark::Counter(k_duration_s * static_cast<double>(state.iterations()),
                                                     benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_ClosedLoopPi60s)->Unit(benchmark::kMillisecond);
+
+/// The same program on the board's firmware core (mcg-sim's default), commands as whole rpm in
+/// the board's 120..720.
+void BM_ClosedLoopPiBoard60s(benchmark::State& state) {
+  auto in = pi_program();
+  for (double& r : in.rpm_cmd) r = std::round(120.0 + (r - 100.0) * 600.0 / 1400.0);
+  const mcg::model::Model model;
+  const mcg::sim::Controller pi = mcg::sim::report_pi();
+  const auto registers = *mcg::boardunits::board_fixed_point(pi.b, pi.a, pi.units());
+  for (auto _ : state) {
+    auto out = mcg::sim::simulate_closed_loop(model, mcg::sim::board_loop_controller(registers), in, {});
+    benchmark::DoNotOptimize(out.plant.omega_rad_s.back());
+  }
+  state.counters["realtime_x"] = benchmark::Counter(k_duration_s * static_cast<double>(state.iterations()),
+                                                    benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_ClosedLoopPiBoard60s)->Unit(benchmark::kMillisecond);
 
 void BM_OpenLoop60s(benchmark::State& state) {
   const auto in = open_program();
