@@ -91,6 +91,9 @@ double positive(const Ini& ini, const char* section, const char* key, std::optio
   return fallback;
 }
 
+using boardunits::k_maps_loop;
+using boardunits::k_maps_physical;
+
 Resolved resolve(const Options& o) {
   Resolved r;
   r.ini = Ini::load_all(o.configs);
@@ -162,6 +165,28 @@ Resolved resolve(const Options& o) {
   }
 
   r.chain = o.loop || ini.has_section("loop") || builtin;
+  // An INI plant says what it maps: omega/v (rad/s per V, mcg-fit tf) gets the loop chain;
+  // loop (encoder counts per sample per duty count) is designed on as it is.
+  const bool ini_plant = !builtin && o.plant.empty() && !o.plant_given && o.num.empty() && o.den.empty() &&
+                         !o.rig && ini.get("plant", "model") != std::optional<std::string>("rig");
+  if (ini_plant) {
+    const std::optional<std::string> maps = ini.get("plant", "maps");
+    if (!maps && !r.chain) {
+      fail("{}: the plant does not say what it maps: give maps = omega/v (rad/s per V, as mcg-fit tf writes it; "
+           "the loop chain is applied) or maps = loop (encoder counts per sample per duty count), or --loop",
+           r.raw_where);
+    }
+    if (maps && *maps != k_maps_physical && *maps != k_maps_loop) {
+      ini.reject("plant", "maps", fmt::format("must be {} or {}", k_maps_physical, k_maps_loop));
+    }
+    if (maps && *maps == k_maps_loop && r.chain) {
+      ini.reject("plant", "maps",
+                 fmt::format("the plant maps the loop already (counts per sample per duty count); {} would apply "
+                             "the loop chain twice",
+                             o.loop ? "--loop" : "its [loop] section"));
+    }
+    if (maps && *maps == k_maps_physical) r.chain = true;
+  }
   const std::optional<double> dt_flag = flag(o.dt_s);
   if (dt_flag && (!(*dt_flag > 0.0) || !std::isfinite(*dt_flag))) fail("--dt: must be positive, got {}", *dt_flag);
   std::optional<double> dt = dt_flag;
@@ -331,6 +356,8 @@ void write_margins(Ini& ini, const std::string& section, const std::vector<Tf>& 
 void echo_plant(Ini& ini, const Resolved& r) {
   ini.set("plant", "tf", linsys::tf_text(r.raw), r.raw_where);
   ini.set("plant", "domain", linsys::var_name(r.raw.domain));
+  ini.set("plant", "maps", r.chain ? k_maps_physical : k_maps_loop,
+          r.chain ? "rad/s per V; [loop] is the chain around it" : "encoder counts per sample per duty count");
   if (r.raw.discrete()) ini.set("plant", "dt_s", r.raw.dt_s);
   ini.set("plant", "hold", r.hold ? "zoh" : "none", r.hold ? "the PWM holds the duty over each period" : "");
   if (r.chain) {

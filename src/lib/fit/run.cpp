@@ -1,6 +1,7 @@
 // mcg-fit friction, tf and model: reading the files, calling the fits, writing INI or CSV.
 #include "fit/run.hpp"
 
+#include "boardunits/chain.hpp"  // k_maps_physical
 #include "common/error.hpp"
 #include "common/parallel.hpp"
 #include "common/tool.hpp"
@@ -244,6 +245,7 @@ void run_tf(const TfRunOptions& options, std::ostream& out, std::ostream& err) {
   ini.set("plant", "num", num, "descending powers of s");
   ini.set("plant", "den", den, "descending powers of s");
   ini.set("plant", "domain", "s");
+  ini.set("plant", "maps", boardunits::k_maps_physical, "rad/s per V: mcg-design applies the loop chain");
   if (options.fit.fit_delay) ini.set("plant", "delay_s", num6(fit.delay_s), se_comment(fit.delay_se, "s"));
   const std::string sec = "fit.tf";
   ini.set(sec, "source", fmt::format("mcg-fit {}", k_version));
