@@ -60,7 +60,14 @@ int main(int argc, char** argv) {
   pid->add_option("--pm", o.pm_deg, "phase margin, degrees")->check(CLI::Range(0.0, 180.0));
   pid->add_option("--wc", o.wc_rad_s, "crossover frequency, rad/s")->check(CLI::Range(1e-12, k_inf));
   pid->add_option("--ti-td", o.ti_over_td, "Ti/Td")->check(CLI::Range(1e-6, 1e6))->capture_default_str();
-  pid->add_option("--n", o.n, "derivative filter: pole at N/Td")->check(CLI::Range(1e-6, 1e6))->capture_default_str();
+  pid->add_option("--n", o.n, "derivative filter: pole at N/Td (--form filtered)")
+      ->check(CLI::Range(1e-6, 1e6))
+      ->capture_default_str();
+  pid->add_option("--form", o.pid_form,
+                  "filtered: C(s) with the derivative filter, discretised by --method; board: the board's PID, "
+                  "designed in z (backward differences, no filter; needs --dt)")
+      ->check(CLI::IsMember({"filtered", "board"}))
+      ->capture_default_str();
   CLI::App* lead = design_sub("lead", "lead compensator for a phase margin at a crossover");
   lead->add_option("--pm", o.pm_deg, "phase margin, degrees")->check(CLI::Range(0.0, 180.0));
   lead->add_option("--wc", o.wc_rad_s, "crossover frequency, rad/s")->check(CLI::Range(1e-12, k_inf));

@@ -131,6 +131,23 @@ TEST(DesignDesign, PidLeadLagMeetTheirPhaseMarginExactly) {
   EXPECT_GT(param(lag, "beta"), 1.0);
 }
 
+TEST(DesignDesign, TheBoardsPidIsIncrementalAndMeetsItsMarginExactly) {
+  // ZOH plant at 1 ms: the board's PID, designed in z, gives 50 degrees at 150 rad/s on that loop,
+  // and is (b0 z^2 + b1 z + b2)/(z^2 - z) with b0 = Kp (1 + T/Ti + Td/T), b2 = Kp Td/T.
+  mcg::design::Setup su;
+  su.plant = linsys::c2d(tf("1807.2/((s+65)*(s+950))"), 0.001, linsys::C2dMethod::zoh, 0.0, "t");
+  su.dt_s = 0.001;
+  const Design d = design_pid_board(su, 50.0, 150.0, 4.0);
+  expect_crossing(su, d, 50.0);
+  ASSERT_TRUE(d.cont.discrete());
+  EXPECT_EQ(d.cont.den, (linsys::Poly{1.0, -1.0, 0.0}));
+  const double kp = param(d, "kp");
+  const double td = param(d, "td_s");
+  EXPECT_NEAR(d.cont.num[0], kp * (1.0 + 0.001 / (4.0 * td) + td / 0.001), 1e-9 * kp);
+  EXPECT_NEAR(d.cont.num[2], kp * td / 0.001, 1e-9 * kp);
+  EXPECT_THROW(design_pid_board(continuous("1/(s+1)"), 50.0, 1.0, 4.0), mcg::Error);  // needs --dt
+}
+
 TEST(DesignDesign, SampledDesignsHoldOnTheDiscreteLoop) {
   // The loop the board runs: ZOH plant at 1 ms, Tustin PI; the margin is exact on that loop.
   mcg::design::Setup su;

@@ -137,7 +137,8 @@ std::optional<BoardFixedPoint> board_controller(const config::Ini& ini) {
   }
   if (!q) {
     const bool incremental = c->a.size() == 2 && c->a[1] == -c->a[0];
-    const std::string what = ini.has(k_section, "type") ? fmt::format("a {} controller; ", c->type) : std::string();
+    std::string what = ini.has(k_section, "type") ? fmt::format("a {} controller; ", c->type) : std::string();
+    if (c->type == "pid") what = "a PID with a derivative filter (mcg-design pid --form board designs the board's PID); ";
     ini.reject(k_section, incremental || c->a.size() == 1 ? "b" : "a", what + k_board_forms);
   }
   return q;

@@ -95,6 +95,7 @@ Design finish(std::string kind, Tf cont, std::vector<std::pair<std::string, doub
 }  // namespace
 
 Tf running_form(const Setup& setup, const Tf& cont) {
+  if (cont.discrete()) return cont;  // designed in z already (the board's PID)
   if (setup.dt_s > 0.0) return linsys::c2d(cont, setup.dt_s, setup.method, setup.prewarp_rad_s, "controller");
   return cont;
 }
@@ -188,6 +189,53 @@ Design design_pid(const Setup& setup, double pm_deg, double wc, double ratio, do
   const double ti = ratio * *td;
   return finish("pid", linsys::scaled(c, kp),
                 {{"kp", kp}, {"ti_s", ti}, {"td_s", *td}, {"n", n}, {"ki", kp / ti}, {"kd", kp * *td}}, wc);
+}
+
+Design design_pid_board(const Setup& setup, double pm_deg, double wc, double ratio) {
+  check_setup(setup);
+  check_pm(pm_deg);
+  if (!(setup.dt_s > 0.0)) fail("--form board: the board's PID runs every sample: --dt is required");
+  if (!(wc > 0.0)) fail("the crossover must be positive, got {}", wc);
+  if (!(ratio > 0.0)) fail("Ti/Td must be positive, got {}", ratio);
+  const double t = setup.dt_s;
+  const double target = rad(pm_deg - 180.0);
+  // C(z)/Kp = 1 + (T/Ti) z/(z - 1) + (Td/T) (z - 1)/z = (b0 z^2 + b1 z + b2)/(z^2 - z).
+  auto shape = [&](double td) {
+    const double ti = ratio * td;
+    Tf c;
+    c.domain = linsys::Domain::z;
+    c.dt_s = t;
+    c.num = {1.0 + t / ti + td / t, -(1.0 + 2.0 * td / t), td / t};
+    c.den = {1.0, -1.0, 0.0};
+    return c;
+  };
+  auto err = [&](double log_td) {
+    return phase_error(LoopEval(loop_factors(setup, shape(std::exp(log_td)))), wc, target);
+  };
+  const double a = std::log(1e-4 / wc);
+  const double b = std::log(1e4 / wc);
+  const int steps = 400;
+  double prev = err(a);
+  double prev_x = a;
+  std::optional<double> td;
+  for (int i = 1; i <= steps && !td; ++i) {
+    const double x = a + (b - a) * i / steps;
+    const double e = err(x);
+    if ((prev < 0.0) != (e < 0.0) && std::abs(prev) < k_pi / 2.0 && std::abs(e) < k_pi / 2.0) {
+      td = std::exp(bisect(err, prev_x, x));
+    }
+    prev = e;
+    prev_x = x;
+  }
+  if (!td) {
+    fail("no PID in the board's form with Ti = {}*Td gives {} degrees of phase margin at {} rad/s", num(ratio),
+         num(pm_deg), num(wc));
+  }
+  const Tf c = shape(*td);
+  const double kp = std::exp(-LoopEval(loop_factors(setup, c)).log_mag(wc));
+  const double ti = ratio * *td;
+  return finish("pid", linsys::scaled(c, kp), {{"kp", kp}, {"ti_s", ti}, {"td_s", *td}, {"ki", kp / ti}, {"kd", kp * *td}},
+                wc);
 }
 
 Design design_lead(const Setup& setup, double pm_deg, double wc) {

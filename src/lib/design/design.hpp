@@ -53,6 +53,12 @@ Design design_pi_crossover(const Setup& setup, double pm_deg, double wc_rad_s);
 /// the smallest Td that gives the phase margin at ω_c, then Kp for crossover at ω_c.
 Design design_pid(const Setup& setup, double pm_deg, double wc_rad_s, double ti_over_td, double n);
 
+/// The board's PID (mcg-protocol(7): U[n] = U[n-1] + b0 e[n] + b1 e[n-1] + b2 e[n-2]), designed in
+/// z at setup.dt_s: no derivative filter, integral and derivative by backward differences,
+/// C(z) = Kp (1 + (T/Ti) z/(z - 1) + (Td/T) (z - 1)/z), Ti = ratio·Td: the smallest Td that gives
+/// the phase margin at ω_c, then Kp for crossover at ω_c.
+Design design_pid_board(const Setup& setup, double pm_deg, double wc_rad_s, double ti_over_td);
+
 /// Lead C = K (1 + s/ω_z)/(1 + s/ω_p), ω_z = ω_c√α, ω_p = ω_c/√α, α = (1 − sin φ)/(1 + sin φ),
 /// with the lead φ solved so that PM holds at ω_c exactly (also through a discretisation).
 Design design_lead(const Setup& setup, double pm_deg, double wc_rad_s);

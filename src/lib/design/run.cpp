@@ -247,10 +247,10 @@ void difference_coefficients(const Tf& cz, std::vector<double>& b, std::vector<d
     b.push_back(num[i] / den[0]);
     a.push_back(den[i] / den[0]);
   }
-  while (b.size() > 1 && b.back() == 0.0 && a.back() == 0.0) {
-    b.pop_back();
-    a.pop_back();
-  }
+  // A zero last coefficient is no term: b and a end where their last non-zero term does
+  // (the board's PID: a = 1 -1 0 is a = 1 -1).
+  while (b.size() > 1 && b.back() == 0.0) b.pop_back();
+  while (a.size() > 1 && a.back() == 0.0) a.pop_back();
 }
 
 std::string difference_text(const std::vector<double>& b, const std::vector<double>& a) {
@@ -383,6 +383,9 @@ Design run_design(const Options& o, const Setup& su) {
     if (!std::isnan(o.wc_rad_s)) return design_pi_crossover(su, pm, o.wc_rad_s);
     fail("--zero or --wc: required");
   }
+  if (o.command == "pid" && o.pid_form == "board") {
+    return design_pid_board(su, need(o.pm_deg, "--pm"), need(o.wc_rad_s, "--wc"), o.ti_over_td);
+  }
   if (o.command == "pid") return design_pid(su, need(o.pm_deg, "--pm"), need(o.wc_rad_s, "--wc"), o.ti_over_td, o.n);
   if (o.command == "lead") return design_lead(su, need(o.pm_deg, "--pm"), need(o.wc_rad_s, "--wc"));
   if (o.command == "lag") return design_lag(su, need(o.pm_deg, "--pm"), need(o.k_dc, "--k-dc"), o.ratio);
@@ -395,9 +398,11 @@ void write_design(const Options& o, const Resolved& r, const Design& d, std::ost
   const Setup& su = r.setup;
   ini.set("design", "kind", d.kind);
   for (const auto& [k, v] : d.params) ini.set("design", k, v);
-  ini.set("design", "tf_s", linsys::tf_text(d.cont), "C(s)");
-  ini.set("design", "num_s", linsys::list_text(linsys::trim(d.cont.num)));
-  ini.set("design", "den_s", linsys::list_text(linsys::trim(d.cont.den)));
+  if (!d.cont.discrete()) {
+    ini.set("design", "tf_s", linsys::tf_text(d.cont), "C(s)");
+    ini.set("design", "num_s", linsys::list_text(linsys::trim(d.cont.num)));
+    ini.set("design", "den_s", linsys::list_text(linsys::trim(d.cont.den)));
+  }
   if (d.wc_rad_s > 0.0) ini.set("design", "wc_design_rad_s", d.wc_rad_s);
   if (rl) {
     ini.set("design", "omega_n_rad_s", rl->omega_n_rad_s);
@@ -413,8 +418,12 @@ void write_design(const Options& o, const Resolved& r, const Design& d, std::ost
   if (su.dt_s > 0.0) {
     cz = running_form(su, d.cont);
     ini.set("design", "dt_s", su.dt_s);
-    ini.set("design", "method", linsys::method_name(su.method));
-    if (su.prewarp_rad_s > 0.0) ini.set("design", "prewarp_rad_s", su.prewarp_rad_s);
+    if (d.cont.discrete()) {
+      ini.set("design", "form", "board", "designed in z: backward differences, no derivative filter");
+    } else {
+      ini.set("design", "method", linsys::method_name(su.method));
+    }
+    if (!d.cont.discrete() && su.prewarp_rad_s > 0.0) ini.set("design", "prewarp_rad_s", su.prewarp_rad_s);
     ini.set("design", "tf_z", linsys::tf_text(*cz), "C(z)");
   }
   std::vector<double> b;

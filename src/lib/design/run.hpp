@@ -49,6 +49,7 @@ struct Options {
   double wc_rad_s = NAN;
   double ti_over_td = 4.0;
   double n = 10.0;
+  std::string pid_form = "filtered";  ///< pid: "filtered" (C(s) with N, discretised) or "board" (the board's form)
   double k_dc = NAN;
   double ratio = 10.0;
   double zeta = NAN;
