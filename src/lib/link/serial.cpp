@@ -12,6 +12,7 @@
 
 #include "common/error.hpp"     // mcg::fail
 #include "config/ini.hpp"       // Ini
+#include "mcg_protocol.h"       // MCG_MODE_OPEN
 #include "link/capture_meta.hpp"  // board_config, k_encoder_text
 #include "link/connection.hpp"  // Connection
 #include "link/interrupt.hpp"   // InterruptGuard
@@ -144,6 +145,16 @@ LoadPlan load_plan(const config::Ini& ini, const std::string& path) {
     add(*reg, parse_value(*reg, e->value, e->origin), e->origin);
   }
   for (const auto& [reg, value] : controller_registers(ini)) add(*reg, value, path);
+  // In a closed-loop mode `duty` is the controller's output, which `get` saves but the board
+  // takes only in open loop: it is restored by the mode, not written.
+  const auto mode = std::find_if(writes.begin(), writes.end(), [](const auto& w) { return w.first->name == "mode"; });
+  if (mode != writes.end() && mode->second != MCG_MODE_OPEN) {
+    const auto duty = std::find_if(writes.begin(), writes.end(), [](const auto& w) { return w.first->name == "duty"; });
+    if (duty != writes.end()) {
+      origins.erase(origins.begin() + (duty - writes.begin()));
+      writes.erase(duty);
+    }
+  }
   if (writes.empty()) fail("{}: no [board] or [controller] section with registers to load", path);
   std::vector<std::size_t> order(writes.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
