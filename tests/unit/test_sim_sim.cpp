@@ -183,6 +183,26 @@ TEST(SimClosedLoop, TheBoardLoopIsTheEmulatedBoardTickForTick) {
   }
 }
 
+TEST(SimClosedLoop, ACommandOfZeroSwitchesTheBoardsControllerOff) {
+  // 0 until 0.1 s (mode open, duty 0: at rest), 420 rpm until 0.8 s, then 0 again: the core
+  // goes back to open loop at duty 0 and the motor coasts down.
+  ClosedLoopInputs in = step_command(420.0, 1.2);
+  for (std::size_t k = 0; k < in.t_s.size(); ++k) {
+    if (k < 100 || k >= 800) in.rpm_cmd[k] = 0.0;
+  }
+  const auto out = simulate_closed_loop(model::Model{}, board_loop_controller(report_pi_registers()), in);
+  for (std::size_t k = 0; k < 100; ++k) EXPECT_EQ(out.duty[k], 0.0) << k;
+  EXPECT_EQ(out.plant.rpm[100], 0.0);
+  EXPECT_GT(out.duty[101], 0.0);
+  EXPECT_NEAR(out.plant.rpm[799], 420.0, 10.0);
+  for (std::size_t k = 800; k < in.t_s.size(); ++k) EXPECT_EQ(out.duty[k], 0.0) << k;
+  EXPECT_LT(out.plant.rpm.back(), 300.0);
+  EXPECT_FALSE(board_takes_command(100.0));
+  EXPECT_FALSE(board_takes_command(420.5));
+  EXPECT_TRUE(board_takes_command(120.0) && board_takes_command(720.0) && board_takes_command(0.0));
+  EXPECT_FALSE(board_takes_command(721.0));
+}
+
 TEST(SimClosedLoop, ReportPiOvershootsA100RpmStepAndSettles) {
   // The report: "Overshoot of the simulation is approximately 30 %" (design: 16 %).
   const auto out = simulate_closed_loop(model::Model{}, equation_loop_controller(report_pi()), step_command(100.0, 0.6));

@@ -65,10 +65,15 @@ class BoardController final : public LoopController {
     const double pulses = std::fmin(std::fabs(count - m_count), std::numeric_limits<std::uint16_t>::max());
     m_count = count;
     // A command switches the controller on (bumpless, from duty 0) as `set rpm_cmd`, `set mode`
-    // would; 0 switches it off: mode open at duty 0, the board at rest.
+    // would; 0 switches it off as `set mode open`, `set duty 0` would (open loop keeps the last
+    // duty otherwise).
     const auto cmd = static_cast<std::int16_t>(rpm_cmd);
     if (cmd != 0 && cmd != m_rpm_cmd) m_core.write(MCG_REG_RPM_CMD, cmd);
-    if ((cmd != 0) != (m_rpm_cmd > 0)) m_core.write(MCG_REG_MODE, cmd != 0 ? m_mode : std::int16_t{MCG_MODE_OPEN});
+    if (cmd != 0 && m_rpm_cmd == 0) m_core.write(MCG_REG_MODE, m_mode);
+    if (cmd == 0 && m_rpm_cmd != 0) {
+      m_core.write(MCG_REG_MODE, MCG_MODE_OPEN);
+      m_core.write(MCG_REG_DUTY, 0);
+    }
     m_rpm_cmd = cmd;
     return static_cast<double>(m_core.tick(static_cast<std::uint16_t>(pulses))) / boardunits::k_board_duty_full;
   }
