@@ -73,6 +73,11 @@ int main(int argc, char** argv) {
   monitor->add_option("--seconds", monitor_opt.seconds, "stop after this long, s (default: Ctrl-C)")
       ->check(CLI::Range(0.01, 1e6));
 
+  mcg::link::ServeOptions serve_opt;
+  auto* serve = app.add_subcommand("serve", "hold the port and serve the other mcg-serial commands on it");
+  serve->add_option("--seconds", serve_opt.seconds, "stop after this long, s (default: Ctrl-C)")
+      ->check(CLI::Range(0.01, 1e6));
+
   mcg::link::RelayOptions relay_opt;
   auto* relay = app.add_subcommand("relay", "test aid: forward -p PORT to a new pty, corrupting, dropping, delaying");
   relay->add_option("--link", relay_opt.link_path, "pseudo-terminal link to create for the tool")->required();
@@ -102,6 +107,7 @@ int main(int argc, char** argv) {
     if (*dump) mcg::link::run_dump(link, dump_opt, std::cout, std::cerr);
     if (*send) mcg::link::run_send(link, send_opt, std::cout);
     if (*monitor) mcg::link::run_monitor(link, monitor_opt, std::cout);
+    if (*serve) mcg::link::run_serve(link, serve_opt);
     if (*relay) {
       relay_opt.port = link.port;
       relay_opt.baud = link.baud;

@@ -18,7 +18,16 @@ class Ini;
 
 namespace mcg::link {
 
+class PortOwner;
+
 struct Connection {
+  Connection();
+  ~Connection();
+  Connection(const Connection&) = delete;
+  Connection& operator=(const Connection&) = delete;
+
+  /// When this process owns the port and serves the others (declared first: it ends last).
+  std::unique_ptr<PortOwner> owner;
   std::unique_ptr<Port> port;
   std::unique_ptr<Session> session;
   Version version;
@@ -33,8 +42,15 @@ struct Connection {
   std::optional<int> m_frac_bits;
 };
 
-/// Opens link.port and checks the board's protocol version (Session::hello).
-std::unique_ptr<Connection> connect(const LinkOptions& link);
+/// How a command holds the port when no other mcg-serial owns it.
+enum class Hold {
+  Alone,   ///< a short command (get, set, load, dump, send): opens the port for itself
+  Serve,   ///< a long one (stream, monitor, console, serve): owns the port and serves the others
+};
+
+/// Reaches the board on link.port (through its owner when another mcg-serial holds it, see
+/// PortOwner) and checks its protocol version (Session::hello).
+std::unique_ptr<Connection> connect(const LinkOptions& link, Hold hold = Hold::Alone);
 
 /// The board registers, in engineering units, that realise the [controller] section of `ini`
 /// (docs/formats.md), or none when there is none: boardunits::board_controller's registers

@@ -94,6 +94,7 @@ class FdPort : public Port {
   }
 
   void discard_input() override { ::tcflush(m_fd, TCIFLUSH); }
+  int poll_fd() const override { return m_fd; }
 
  protected:
   virtual long raw_read(std::span<std::uint8_t> buf) { return ::read(m_fd, buf.data(), buf.size()); }

@@ -38,6 +38,9 @@ class Port {
   virtual void write_all(std::span<const std::uint8_t> bytes, double timeout_s) = 0;
   /// Throws away bytes received but not read yet.
   virtual void discard_input() = 0;
+  /// A descriptor poll() reports readable when input is there, or -1 (then the port's owner
+  /// asks read_some() at short intervals).
+  virtual int poll_fd() const { return -1; }
 };
 
 /// Opens `path` for the board: 8N1 at `baud`, no flow control, raw, exclusive. Serial devices

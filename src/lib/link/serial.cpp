@@ -16,15 +16,29 @@
 #include "link/capture_meta.hpp"  // board_config, k_encoder_text
 #include "link/connection.hpp"  // Connection
 #include "link/interrupt.hpp"   // InterruptGuard
+#include "link/owner.hpp"       // PortOwner, connect_owner, open_shared_port
 #include "mcg/version.hpp"      // k_version
 #include "measurement/measurement.hpp"  // CountEstimator, format_rpm_estimator
 #include "table/table.hpp"      // Writer, read_path
 
 namespace mcg::link {
 
-std::unique_ptr<Connection> connect(const LinkOptions& link) {
+Connection::Connection() = default;
+Connection::~Connection() = default;
+
+std::unique_ptr<Connection> connect(const LinkOptions& link, Hold hold) {
   auto c = std::make_unique<Connection>();
-  c->port = open_port(link.port, link.baud);
+  if (auto through_owner = connect_owner(link.port)) {
+    c->port = std::move(through_owner);
+  } else {
+    auto port = open_shared_port(link.port, link.baud);
+    if (hold == Hold::Serve && port->poll_fd() >= 0) {
+      c->owner = std::make_unique<PortOwner>(std::move(port));
+      c->port = c->owner->local_client();
+    } else {
+      c->port = std::move(port);
+    }
+  }
   SessionOptions so;
   so.reply_timeout_s = link.timeout_s;
   so.attempts = link.attempts;
@@ -321,9 +335,22 @@ void run_send(const LinkOptions& link, const SendOptions& options, std::ostream&
                      options.then.empty() ? "" : fmt::format(", {}ing", options.then));
 }
 
+void run_serve(const LinkOptions& link, const ServeOptions& options) {
+  auto c = connect(link, Hold::Serve);
+  if (!c->owner) fail("{}: another mcg-serial holds the port and serves it already", link.port);
+  const InterruptGuard guard;
+  const auto start = std::chrono::steady_clock::now();
+  while (!InterruptGuard::interrupted()) {
+    if (!c->owner->serving()) fail("{}: the port vanished", link.port);
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (options.seconds > 0.0 && elapsed >= options.seconds) break;
+    ::usleep(50000);
+  }
+}
+
 void run_monitor(const LinkOptions& link, const MonitorOptions& options, std::ostream& out) {
   if (::isatty(STDOUT_FILENO) != 1) fail("monitor: stdout is not a terminal (use 'stream' to capture data)");
-  auto c = connect(link);
+  auto c = connect(link, Hold::Serve);
   Session& s = *c->session;
   const InterruptGuard guard;
   const RegisterInfo& rpm = require_register("rpm");

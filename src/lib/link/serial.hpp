@@ -88,6 +88,13 @@ std::vector<SeqEntry> send_plan(const table::Table& tbl, int frac_bits);
 /// sequence (an entry wherever a register column changes) and loads it into the board's RAM.
 void run_send(const LinkOptions& link, const SendOptions& options, std::ostream& out);
 
+struct ServeOptions {
+  double seconds = 0.0;      ///< 0: until Ctrl-C
+};
+/// serve: holds the port and serves every other mcg-serial command on it (PortOwner) until
+/// Ctrl-C or `seconds`; fails when another mcg-serial already holds it, or when the port vanishes.
+void run_serve(const LinkOptions& link, const ServeOptions& options);
+
 struct MonitorOptions {
   double seconds = 0.0;      ///< 0: until Ctrl-C
   double period_s = 0.2;     ///< redraw period

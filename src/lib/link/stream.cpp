@@ -37,7 +37,7 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
   std::int64_t want = options.samples;
   if (options.seconds > 0.0) want = static_cast<std::int64_t>(std::llround(options.seconds / k_sample_s));
   const Rig rig = load_rig(options.rig);
-  auto c = connect(link);
+  auto c = connect(link, Hold::Serve);
   Session& s = *c->session;
   const InterruptGuard guard;
   const std::vector<std::pair<std::string, std::string>> config = board_config(*c);

@@ -1,0 +1,460 @@
+// The port owner: a thread that holds the board's line and serves clients over a Unix socket.
+#include "link/owner.hpp"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <climits>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <deque>
+#include <optional>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "common/error.hpp"    // mcg::fail
+#include "link/frame.hpp"      // Decoder, encode
+#include "link/registers.hpp"  // require_register
+#include "mcg_protocol.h"      // MCG_CMD_*, MCG_MSG_*
+
+namespace mcg::link {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double now_s() { return std::chrono::duration<double>(Clock::now().time_since_epoch()).count(); }
+
+/// A request goes to the board after the previous one was answered, or after this long.
+constexpr double k_hold_s = 0.1;
+/// An unanswered request is forgotten (its answer goes nowhere) after this long.
+constexpr double k_forget_s = 10.0;
+/// A client that does not read what it is sent is dropped beyond this backlog.
+constexpr std::size_t k_max_backlog = 1u << 20;
+constexpr double k_port_write_timeout_s = 2.0;
+
+int poll_ms(double timeout_s) { return static_cast<int>(std::clamp(std::ceil(timeout_s * 1e3), 0.0, 3.6e6)); }
+
+sockaddr_un socket_address(const std::string& path) {
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  if (path.size() >= sizeof addr.sun_path) fail("{}: control socket path too long", path);
+  std::memcpy(addr.sun_path, path.c_str(), path.size() + 1);
+  return addr;
+}
+
+/// A byte line over a connected stream socket (the client's end of the owner's service).
+class SocketPort final : public Port {
+ public:
+  SocketPort(std::string name, int fd) : m_name(std::move(name)), m_fd(fd) {}
+  ~SocketPort() override { ::close(m_fd); }
+  const std::string& name() const override { return m_name; }
+
+  std::size_t read_some(std::span<std::uint8_t> buf, double timeout_s) override {
+    pollfd p{m_fd, POLLIN, 0};
+    const int ready = ::poll(&p, 1, poll_ms(timeout_s));
+    if (ready < 0) {
+      if (errno == EINTR) return 0;
+      fail("{}: waiting for input: {}", m_name, std::strerror(errno));
+    }
+    if (ready == 0) return 0;
+    const ssize_t n = ::recv(m_fd, buf.data(), buf.size(), MSG_DONTWAIT);
+    if (n > 0) return static_cast<std::size_t>(n);
+    if (n < 0 && (errno == EAGAIN || errno == EINTR)) return 0;
+    vanished();
+  }
+
+  void write_all(std::span<const std::uint8_t> bytes, double timeout_s) override {
+    const auto deadline = Clock::now() + std::chrono::duration<double>(timeout_s);
+    while (!bytes.empty()) {
+      const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
+      if (left <= 0.0) fail("{}: write timed out after {} s (the port's owner does not read)", m_name, timeout_s);
+      pollfd p{m_fd, POLLOUT, 0};
+      const int ready = ::poll(&p, 1, poll_ms(left));
+      if (ready < 0 && errno != EINTR) fail("{}: waiting to write: {}", m_name, std::strerror(errno));
+      if (ready <= 0) continue;
+      const ssize_t n = ::send(m_fd, bytes.data(), bytes.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
+      if (n < 0) {
+        if (errno == EAGAIN || errno == EINTR) continue;
+        vanished();
+      }
+      bytes = bytes.subspan(static_cast<std::size_t>(n));
+    }
+  }
+
+  void discard_input() override {
+    std::uint8_t buf[512];
+    while (::recv(m_fd, buf, sizeof buf, MSG_DONTWAIT) > 0) {
+    }
+  }
+
+ private:
+  [[noreturn]] void vanished() const { throw PortVanished(fmt::format("{}: the port vanished", m_name)); }
+
+  std::string m_name;
+  int m_fd;
+};
+
+/// The answer a request expects: its command with the reply bit and, for register reads and
+/// writes, the register echoed in the answer.
+struct Expect {
+  int client = -1;
+  std::uint8_t answer = 0;
+  int reg = -1;
+  double sent_s = 0.0;
+};
+
+Expect expectation(int client, const Frame& request) {
+  Expect e;
+  e.client = client;
+  e.answer = static_cast<std::uint8_t>(request.cmd | MCG_REPLY_BIT);
+  if ((request.cmd == MCG_CMD_READ || request.cmd == MCG_CMD_WRITE) && !request.payload.empty()) {
+    e.reg = request.payload[0];
+  }
+  return e;
+}
+
+bool answers(const Expect& e, const Frame& f) {
+  if (f.cmd != e.answer) return false;
+  // A refusal carries the status only; an accepted read or write echoes the register.
+  if (e.reg >= 0 && f.payload.size() >= 2 && f.payload[0] == MCG_ST_OK) return f.payload[1] == e.reg;
+  return true;
+}
+
+}  // namespace
+
+std::string control_socket_path(const std::string& port) {
+  std::string key = port;
+  if (char* real = ::realpath(port.c_str(), nullptr)) {
+    key = real;
+    std::free(real);
+  }
+  std::string name;
+  for (char c : key) name += (c == '/' || c == ' ') ? '_' : c;
+  while (!name.empty() && name.front() == '_') name.erase(0, 1);
+  const char* dir = std::getenv("XDG_RUNTIME_DIR");
+  std::string base = (dir != nullptr && *dir != '\0') ? std::string(dir) : std::string("/tmp");
+  std::string path = fmt::format("{}/mcg-serial.{}.sock", base, name);
+  if (path.size() >= sizeof(sockaddr_un{}.sun_path)) {
+    path = fmt::format("{}/mcg-serial.{:016x}.sock", base, std::hash<std::string>{}(key));
+  }
+  return path;
+}
+
+std::unique_ptr<Port> connect_owner(const std::string& port) {
+  const std::string path = control_socket_path(port);
+  const sockaddr_un addr = socket_address(path);
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) fail("{}: cannot make a socket: {}", path, std::strerror(errno));
+  if (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {
+    ::close(fd);
+    return nullptr;
+  }
+  return std::make_unique<SocketPort>(port, fd);
+}
+
+std::unique_ptr<Port> open_shared_port(const std::string& port, int baud) {
+  if (auto p = connect_owner(port)) return p;
+  const auto deadline = Clock::now() + std::chrono::seconds(1);
+  for (;;) {
+    try {
+      return open_port(port, baud);
+    } catch (const PortVanished&) {
+      throw;
+    } catch (const Error& e) {
+      // Busy: an owner may be between opening the port and listening. Anything else is final.
+      if (std::string_view(e.what()).find("port busy") == std::string_view::npos || Clock::now() > deadline) throw;
+    }
+    ::usleep(20000);
+    if (auto p = connect_owner(port)) return p;
+  }
+}
+
+struct PortOwner::Impl {
+  struct Client {
+    int fd = -1;
+    int id = 0;
+    Decoder decoder{1.0};
+    std::vector<std::uint8_t> backlog;   ///< bytes for the client its socket did not take yet
+    bool stream = false;                 ///< turned the stream on
+    bool closed = false;
+  };
+
+  std::unique_ptr<Port> port;
+  std::string path;
+  int listen_fd = -1;
+  int wake[2] = {-1, -1};   ///< the owner's destructor wakes the thread through it
+  std::thread thread;
+  std::atomic<bool> serving{true};
+  std::vector<Client> clients;
+  int next_id = 1;
+  Decoder board{0.1};
+  std::deque<std::pair<int, Frame>> queue;   ///< requests not sent yet (client -1: the owner's own)
+  std::vector<Expect> expected;              ///< sent, not answered
+  double last_sent_s = -1e9;
+  bool waiting = false;                      ///< the last request sent has no answer yet
+  int log_client = -1;                       ///< who asked for the log dump
+  std::uint8_t stream_reg = 0;
+
+  Client* find(int id) {
+    for (auto& c : clients) {
+      if (c.id == id && !c.closed) return &c;
+    }
+    return nullptr;
+  }
+
+  void send_to(Client& c, const Frame& f) {
+    if (c.closed) return;
+    const std::vector<std::uint8_t> bytes = encode(f.cmd, f.payload);
+    c.backlog.insert(c.backlog.end(), bytes.begin(), bytes.end());
+    flush_client(c);
+  }
+
+  void flush_client(Client& c) {
+    while (!c.backlog.empty() && !c.closed) {
+      const ssize_t n = ::send(c.fd, c.backlog.data(), c.backlog.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        if (errno != EAGAIN) c.closed = true;
+        break;
+      }
+      c.backlog.erase(c.backlog.begin(), c.backlog.begin() + n);
+    }
+    if (c.backlog.size() > k_max_backlog) c.closed = true;
+  }
+
+  bool anyone_streams(int except) const {
+    return std::any_of(clients.begin(), clients.end(),
+                       [&](const Client& c) { return !c.closed && c.id != except && c.stream; });
+  }
+
+  /// A whole frame from client `c`: queued for the board, or answered here when it would
+  /// turn off a stream another client still reads.
+  void from_client(Client& c, Frame f) {
+    if (f.cmd == MCG_CMD_WRITE && f.payload.size() >= 3 && f.payload[0] == stream_reg) {
+      const bool on = get_i16(f.payload, 1) != 0;
+      c.stream = on;
+      // The stream is on while anyone reads it: writing what it already is would restart the
+      // board's block (a gap for the others), writing it off would end theirs.
+      if (anyone_streams(c.id)) {
+        Frame reply;
+        reply.cmd = static_cast<std::uint8_t>(MCG_CMD_WRITE | MCG_REPLY_BIT);
+        reply.payload = {MCG_ST_OK, stream_reg};
+        put_i16(reply.payload, 1);
+        send_to(c, reply);
+        return;
+      }
+    }
+    if (f.cmd == MCG_CMD_LOG_DUMP) log_client = c.id;
+    queue.emplace_back(c.id, std::move(f));
+  }
+
+  void from_board(const Frame& f) {
+    if (f.cmd == MCG_MSG_STREAM) {
+      for (auto& c : clients) {
+        if (c.stream) send_to(c, f);
+      }
+      return;
+    }
+    if (f.cmd == MCG_MSG_LOG_DATA) {
+      if (Client* c = find(log_client)) send_to(*c, f);
+      return;
+    }
+    if (f.cmd == MCG_MSG_ERROR) {
+      // A damaged frame: whoever waits for an answer resends at once.
+      std::vector<int> told;
+      for (const auto& e : expected) {
+        if (std::find(told.begin(), told.end(), e.client) != told.end()) continue;
+        told.push_back(e.client);
+        if (Client* c = find(e.client)) send_to(*c, f);
+      }
+      waiting = false;
+      return;
+    }
+    const auto it = std::find_if(expected.begin(), expected.end(), [&](const Expect& e) { return answers(e, f); });
+    if (it == expected.end()) return;
+    const int id = it->client;
+    expected.erase(it);
+    waiting = false;
+    if (Client* c = find(id)) send_to(*c, f);
+  }
+
+  void send_next() {
+    const double now = now_s();
+    std::erase_if(expected, [&](const Expect& e) { return now - e.sent_s > k_forget_s; });
+    if (queue.empty() || (waiting && now - last_sent_s < k_hold_s)) return;
+    auto [id, f] = std::move(queue.front());
+    queue.pop_front();
+    port->write_all(encode(f.cmd, f.payload), k_port_write_timeout_s);
+    Expect e = expectation(id, f);
+    e.sent_s = now;
+    expected.push_back(e);
+    last_sent_s = now;
+    waiting = true;
+  }
+
+  void drop_closed() {
+    bool stopped_streaming = false;
+    for (auto& c : clients) {
+      if (!c.closed) continue;
+      stopped_streaming = stopped_streaming || c.stream;
+      std::erase_if(queue, [&](const auto& q) { return q.first == c.id; });
+      ::close(c.fd);
+      c.fd = -1;
+    }
+    std::erase_if(clients, [](const Client& c) { return c.fd < 0; });
+    if (stopped_streaming && !anyone_streams(-1)) {
+      // The last reader of the stream went away without turning it off.
+      Frame off;
+      off.cmd = MCG_CMD_WRITE;
+      off.payload = {stream_reg};
+      put_i16(off.payload, 0);
+      queue.emplace_back(-1, std::move(off));
+    }
+  }
+
+  void accept_clients() {
+    for (;;) {
+      const int fd = ::accept4(listen_fd, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
+      if (fd < 0) return;
+      add_client(fd);
+    }
+  }
+
+  void add_client(int fd) {
+    Client c;
+    c.fd = fd;
+    c.id = next_id++;
+    clients.push_back(std::move(c));
+  }
+
+  void read_client(Client& c) {
+    std::uint8_t buf[4096];
+    const ssize_t n = ::recv(c.fd, buf, sizeof buf, MSG_DONTWAIT);
+    if (n == 0 || (n < 0 && errno != EAGAIN && errno != EINTR)) {
+      c.closed = true;
+      return;
+    }
+    if (n < 0) return;
+    std::vector<Frame> frames;
+    c.decoder.feed(std::span<const std::uint8_t>(buf, static_cast<std::size_t>(n)), now_s(), frames);
+    for (auto& f : frames) from_client(c, std::move(f));
+  }
+
+  void serve() {
+    sigset_t block;
+    sigemptyset(&block);
+    sigaddset(&block, SIGINT);
+    sigaddset(&block, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &block, nullptr);
+    try {
+      loop();
+    } catch (const Error&) {
+      // The port vanished or stays blocked: every client sees its line end.
+    }
+    for (auto& c : clients) {
+      ::close(c.fd);
+      c.fd = -1;
+    }
+    clients.clear();
+    close_listener();
+    serving = false;
+  }
+
+  void loop() {
+    std::uint8_t buf[512];
+    for (;;) {
+      std::vector<pollfd> fds;
+      fds.push_back({wake[0], POLLIN, 0});
+      fds.push_back({listen_fd, POLLIN, 0});
+      fds.push_back({port->poll_fd(), POLLIN, 0});
+      for (const auto& c : clients) {
+        fds.push_back({c.fd, static_cast<short>(POLLIN | (c.backlog.empty() ? 0 : POLLOUT)), 0});
+      }
+      double timeout_s = 0.05;
+      if (waiting && !queue.empty()) timeout_s = std::max(0.0, k_hold_s - (now_s() - last_sent_s));
+      if (fds[2].fd < 0) timeout_s = std::min(timeout_s, 0.002);
+      const int ready = ::poll(fds.data(), fds.size(), poll_ms(timeout_s));
+      if (ready < 0 && errno != EINTR) fail("control socket: poll: {}", std::strerror(errno));
+      if (ready > 0 && fds[0].revents != 0) return;
+      if (ready > 0 && (fds[1].revents & POLLIN) != 0) accept_clients();
+      if (fds[2].fd < 0 || (ready > 0 && fds[2].revents != 0)) {
+        const std::size_t n = port->read_some(buf, 0.0);
+        std::vector<Frame> frames;
+        if (n > 0) board.feed(std::span<const std::uint8_t>(buf, n), now_s(), frames);
+        for (const auto& f : frames) from_board(f);
+      } else {
+        std::vector<Frame> frames;
+        board.poll(now_s(), frames);
+        for (const auto& f : frames) from_board(f);
+      }
+      for (std::size_t k = 3; k < fds.size(); ++k) {
+        Client* c = find(clients[k - 3].id);
+        if (c == nullptr || fds[k].revents == 0) continue;
+        if ((fds[k].revents & POLLOUT) != 0) flush_client(*c);
+        if ((fds[k].revents & (POLLIN | POLLHUP | POLLERR)) != 0) read_client(*c);
+      }
+      drop_closed();
+      send_next();
+    }
+  }
+
+  void close_listener() {
+    if (listen_fd >= 0) {
+      ::close(listen_fd);
+      listen_fd = -1;
+      ::unlink(path.c_str());
+    }
+  }
+};
+
+PortOwner::PortOwner(std::unique_ptr<Port> port) : m_impl(std::make_unique<Impl>()) {
+  Impl& m = *m_impl;
+  m.port = std::move(port);
+  m.stream_reg = require_register("stream").id;
+  m.path = control_socket_path(m.port->name());
+  const sockaddr_un addr = socket_address(m.path);
+  m.listen_fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+  if (m.listen_fd < 0) fail("{}: cannot make a socket: {}", m.path, std::strerror(errno));
+  // This process holds the port exclusively, so a socket already there is a dead owner's.
+  ::unlink(m.path.c_str());
+  if (::bind(m.listen_fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0 ||
+      ::listen(m.listen_fd, 16) != 0) {
+    const int err = errno;
+    ::close(m.listen_fd);
+    fail("{}: cannot listen for other mcg-serial commands: {}", m.path, std::strerror(err));
+  }
+  if (::pipe2(m.wake, O_CLOEXEC) != 0) {
+    m.close_listener();
+    fail("cannot make a pipe: {}", std::strerror(errno));
+  }
+  m.port->discard_input();
+  m.thread = std::thread([&m] { m.serve(); });
+}
+
+PortOwner::~PortOwner() {
+  Impl& m = *m_impl;
+  // Closing the pipe's write end wakes the thread's poll (POLLHUP) and ends it.
+  ::close(m.wake[1]);
+  m.thread.join();
+  ::close(m.wake[0]);
+}
+
+bool PortOwner::serving() const { return m_impl->serving; }
+
+std::unique_ptr<Port> PortOwner::local_client() {
+  auto p = connect_owner(m_impl->port->name());
+  if (!p) fail("{}: cannot reach this process's own control socket", m_impl->path);
+  return p;
+}
+
+}  // namespace mcg::link
