@@ -4,6 +4,7 @@
 #include "common/error.hpp"
 #include "common/tool.hpp"
 
+#include <fmt/compile.h>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -326,22 +327,29 @@ void Writer::set_digits(std::string_view name, int digits) {
 
 void Writer::row(std::span<const double> values) {
   MCG_DEMAND(values.size() == m_names.size());
-  char text[32];
+  // Formatted straight into the buffer's tail: at most 25 characters a number ("%.17g" of a
+  // negative subnormal), a separator each. fmt's "{:.Ng}" writes what printf's "%.Ng" and
+  // std::to_chars(general, N) write, in half their time.
+  const std::size_t used = m_buffer.size();
+  m_buffer.resize(used + values.size() * 26 + 1);
+  char* p = m_buffer.data() + used;
   for (std::size_t c = 0; c < values.size(); ++c) {
-    if (c) m_buffer += ',';
+    if (c) *p++ = ',';
     const double v = values[c];
     if (std::isnan(v)) {
-      m_buffer += "nan";
+      p = std::copy_n("nan", 3, p);
     } else if (std::isinf(v)) {
-      m_buffer += v > 0 ? "inf" : "-inf";
+      p = v > 0 ? std::copy_n("inf", 3, p) : std::copy_n("-inf", 4, p);
     } else if (v == 0) {
-      m_buffer += '0';
+      *p++ = '0';
+    } else if (m_digits[c] == k_default_digits) {
+      p = fmt::format_to(p, FMT_COMPILE("{:.10g}"), v);
     } else {
-      const auto res = std::to_chars(text, text + sizeof text, v, std::chars_format::general, m_digits[c]);
-      m_buffer.append(text, res.ptr);
+      p = fmt::format_to(p, FMT_COMPILE("{:.{}g}"), v, m_digits[c]);
     }
   }
-  m_buffer += '\n';
+  *p++ = '\n';
+  m_buffer.resize(static_cast<std::size_t>(p - m_buffer.data()));
   flush_if_full();
 }
 
