@@ -36,6 +36,10 @@ double now_s() { return std::chrono::duration<double>(Clock::now().time_since_ep
 
 /// A request goes to the board after the previous one was answered, or after this long.
 constexpr double k_hold_s = 0.1;
+/// While the stream is on it takes 56 of every 61 bytes the line carries at 9600 baud (a
+/// 56-byte block per 64 ms): one answer (9 bytes for a register) per this long fits in the rest
+/// without making the board drop a block.
+constexpr double k_stream_pace_s = 0.12;
 /// An unanswered request is forgotten (its answer goes nowhere) after this long.
 constexpr double k_forget_s = 10.0;
 /// A client that does not read what it is sent is dropped beyond this backlog.
@@ -255,7 +259,11 @@ struct PortOwner::Impl {
       }
     }
     if (f.cmd == MCG_CMD_LOG_DUMP) log_client = c.id;
-    queue.emplace_back(c.id, std::move(f));
+    // A client that resends while its request still waits for its turn asks once.
+    const bool again = std::any_of(queue.begin(), queue.end(), [&](const auto& q) {
+      return q.first == c.id && q.second.cmd == f.cmd && q.second.payload == f.payload;
+    });
+    if (!again) queue.emplace_back(c.id, std::move(f));
   }
 
   void from_board(const Frame& f) {
@@ -292,6 +300,7 @@ struct PortOwner::Impl {
     const double now = now_s();
     std::erase_if(expected, [&](const Expect& e) { return now - e.sent_s > k_forget_s; });
     if (queue.empty() || (waiting && now - last_sent_s < k_hold_s)) return;
+    if (anyone_streams(-1) && now - last_sent_s < k_stream_pace_s) return;
     auto [id, f] = std::move(queue.front());
     queue.pop_front();
     port->write_all(encode(f.cmd, f.payload), k_port_write_timeout_s);
@@ -381,7 +390,10 @@ struct PortOwner::Impl {
         fds.push_back({c.fd, static_cast<short>(POLLIN | (c.backlog.empty() ? 0 : POLLOUT)), 0});
       }
       double timeout_s = 0.05;
-      if (waiting && !queue.empty()) timeout_s = std::max(0.0, k_hold_s - (now_s() - last_sent_s));
+      if (!queue.empty()) {
+        const double gap_s = std::max(waiting ? k_hold_s : 0.0, anyone_streams(-1) ? k_stream_pace_s : 0.0);
+        timeout_s = std::clamp(gap_s - (now_s() - last_sent_s), 0.0, timeout_s);
+      }
       if (fds[2].fd < 0) timeout_s = std::min(timeout_s, 0.002);
       const int ready = ::poll(fds.data(), fds.size(), poll_ms(timeout_s));
       if (ready < 0 && errno != EINTR) fail("control socket: poll: {}", std::strerror(errno));
