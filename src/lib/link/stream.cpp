@@ -46,10 +46,11 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
     s.write(stream, 1);
   } else {
     // A sequence that turns the stream on in its first entry starts the capture on its own first
-    // tick (t = 0 there); the read comes a frame time (> 5 ms) after the start, when that entry ran.
+    // tick (t = 0 there). Writing 1 after it changes nothing on the board (on stays on), turns on
+    // a sequence's stream that does not, and tells a port owner this client reads the stream.
     const RegisterInfo& state = require_register("seq_state");
     s.write(state, static_cast<std::int16_t>(parse_value(state, options.then, "--then")));
-    if (s.read(stream) == 0) s.write(stream, 1);
+    s.write(stream, 1);
   }
 
   table::Writer w(out);
