@@ -98,6 +98,9 @@ int main(int argc, char** argv) {
   gp->add_option("--fix", gap.fix, "measured parameters pinned, NAME=VALUE, comma separated (not rescaled)")
       ->allow_extra_args(false)
       ->delimiter(',');
+  gp->add_option("--exclude", gap.exclude, "catalog effects not tried as candidates, comma separated")
+      ->allow_extra_args(false)
+      ->delimiter(',');
   gp->add_option("--from", gap.from_s, "use the rows of each run from this time on, s");
   gp->add_option("--to", gap.to_s, "use the rows of each run up to this time, s");
   gp->add_option("--gear-ratio", gap.gear_ratio, "motor turns per turn of the shaft whose speed was measured")

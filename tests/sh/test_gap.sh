@@ -6,6 +6,9 @@
 # validation use different excitations. Each case asserts the named effect(s) and, for an
 # effect, that the validation gap above the noise floor shrinks by at least 60 %. The effect
 # parameters are not the example cases' (test_gap_range.sh covers each effect's range).
+# Effects outside the catalog are made by withholding the simulated effect from the
+# candidates (--exclude): the verdict must be `unexplained`, saying where the residual lies,
+# even where another candidate absorbs part of it.
 # Args: TOOL_DIR SOURCE_DIR. Runs the built (Release) tools; a few seconds per case.
 set -euo pipefail
 tools=$1
@@ -25,11 +28,13 @@ measure() {
   mcg-sim --encoder --noise-i 0.003 --adc --seed "$seed" "${args[@]}"
 }
 
-# check NAME EXPECTED: runs the diagnosis on $work/NAME-{train,validate}.csv
+# check NAME EXPECTED [WHERE [GAP ARGS...]]: runs the diagnosis on $work/NAME-{train,validate}.csv;
+# WHERE (for unexplained) is text the summary must say about where the residual lies
 check() {
-  local name=$1 expected=$2
+  local name=$1 expected=$2 where=${3:-}
+  shift $(($# < 3 ? $# : 3))
   local out="$work/$name.csv"
-  if ! mcg-fit gap --train "$work/$name-train.csv" --validate "$work/$name-validate.csv" >"$out" 2>"$work/$name.err"; then
+  if ! mcg-fit gap --train "$work/$name-train.csv" --validate "$work/$name-validate.csv" "$@" >"$out" 2>"$work/$name.err"; then
     echo "FAIL $name: mcg-fit gap failed: $(tail -1 "$work/$name.err")"
     failures=$((failures + 1))
     return
@@ -42,7 +47,10 @@ check() {
   if [[ "$effect" != "$expected" ]]; then
     echo "FAIL $name: diagnosis '$effect', expected '$expected'"
     failures=$((failures + 1))
-  elif [[ "$expected" != none ]] && ! awk -v s="$shrink" 'BEGIN { exit !(s >= 60) }'; then
+  elif [[ -n "$where" ]] && ! grep -qF "$where" "$work/$name.err"; then
+    echo "FAIL $name: the summary does not say '$where': $(sed -n 2p "$work/$name.err")"
+    failures=$((failures + 1))
+  elif [[ "$expected" != none && "$expected" != unexplained ]] && ! awk -v s="$shrink" 'BEGIN { exit !(s >= 60) }'; then
     echo "FAIL $name: gap above the noise shrinks by $shrink %, expected at least 60 %"
     failures=$((failures + 1))
   else
@@ -59,12 +67,13 @@ chirp_at() { mcg-sweep chirp --bias "$1" --amp "$2" --f0 1 --f1 60 --duration 3 
 stairs_low() { mcg-sweep staircase --amp "$1" --steps 6 --hold 0.2 --duration 3 --clutch "$2"; }
 engage() { mcg-sweep step --level 7 --at 0.1 --then 10@1.2,5@2.2 --duration 3 --clutch-schedule "1@0,2@0.6,1@1.5,2@1.9"; }
 
-# case NAME EXPECTED EFFECTS TRAIN_GEN VALIDATE_GEN
+# case NAME EXPECTED EFFECTS TRAIN_GEN VALIDATE_GEN [WHERE [GAP ARGS...]]
 run_case() {
   local name=$1 expected=$2 effects=$3 train=$4 validate=$5
+  shift 5
   eval "$train" | measure "$effects" 11 >"$work/$name-train.csv"
   eval "$validate" | measure "$effects" 12 >"$work/$name-validate.csv"
-  check "$name" "$expected"
+  check "$name" "$expected" "$@"
 }
 
 run_case none none "" "steps_load 2" "prbs_at 7 2 0 5"
@@ -80,6 +89,12 @@ run_case clutch_engage_lag clutch_engage_lag "clutch_engage_lag:T_max_Nm=0.08,ta
 run_case thermal thermal "thermal:R_th_K_W=6,tau_th_s=3" "steps_load 2" "prbs_loaded 10 3 8"
 run_case two_effects "dead_time+brush_drop" "dead_time:tau_d_s=0.0035 brush_drop:V_b_V=0.8" "prbs_at 8 2.5 2 6" \
   "steps_load 0"
+# Outside the catalog: the delay shows only after input events; brush drop is partly
+# absorbed by hbridge and a nominal refit (about 60 % of the excess), which is not enough.
+run_case outside_dead_time unexplained "dead_time:tau_d_s=0.0025" "prbs_at 8 2.5 0 1" "steps_load 2" \
+  "lies mostly in timing transient" --exclude dead_time
+run_case outside_brush_drop unexplained "brush_drop:V_b_V=1.1" "stairs_low 6 1" "chirp_at 7 2 2" \
+  "what is left of the speed residual lies mostly in" --exclude brush_drop
 
 if ((failures > 0)); then
   echo "$failures case(s) failed"

@@ -7,6 +7,8 @@
 #include "table/table.hpp"
 
 #include "common/demand.hpp"
+#include <fmt/format.h>
+
 #include <fstream>
 #include <ostream>
 
@@ -14,8 +16,44 @@ namespace mcg::fit {
 
 using namespace gap_detail;
 
+namespace {
+
+/// "; what is left lies mostly in direction reverse (82 % of it), speed < 150 rpm (70 %)...":
+/// per group of regimes (and the frequency bands) the regime carrying most of the residual
+/// left, named when it carries clearly more than its share of the samples.
+std::string where_left(const GapReport& report) {
+  const bool speed = floor_index(report.floors, "rpm") != std::string::npos;
+  const std::vector<RegimeStat>& regimes = speed ? report.regimes_after : report.current_regimes_after;
+  std::size_t all = 0;
+  for (const auto& r : regimes) {
+    if (r.group == "all") all = r.samples;
+  }
+  std::vector<std::string> parts;
+  auto strongest = [&](const std::vector<RegimeStat>& stats, std::string_view group, bool by_samples) {
+    const RegimeStat* best = nullptr;
+    for (const auto& r : stats) {
+      if (r.group == group && r.samples > 0 && (best == nullptr || r.share > best->share)) best = &r;
+    }
+    if (best == nullptr || best->share < 0.5) return;
+    // A regime holding most of the samples holds most of any residual: not a finding.
+    if (by_samples && all > 0 && best->share < 1.25 * static_cast<double>(best->samples) / static_cast<double>(all)) {
+      return;
+    }
+    parts.push_back(fmt::format("{} {} ({:.0f} %)", group, best->regime, 100.0 * best->share));
+  };
+  for (const char* group : {"direction", "speed", "clutch", "load", "timing"}) strongest(regimes, group, true);
+  if (speed) strongest(report.bands_after, "band", false);
+  if (parts.empty()) return "; what is left is spread over every regime and band";
+  std::string out = fmt::format("; what is left of the {} residual lies mostly in", speed ? "speed" : "current");
+  for (std::size_t k = 0; k < parts.size(); ++k) out += (k == 0 ? " " : ", ") + parts[k];
+  return out;
+}
+
+}  // namespace
+
 GapReport diagnose_gap(const model::Model& model, const GapData& data, const GapSettings& settings) {
   MCG_DEMAND(!data.train.empty() && !data.validate.empty());
+  check_excluded(settings.excluded);
   GapReport report;
   report.split_note = data.split_note;
   report.validation_samples = validation_count(data);
@@ -34,6 +72,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
           report.white_before);
   analyse(data, report.simulated_after, report.regimes_after, report.bands_after, report.current_regimes_after,
           report.white_after);
+  if (report.diagnosis == "unexplained") report.reason += where_left(report);
   return report;
 }
 
@@ -46,6 +85,8 @@ void run_gap(const GapOptions& options, std::ostream& out, std::ostream& err) {
     settings.bounds = read_bounds(ini, model);
   }
   settings.fixed = fix_parameters(model, options.fix);
+  check_excluded(options.exclude);
+  settings.excluded = options.exclude;
   if (!(options.from_s < options.to_s)) fail("--from {} s is not before --to {} s", options.from_s, options.to_s);
   auto load = [&](const std::vector<std::string>& paths) {
     std::vector<table::Table> tables;

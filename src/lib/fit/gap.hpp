@@ -22,7 +22,10 @@
 // i.e. it removes a clear part of the gap above the noise that the reference leaves.
 // The diagnosis: `none` unless the model as given misses by more than the noise allows;
 // the best significant effect (or pair) over the refit; else `param_mismatch` if the refit
-// alone is significant; else `none`.
+// alone is significant. That choice is accepted only when it explains the gap: its score
+// is near the noise or it removes a stated share of the excess (k_gap_near_noise,
+// k_gap_explained_share); otherwise, and when nothing is significant, `unexplained`, with
+// the best candidate's residual analysed to say where what is left lies.
 #pragma once
 
 #include "fit/diag_residual.hpp"
@@ -44,6 +47,18 @@ namespace mcg::fit {
 inline constexpr double k_gap_abs_threshold = 0.25;
 /// ... and by at least this fraction of the gap its reference leaves above the noise.
 inline constexpr double k_gap_rel_threshold = 0.2;
+/// A significant candidate is accepted as the explanation only when its validation score
+/// is near the noise, score <= (1 + k_gap_near_noise) outputs (an RMS within about 22 % of
+/// the floor per output), ...
+inline constexpr double k_gap_near_noise = 0.5;
+/// ... or it removes at least this share of the score above the noise that the model as
+/// given leaves (three quarters of the squared excess: half of its RMS). Otherwise the
+/// verdict is `unexplained`.
+inline constexpr double k_gap_explained_share = 0.75;
+/// The data's own noise estimate replaces the stated measurement chain when it exceeds it
+/// by more than this factor (the second-difference estimate carries some of a fast
+/// excitation's signal, so a smaller excess is not trusted over the chain).
+inline constexpr double k_gap_data_floor_factor = 2.0;
 
 /// How the diagnosis runs.
 struct GapSettings {
@@ -54,6 +69,7 @@ struct GapSettings {
   /// would move them at 1 (motor.R_ohm: R_scale, motor.J_kg_m2: J_scale, Kt/Ke: Kt_scale,
   /// Tc: coulomb_scale, Ts: static_scale, visc*: viscous_scale).
   std::vector<std::string> fixed;
+  std::vector<std::string> excluded;   ///< catalog effects not tried as candidates (--exclude)
   std::map<std::string, std::pair<double, double>> bounds;  ///< [bounds] of the INI
   std::function<void(const std::string&)> progress;  ///< progress lines (none when empty)
 };
@@ -90,12 +106,14 @@ GapData prepare_gap_data(const std::vector<table::Table>& train, const std::vect
 struct OutputFloor {
   std::string output;       ///< "rpm" or "i"
   NoiseFloor noise;
-  double floor = 0.0;       ///< used for the score (the chain value when stated, else the data value)
+  /// used for the score: the chain value when stated, unless the data's own estimate exceeds
+  /// it by more than k_gap_data_floor_factor (then, and when no chain is stated, the data's)
+  double floor = 0.0;
 };
 
 /// One candidate and its validation result.
 struct GapCandidate {
-  std::string name;                   ///< "none", "param_mismatch", "stribeck", "stribeck+dead_time"
+  std::string name;                   ///< "none", "unexplained", "param_mismatch", "stribeck", "stribeck+dead_time"
   std::vector<std::string> effects;   ///< catalog effects added (param_mismatch excluded)
   std::string status;                 ///< "as given", "fitted", "not converged", "not excited: ..."
   model::Model model;                 ///< the fitted model
@@ -160,6 +178,7 @@ struct GapOptions {
   unsigned threads = 0;
   double split_fraction = 0.6;
   std::vector<std::string> fix;  ///< "NAME=VALUE": measured, so never rescaled by a refit
+  std::vector<std::string> exclude;  ///< catalog effects not tried
   double from_s = -std::numeric_limits<double>::infinity();  ///< time range of each run
   double to_s = std::numeric_limits<double>::infinity();
   double gear_ratio = 1.0;       ///< motor turns per turn of the measured shaft

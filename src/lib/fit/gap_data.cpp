@@ -106,7 +106,8 @@ std::vector<OutputFloor> noise_floors(const GapData& data) {
     of.output = name;
     of.noise.chain = std::sqrt(chain_sq / static_cast<double>(rows));
     of.noise.data = std::sqrt(data_sq / static_cast<double>(rows));
-    of.floor = stated && of.noise.chain > 0.0 ? of.noise.chain : of.noise.data;
+    const bool chain_holds = stated && of.noise.chain > 0.0 && of.noise.data <= k_gap_data_floor_factor * of.noise.chain;
+    of.floor = chain_holds ? of.noise.chain : of.noise.data;
     // Noise-free data (a simulation without a measurement chain) still needs a scale:
     // 0.1 % of the signal's RMS.
     of.floor = std::max(of.floor, 1e-3 * std::sqrt(signal_sq / static_cast<double>(rows)));

@@ -33,35 +33,70 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
     if (c.name == candidates.best_single) best_single = &c;
   }
   const double before_score = none.score;
+  const double excess = before_score - static_cast<double>(outputs);
+  // The share of the excess over the noise that the model as given leaves and `c` removes.
+  auto removed = [&](const GapCandidate& c) { return excess > 0.0 ? (before_score - c.score) / excess : 0.0; };
   // The decision.
   pm.significant = gap && improves(pm.score, before_score, outputs);
   std::string diagnosis = "none";
+  const GapCandidate* chosen = nullptr;
   if (!gap) {
     report.reason = fmt::format("the model as given matches the validation runs within the noise (score {:.2f} for "
                                 "{} output{}, noise alone gives about {})",
                                 before_score, outputs, outputs > 1 ? "s" : "", outputs);
   } else if (!pairs.empty() && pairs.front().significant) {
-    diagnosis = pairs.front().name;
+    chosen = &pairs.front();
     report.reason = fmt::format("both effects together close significantly more of the gap than {} alone",
                                 best_single->name);
   } else if (best_single != nullptr) {
-    diagnosis = best_single->name;
+    chosen = best_single;
     report.reason = fmt::format("{} closes significantly more of the gap than refitting the nominal parameters",
-                                diagnosis);
+                                best_single->name);
   } else if (pm.significant) {
-    diagnosis = "param_mismatch";
+    chosen = &pm;
     report.reason = "refitting the nominal parameters closes the gap; no effect adds to it beyond the noise";
-  } else {
-    report.reason = "the model misses by more than the noise, but no candidate closes a significant part of the gap";
+  }
+  // Accepted only when it explains the gap: near the noise, or most of the excess removed.
+  const bool near_noise = chosen != nullptr && chosen->score <= (1.0 + k_gap_near_noise) * static_cast<double>(outputs);
+  if (chosen != nullptr && (near_noise || removed(*chosen) >= k_gap_explained_share)) {
+    diagnosis = chosen->name;
+  } else if (gap) {
+    diagnosis = "unexplained";
+    // The best candidate by FPE stands for what the catalog can do; its residual is analysed.
+    const GapCandidate* best = chosen;
+    for (const std::vector<GapCandidate>* group : {&singles, &pairs}) {
+      for (const auto& c : *group) {
+        if (c.evaluated && std::isfinite(c.fpe) && (best == nullptr || c.fpe < best->fpe)) best = &c;
+      }
+    }
+    if (best == nullptr || !(best->fpe < none.fpe)) best = pm.evaluated && pm.fpe < none.fpe ? &pm : &none;
+    GapCandidate u = *best;
+    u.name = "unexplained";
+    u.effects.clear();
+    u.significant = false;
+    u.status = fmt::format("best candidate {} removes {:.0f} % of the score above the noise", best->name,
+                           100.0 * removed(*best));
+    report.reason = fmt::format(
+        "no candidate explains the gap: the best, {}, leaves a validation score of {:.2f} against about {} for "
+        "noise alone and removes {:.0f} % of the excess (accepted: within {:.0f} % of the noise, or {:.0f} % "
+        "removed)",
+        best->name, best->score, outputs, 100.0 * removed(*best), 100.0 * k_gap_near_noise,
+        100.0 * k_gap_explained_share);
+    report.candidates.push_back(std::move(u));
   }
   none.significant = false;
 
   std::vector<GapCandidate> all;
+  if (diagnosis == "unexplained") {
+    all.push_back(std::move(report.candidates.back()));
+    report.candidates.clear();
+  }
   all.push_back(std::move(none));
   all.push_back(std::move(pm));
   for (auto& c : singles) all.push_back(std::move(c));
   for (auto& c : pairs) all.push_back(std::move(c));
-  std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.fpe < b.fpe; });
+  const auto ranked = all.begin() + (diagnosis == "unexplained" ? 1 : 0);
+  std::stable_sort(ranked, all.end(), [](const auto& a, const auto& b) { return a.fpe < b.fpe; });
   for (auto& c : skipped) all.push_back(std::move(c));
   const auto it = std::find_if(all.begin(), all.end(), [&](const auto& c) { return c.name == diagnosis; });
   MCG_DEMAND(it != all.end());

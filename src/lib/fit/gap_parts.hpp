@@ -41,6 +41,9 @@ struct Evaluation {
 };
 Evaluation evaluate(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors);
 
+/// Throws unless every name is a candidate effect of the catalog (--exclude).
+void check_excluded(const std::vector<std::string>& excluded);
+
 /// The fit objective on the training runs (sum over runs and outputs of the squared NRMSE),
 /// used to pick a starting point on a grid.
 double training_cost(const model::Model& model, const std::vector<Run>& runs);

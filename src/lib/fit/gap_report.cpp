@@ -236,7 +236,10 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
   if (s.i != std::string::npos) {
     out << fmt::format("validation i RMS: {:.4f} -> {:.4f} A\n", none.rms[s.i], diag.rms[s.i]);
   }
-  if (!diag.free.empty()) out << "fitted parameters (+- one standard error): " << params_text(diag) << "\n";
+  if (!diag.free.empty()) {
+    out << (report.diagnosis == "unexplained" ? "best candidate's fitted parameters" : "fitted parameters")
+        << " (+- one standard error): " << params_text(diag) << "\n";
+  }
   out << "\ncandidates, diagnosis first (score = validation MSE in noise units summed over outputs; FPE ranks):\n";
   out << fmt::format("  {:<32} {:>10} {:>10} {:>9} {:>3}  {}\n", "effect", "rms rpm", "score", "fpe", "sig", "status");
   for (const auto& c : report.candidates) {

@@ -260,6 +260,16 @@ std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& 
 
 namespace gap_detail {
 
+void check_excluded(const std::vector<std::string>& excluded) {
+  for (const auto& e : excluded) {
+    if (find_plan(e) == nullptr) {
+      std::string names;
+      for (const auto& p : effect_plans()) names += (names.empty() ? "" : ", ") + p.name;
+      fail("--exclude: {} is not a candidate effect (one of {})", quote(e), names);
+    }
+  }
+}
+
 Evaluation evaluate(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors) {
   Evaluation ev;
   ev.sum_sq.assign(floors.size(), 0.0);
@@ -373,6 +383,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data, con
   const std::vector<double> cogging_n = cogging_orders(pm.model, data.train, 2);
   for (const EffectPlan& plan : effect_plans()) {
     if (model.effect(plan.name) != nullptr) continue;
+    if (std::find(settings.excluded.begin(), settings.excluded.end(), plan.name) != settings.excluded.end()) continue;
     const std::string why = not_excited(plan.name, data.train);
     if (!why.empty()) {
       GapCandidate c;
