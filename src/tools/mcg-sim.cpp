@@ -2,6 +2,9 @@
 #include "board/board.hpp"
 #include "common/tool.hpp"
 #include "sim/run.hpp"
+#include "model/model.hpp"
+
+#include <iostream>
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -41,6 +44,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-step", opt.max_step_s, "largest integration step, s")
       ->check(CLI::Range(1e-7, 1e-3))
       ->capture_default_str();
+  bool list_effects = false;
+  app.add_flag("--list-effects", list_effects,
+               "instead: print the effect catalog (effect, parameter, unit, default, range, meaning)");
   mcg::board::ServeOptions board;
   app.add_option("--board", board.link_path,
                  "instead: serve the emulated board (firmware core + this model) on a pty linked at PATH");
@@ -48,6 +54,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.01, 100.0))
       ->capture_default_str();
   return mcg::tool_main(app, argc, argv, [&] {
+    if (list_effects) {
+      mcg::model::write_effect_catalog(std::cout);
+      return;
+    }
     if (!board.link_path.empty()) {
       board.configs = opt.configs;
       board.effects = opt.effects;

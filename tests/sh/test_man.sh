@@ -31,5 +31,20 @@ $("$tool" "$sub" --help 2>&1)"
     if printf '%s' "$text" | grep -qF -- "$opt"; then check ok; else check bad "$name: $opt is in --help but not in $name.1"; fi
   done
 done
+# mcg-sim(1)'s EFFECTS against the catalog the tool prints: each effect has an entry that names
+# each of its parameters and states its default.
+if [ -x "$tool_dir/mcg-sim" ]; then
+  effects_page="$src/man/mcg-sim.1"
+  while IFS=$'\t' read -r effect param unit def lo hi meaning; do
+    para=$(awk -v e="$effect" '/^\.SH /{s = ($0 == ".SH EFFECTS")} s && $0 == ".B " e {p = 1; next}
+      p && /^\.(TP|SH)/ {p = 0} p' "$effects_page")
+    if [ -z "$para" ]; then check bad "mcg-sim.1 EFFECTS: no entry for $effect"; continue; fi
+    if printf '%s' "$para" | grep -qF -- "$param" && printf '%s' "$para" | grep -qF -- "$def"; then
+      check ok
+    else
+      check bad "mcg-sim.1 EFFECTS: $effect does not state $param (default $def)"
+    fi
+  done < <("$tool_dir/mcg-sim" --list-effects | grep -v '^#' | tail -n +2)
+fi
 echo "man: $passed passed, $failed failed"
 [ "$failed" = 0 ]

@@ -14,6 +14,7 @@
 
 #include <array>
 #include <limits>
+#include <iosfwd>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -106,6 +107,10 @@ struct EffectSpec {
 const std::vector<EffectSpec>& effect_catalog();
 /// The spec of effect `name`, or nullptr.
 const EffectSpec* find_effect(std::string_view name);
+/// The catalog as `mcg-sim --list-effects` prints it: per effect two `#` lines (summary,
+/// equation), then one tab-separated row per parameter: effect, parameter, unit, default,
+/// min, max, meaning (under a header row of those names).
+void write_effect_catalog(std::ostream& out);
 /// An effect with all parameters at their defaults. Throws mcg::Error for an unknown name.
 Effect default_effect(std::string_view name);
 /// Parses "NAME" or "NAME:key=value,key=value". Unknown names/keys, malformed numbers and

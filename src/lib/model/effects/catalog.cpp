@@ -3,6 +3,7 @@
 // the parser of "NAME:key=value,..." specifications.
 #include <algorithm>
 #include <cmath>
+#include <ostream>
 
 #include "common/error.hpp"
 #include "config/ini.hpp"
@@ -87,6 +88,18 @@ const std::vector<EffectSpec>& effect_catalog() {
         {"L_scale", 1.0, 0.2, 5.0, "1", "armature inductances"}}},
   };
   return catalog;
+}
+
+void write_effect_catalog(std::ostream& out) {
+  out << "effect\tparameter\tunit\tdefault\tmin\tmax\tmeaning\n";
+  for (const EffectSpec& e : effect_catalog()) {
+    out << "# " << e.name << ": " << e.summary << "\n#   " << e.equation << "\n";
+    for (const EffectParamSpec& p : e.params) {
+      out << e.name << '\t' << p.name << '\t' << (p.unit.empty() ? "1" : p.unit) << '\t'
+          << config::format_number(p.default_value) << '\t' << config::format_number(p.lower) << '\t'
+          << config::format_number(p.upper) << '\t' << p.doc << '\n';
+    }
+  }
 }
 
 const EffectSpec* find_effect(std::string_view name) {
