@@ -106,14 +106,18 @@ int main(int argc, char** argv) {
   gp->add_option("--gear-ratio", gap.gear_ratio, "motor turns per turn of the shaft whose speed was measured")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  gp->add_option("--budget", gap.budget_s, "wall-clock budget, s: after it the results so far, marked partial")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  gp->add_flag("--progress,!--no-progress", gap.progress, "progress lines on stderr (default: when it is a terminal)");
   gp->add_option("--threads", gap.threads, "candidates fitted at once (0 = every core)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
 
+  gap.progress = mcg::stderr_is_terminal();
   return mcg::tool_main_status(app, argc, argv, [&]() -> int {
     if (gp->parsed()) {
-      mcg::fit::run_gap(gap, std::cout, std::cerr);
-      return 0;
+      return mcg::fit::run_gap(gap, std::cout, std::cerr);
     }
     if (fr->parsed()) {
       mcg::fit::run_friction(friction, std::cout);

@@ -96,6 +96,17 @@ run_case outside_dead_time unexplained "dead_time:tau_d_s=0.0025" "prbs_at 8 2.5
 run_case outside_brush_drop unexplained "brush_drop:V_b_V=1.1" "stairs_low 6 1" "chirp_at 7 2 2" \
   "what is left of the speed residual lies mostly in" --exclude brush_drop
 
+# A time budget too short for the search: the ranking so far, marked partial, exit status 4.
+status=0
+mcg-fit gap --train "$work/dead_time-train.csv" --validate "$work/dead_time-validate.csv" --budget 0.2 --progress \
+  >"$work/budget.csv" 2>"$work/budget.err" || status=$?
+if [[ $status -ne 4 ]] || ! grep -q '^# partial: the time budget ran out' "$work/budget.csv" ||
+  ! grep -q ',time budget spent' "$work/budget.csv" || ! grep -q '^mcg-fit gap: fitted .* of the budget left' "$work/budget.err"; then
+  echo "FAIL budget: exit $status, $(grep -c 'time budget spent' "$work/budget.csv") candidates cut short"
+  failures=$((failures + 1))
+else
+  echo "ok   budget: partial after 0.2 s, exit 4, $(grep -c 'time budget spent' "$work/budget.csv") candidates cut short"
+fi
 if ((failures > 0)); then
   echo "$failures case(s) failed"
   exit 1

@@ -62,17 +62,17 @@ draw() {
 
 # Points where the diagnosis is known to fall short today (reported, not counted; an xpass
 # means it has been fixed and the entry should go):
-#   cogging-low    T_c 0.87 mN m, N 4: diagnosis none (a third of the Coulomb level, a slow
+#   cogging-low    T_c 0.87 mN m, N 4: diagnosis unexplained (a third of the Coulomb level, a slow
 #                  ripple: below the significance margin)
 #   cogging-high   T_c 3.7 mN m, N 18: cogging named, the gap shrinks by 41 % only
-#   thermal-mid/high  R_th 13.5/18.5 K/W, tau 6.8/9.2 s: thermal named, 45-47 % shrink; on a
+#   thermal-mid   R_th 12.8 K/W, tau 6.4 s: thermal named, under 60 % shrink (or paired); on a
 #                  3 s training run only the heat capacity tau/R_th shows (t << tau), R_th
 #                  runs to its bound 200 K/W
-#   dead_time-4.2ms   4.2 ms, trained on clutch 0 only, validated engaged and loaded: none
+#   dead_time-4.2ms   4.2 ms, trained on clutch 0 only, validated engaged and loaded: unexplained
 #                  (the param_mismatch refit on clutch-0 data makes the engaged validation
 #                  worse, 110 against 27.7 rpm, and every effect is fitted on top of it)
 #   pair-2.5ms-1.1V   dead_time 2.5 ms + brush_drop 1.1 V: brush_drop alone is named
-declare -A known=([cogging-low]=1 [cogging-high]=1 [thermal-mid]=1 [thermal-high]=1 [dead_time-4.2ms]=1
+declare -A known=([cogging-low]=1 [cogging-high]=1 [thermal-mid]=1 [dead_time-4.2ms]=1
   [pair-2.5ms-1.1V]=1)
 xfail() {
   if [[ -n "${known[$1]:-}" ]]; then

@@ -32,6 +32,7 @@
 #include "fit/greybox.hpp"
 #include "model/model.hpp"
 
+#include <chrono>
 #include <functional>
 #include <iosfwd>
 #include <map>
@@ -72,6 +73,9 @@ struct GapSettings {
   std::vector<std::string> excluded;   ///< catalog effects not tried as candidates (--exclude)
   std::map<std::string, std::pair<double, double>> bounds;  ///< [bounds] of the INI
   std::function<void(const std::string&)> progress;  ///< progress lines (none when empty)
+  /// When the time budget runs out: fits under way stop at their next iteration, candidates
+  /// not started are reported as not fitted, and the report is marked partial.
+  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
 };
 
 /// One measured validation run prepared for scoring: rows before `first_scored` only bring
@@ -136,6 +140,7 @@ struct GapReport {
   std::size_t validation_samples = 0;
   std::vector<GapCandidate> candidates;  ///< diagnosis first, then the rest best first
   std::string diagnosis;                 ///< = candidates.front().name
+  bool partial = false;                  ///< the time budget ran out before every candidate was fitted
   std::string reason;                    ///< one sentence: why this diagnosis
   /// Where the gap lies before and after (the diagnosis' model), pooled over validation runs.
   std::vector<RegimeStat> regimes_before, regimes_after;
@@ -182,9 +187,15 @@ struct GapOptions {
   double from_s = -std::numeric_limits<double>::infinity();  ///< time range of each run
   double to_s = std::numeric_limits<double>::infinity();
   double gear_ratio = 1.0;       ///< motor turns per turn of the measured shaft
+  double budget_s = 120.0;       ///< wall-clock budget of the diagnosis (partial results after it)
+  bool progress = false;         ///< progress lines on `err`
 };
 
+/// Exit status of `mcg-fit gap` when the time budget ran out (the results so far are written).
+inline constexpr int k_gap_partial_exit = 4;
+
 /// The whole subcommand: reads the files, diagnoses, writes stdout/stderr (and residuals).
-void run_gap(const GapOptions& options, std::ostream& out, std::ostream& err);
+/// Returns 0, or k_gap_partial_exit when the budget ran out.
+int run_gap(const GapOptions& options, std::ostream& out, std::ostream& err);
 
 }  // namespace mcg::fit

@@ -86,6 +86,12 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
   }
   none.significant = false;
 
+  const auto cut = [](const GapCandidate& c) { return c.status.starts_with(k_out_of_time); };
+  report.partial = cut(pm) || std::any_of(singles.begin(), singles.end(), cut) ||
+                   std::any_of(pairs.begin(), pairs.end(), cut);
+  if (report.partial) {
+    report.reason += "; PARTIAL: the time budget ran out, the candidates marked so were not fitted to the end";
+  }
   std::vector<GapCandidate> all;
   if (diagnosis == "unexplained") {
     all.push_back(std::move(report.candidates.back()));

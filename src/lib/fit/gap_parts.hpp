@@ -17,6 +17,8 @@
 namespace mcg::fit::gap_detail {
 
 inline constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
+/// Status of a candidate the time budget cut short (the start of its status text).
+inline constexpr std::string_view k_out_of_time = "time budget spent";
 
 // --- data ------------------------------------------------------------------------------
 

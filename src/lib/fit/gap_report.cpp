@@ -192,6 +192,7 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
   const double before_i = at_or_nan(none.rms, s.i);
   out << "# source: mcg-fit gap\n";
   out << "# diagnosis: " << report.diagnosis << "\n";
+  if (report.partial) out << "# partial: the time budget ran out; the ranking is of the candidates fitted so far\n";
   if (!report.split_note.empty()) out << "# split: " << report.split_note << "\n";
   for (const auto& f : report.floors) {
     out << fmt::format("# noise_floor_{}: {} (measurement chain {}, from the data {})\n", f.output, number(f.floor),

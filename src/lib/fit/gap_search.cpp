@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <complex>
 #include <mutex>
@@ -130,7 +131,7 @@ std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed) {
 /// Searches the effect's grid (the cartesian product of its starting values, on each of the
 /// `bases`) on the training cost and returns the best point.
 model::Model grid_start(const std::vector<model::Model>& bases, const EffectPlan& plan, const std::vector<Run>& runs,
-                        const std::vector<double>& cogging_n) {
+                        const std::vector<double>& cogging_n, std::chrono::steady_clock::time_point deadline) {
   std::vector<std::vector<double>> axes = plan.grid;
   std::vector<std::string> keys = plan.free;
   if (plan.name == "cogging" && !cogging_n.empty()) {
@@ -143,6 +144,7 @@ model::Model grid_start(const std::vector<model::Model>& bases, const EffectPlan
   model::Model best_model = bases.front();
   for (const model::Model& base : bases) {
     for (std::size_t p = 0; p < points; ++p) {
+      if (std::chrono::steady_clock::now() >= deadline) return best_model;
       model::Model trial = base;
       std::size_t rest = p;
       for (std::size_t k = 0; k < keys.size(); ++k) {
@@ -182,7 +184,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
         add_effect(other, e);
         bases.push_back(std::move(other));
       }
-      start = grid_start(bases, *plan, data.train, cogging_n);
+      start = grid_start(bases, *plan, data.train, cogging_n, settings.deadline);
     }
   }
   FitProblem problem;
@@ -192,6 +194,9 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   problem.nls.ftol = 1e-5;
   problem.nls.check_smoothness = false;
   problem.bounds = settings.bounds;
+  if (settings.deadline != std::chrono::steady_clock::time_point::max()) {
+    problem.nls.stop = [deadline = settings.deadline] { return std::chrono::steady_clock::now() >= deadline; };
+  }
   auto budget = [&](std::size_t free) {
     return settings.max_evaluations > 0 ? settings.max_evaluations
                                         : job.evaluations_per_parameter * static_cast<int>(free + 1);
@@ -217,7 +222,11 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   for (const auto& e : job.effects) {
     if (const EffectPlan* plan = find_plan(e)) c.added_parameters += plan->free.size();
   }
-  c.status = fit.nls.converged ? "fitted" : "fitted, budget spent";
+  const bool out_of_time = settings.deadline != std::chrono::steady_clock::time_point::max() &&
+                           std::chrono::steady_clock::now() >= settings.deadline;
+  c.status = out_of_time             ? std::string(k_out_of_time) + ", fit stopped early"
+             : fit.nls.converged ? "fitted"
+                                 : "fitted, budget spent";
   c.evaluated = true;
   const Evaluation ev = evaluate(c.model, data, floors);
   c.score = ev.score;
@@ -236,6 +245,18 @@ std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& 
   const unsigned workers = parallel::worker_count(threads, jobs.size());
   const unsigned jac_threads = std::max(1U, threads / workers);
   parallel::for_each(jobs.size(), workers, [&](std::size_t k) {
+    if (std::chrono::steady_clock::now() >= settings.deadline) {
+      GapCandidate& c = out[k];
+      c.name = jobs[k].name;
+      c.effects = jobs[k].effects;
+      c.model = jobs[k].start;
+      c.status = std::string(k_out_of_time) + ", not fitted";
+      c.score = k_nan;
+      c.fpe = std::numeric_limits<double>::infinity();
+      c.rms.assign(floors.size(), k_nan);
+      c.train_rms_rpm = k_nan;
+      return;
+    }
     try {
       out[k] = run_job(jobs[k], data, floors, settings, jac_threads, cogging_n);
     } catch (const Error& e) {
@@ -251,7 +272,14 @@ std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& 
     }
     const std::lock_guard lock(mutex);
     ++done;
-    if (settings.progress) settings.progress(fmt::format("fitted {} ({}/{})", jobs[k].name, done, total));
+    if (settings.progress) {
+      std::string left;
+      if (settings.deadline != std::chrono::steady_clock::time_point::max()) {
+        const std::chrono::duration<double> rest = settings.deadline - std::chrono::steady_clock::now();
+        left = fmt::format(", {:.0f} s of the budget left", std::max(0.0, rest.count()));
+      }
+      settings.progress(fmt::format("fitted {} ({}/{}{}): {}", jobs[k].name, done, total, left, out[k].status));
+    }
   });
   return out;
 }

@@ -207,11 +207,19 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
   lm.setGtol(0.0);
   lm.setMaxfev(options.max_evaluations);
   Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
-  const auto status = lm.minimize(u);
+  // Eigen's minimize() loop, with the caller's stop asked after every iteration.
+  auto status = lm.minimizeInit(u);
+  bool stopped = false;
+  if (status != Eigen::LevenbergMarquardtSpace::ImproperInputParameters) {
+    do {
+      status = lm.minimizeOneStep(u);
+      stopped = status == Eigen::LevenbergMarquardtSpace::Running && options.stop && options.stop();
+    } while (status == Eigen::LevenbergMarquardtSpace::Running && !stopped);
+  }
 
   NlsResult result;
   for (const auto& spec : specs) result.names.push_back(spec.name);
-  result.reason = describe(status, result.converged);
+  result.reason = stopped ? "stopped early (time budget spent)" : describe(status, result.converged);
   result.iterations = static_cast<int>(lm.iterations());
   result.evaluations = static_cast<int>(lm.nfev());
   result.values = coords.to_physical(u);

@@ -43,6 +43,9 @@ struct NlsOptions {
   /// Check at the optimum whether the residual is smooth in each parameter (NlsResult::rough),
   /// at the cost of one more Jacobian.
   bool check_smoothness = true;
+  /// Asked after every iteration: true stops the solver there (a time budget), with the
+  /// result so far, not converged. Empty: never stops early.
+  std::function<bool()> stop;
 };
 
 /// The optimum and its statistics. With J the Jacobian of the residuals r with respect to
