@@ -64,7 +64,7 @@ draw() {
 # means it has been fixed and the entry should go):
 #   cogging-low    T_c 0.87 mN m, N 4: diagnosis unexplained (a third of the Coulomb level, a slow
 #                  ripple: below the significance margin)
-#   cogging-high   T_c 3.7 mN m, N 18: cogging named, the gap shrinks by 41 % only
+#   cogging-high   T_c 3.7 mN m, N 18: cogging shrinks the gap by 41 % only, unexplained
 #   thermal-mid   R_th 12.8 K/W, tau 6.4 s: thermal named, under 60 % shrink (or paired); on a
 #                  3 s training run only the heat capacity tau/R_th shows (t << tau), R_th
 #                  runs to its bound 200 K/W
