@@ -44,6 +44,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-step", opt.max_step_s, "largest integration step, s")
       ->check(CLI::Range(1e-7, 1e-3))
       ->capture_default_str();
+  app.add_flag("--compare", opt.compare,
+               "the input is a measured run: keep its rpm and i as rpm_measured, i_measured, add the residuals "
+               "and their running RMS per regime; the RMS per regime on stderr at the end");
   bool list_effects = false;
   app.add_flag("--list-effects", list_effects,
                "instead: print the effect catalog (effect, parameter, unit, default, range, meaning)");

@@ -111,6 +111,21 @@ TEST(TableWrite, RoundTripKeepsMetadataAndValues) {
   EXPECT_EQ(out.str(), "# seed: 42\nt,v,r_load\n0,1.25,inf\n0.001,-2,nan\n");
 }
 
+// A wide table (mcg-sim --compare writes 17 columns) keeps every name: the header is data, not
+// the shortened column list of a message.
+TEST(TableWrite, WideHeaderRoundTrips) {
+  std::string csv = "c0";
+  std::string row = "0";
+  for (int c = 1; c < 30; ++c) {
+    csv += ",c" + std::to_string(c);
+    row += "," + std::to_string(c);
+  }
+  csv += "\n" + row + "\n";
+  std::ostringstream out;
+  write(out, parse(csv));
+  EXPECT_EQ(out.str(), csv);
+}
+
 TEST(TableWrite, DigitsPerColumn) {
   std::ostringstream out;
   Writer w(out);

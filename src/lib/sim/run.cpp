@@ -2,6 +2,7 @@
 #include "sim/run.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <ostream>
@@ -53,7 +54,45 @@ void require_finite_value(double x, const table::Reader& in, std::string_view na
 }
 
 /// Where each output column comes from: an input column, or one of the simulated values.
-enum class Out { Input, Clutch, RLoad, Duty, V, Omega, Rpm, RpmTrue, I, IGen, VGen, Theta };
+enum class Out {
+  Input, Clutch, RLoad, Duty, V, Omega, Rpm, RpmTrue, I, IGen, VGen, Theta,
+  RpmResidual, RpmResidualRms, IResidual, IResidualRms
+};
+
+/// Running RMS of a residual per regime (clutch state, load open or closed, direction of the
+/// measured speed), the regimes mcg-fit gap breaks its residual into.
+class RegimeRms {
+ public:
+  /// Adds residual `r` (ignored when not finite) in the regime of this row; returns the RMS of
+  /// the regime so far (nan before its first finite residual).
+  double add(int clutch, bool load_closed, double rpm_measured, double r) {
+    const int dir = !std::isfinite(rpm_measured) || std::abs(rpm_measured) < 1.0 ? 1 : rpm_measured > 0.0 ? 2 : 0;
+    Acc& a = m_acc[static_cast<std::size_t>((clutch * 2 + (load_closed ? 1 : 0)) * 3 + dir)];
+    if (std::isfinite(r)) {
+      a.sum_sq += r * r;
+      ++a.n;
+    }
+    return a.n > 0 ? std::sqrt(a.sum_sq / static_cast<double>(a.n)) : std::numeric_limits<double>::quiet_NaN();
+  }
+  /// One line per regime seen: "clutch 2, load open, forward: 2.9 rpm RMS over 796 rows".
+  void report(std::ostream& out, std::string_view what, std::string_view unit) const {
+    static constexpr std::array<const char*, 3> k_dir{"reverse", "stopped", "forward"};
+    for (std::size_t k = 0; k < m_acc.size(); ++k) {
+      const Acc& a = m_acc[k];
+      if (a.n == 0) continue;
+      out << fmt::format("mcg-sim: {} residual, clutch {}, load {}, {}: {:.4g} {} RMS over {} rows\n", what,
+                         k / 6, (k / 3) % 2 != 0 ? "closed" : "open", k_dir[k % 3],
+                         std::sqrt(a.sum_sq / static_cast<double>(a.n)), unit, a.n);
+    }
+  }
+
+ private:
+  struct Acc {
+    double sum_sq = 0.0;
+    std::size_t n = 0;
+  };
+  std::array<Acc, 18> m_acc{};
+};
 
 struct OutColumn {
   Out what;
@@ -88,7 +127,8 @@ std::string equation_text(const Controller& c, bool configured) {
 
 }  // namespace
 
-void run(const RunOptions& opt, std::istream& in, const std::string& source, std::ostream& out) {
+void run(const RunOptions& opt, std::istream& in, const std::string& source, std::ostream& out,
+         std::ostream& report) {
   const config::Ini ini = config::Ini::load_all(opt.configs);
   model::Model model = model::model_from_ini(ini);
   for (const auto& text : opt.effects) {
@@ -153,6 +193,22 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
       plan.push_back({what, 0});
     }
   };
+  // --compare: the measured columns the model also writes stay, renamed, beside the model's.
+  std::optional<std::size_t> rpm_measured_col;
+  std::optional<std::size_t> i_measured_col;
+  if (opt.compare) {
+    for (auto [name, col] : {std::pair<const char*, std::optional<std::size_t>*>{"rpm", &rpm_measured_col},
+                             {"i", &i_measured_col}}) {
+      if (const auto c = reader.find(name)) {
+        *col = c;
+        names[*c] += "_measured";
+      }
+    }
+    if (!rpm_measured_col && !i_measured_col) {
+      fail("{}: --compare needs a measured run: no column 'rpm' or 'i' (columns: {})", source,
+           join(reader.columns(), ", "));
+    }
+  }
   if (!clutch_col) put("clutch", Out::Clutch);
   if (!r_load_col) put("r_load", Out::RLoad);
   if (closed) {
@@ -161,15 +217,29 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   }
   put("omega", Out::Omega);
   put("rpm", Out::Rpm);
-  if (opt.encoder) put("rpm_true", Out::RpmTrue);
+  if (opt.encoder || (opt.compare && reader.metadata().get("rpm_estimator"))) put("rpm_true", Out::RpmTrue);
   put("i", Out::I);
   put("i_gen", Out::IGen);
   put("v_gen", Out::VGen);
   put("theta", Out::Theta);
+  if (rpm_measured_col) {
+    put("rpm_residual", Out::RpmResidual);
+    put("rpm_residual_rms", Out::RpmResidualRms);
+  }
+  if (i_measured_col) {
+    put("i_residual", Out::IResidual);
+    put("i_residual_rms", Out::IResidualRms);
+  }
 
   table::Metadata meta = reader.metadata();
   const double t_first = reader[t_col];
-  const CountEstimator estimator{opt.window_s, opt.counts_per_rev};
+  // Compared with a capture, the model's speed is measured as the capture's was.
+  const std::optional<std::string> capture_estimator =
+      opt.compare && !opt.encoder ? meta.get("rpm_estimator") : std::nullopt;
+  const bool encoder = opt.encoder || capture_estimator.has_value();
+  const CountEstimator estimator = capture_estimator
+                                       ? measurement::parse_rpm_estimator(*capture_estimator, source + ": rpm_estimator")
+                                       : CountEstimator{opt.window_s, opt.counts_per_rev};
   const bool noisy = opt.noise_i_A > 0.0 || opt.noise_v_gen_V > 0.0;
   const measurement::CurrentChain adc = measurement::board_current_chain();
   meta.set("source", fmt::format("mcg-sim {}", k_version));
@@ -182,11 +252,16 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   meta.set("timing", fmt::format("{}, clutch, r_load of row n act over [t(n), t(n+1)); rpm, i, v_gen sampled at t(n){}",
                                  drive_name, closed ? "; duty, v: the controller's output at t(n), held to t(n+1)" : ""));
   meta.set("initial_state", fmt::format("at rest, t = {}", config::format_number(t_first)));
-  meta.erase("rpm_estimator");
-  meta.erase("encoder");
+  if (!capture_estimator) meta.erase("rpm_estimator");
+  if (!capture_estimator) meta.erase("encoder");
   meta.erase("i_measurement");
   meta.erase("v_gen_measurement");
   meta.erase("seed");
+  if (opt.compare) {
+    meta.set("compare", "rpm_measured, i_measured: the input's measurements; X_residual = X_measured - X (the "
+                        "model's); X_residual_rms: the running RMS of the residual in the row's regime (clutch, "
+                        "load, direction of the measured speed)");
+  }
   if (opt.encoder) {
     meta.set("rpm_estimator", format_rpm_estimator(estimator));
     meta.set("encoder", opt.counts_per_rev == boardunits::k_board_counts_per_rev
@@ -211,6 +286,8 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   model::SimOptions sim_opt;
   sim_opt.max_step_s = opt.max_step_s;
   StreamingRpmEstimator rpm_estimator(estimator);
+  RegimeRms rpm_regimes;
+  RegimeRms i_regimes;
   std::mt19937_64 rng(opt.seed);
   std::normal_distribution<double> unit(0.0, 1.0);
   const double supply = model.params.supply_V;
@@ -267,13 +344,27 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
       drive = model::Drive{drive_is_duty ? drive_value * supply : drive_value, clutch_state, r_load};
     }
     const double rpm_true = s.omega_rad_s * 30.0 / std::numbers::pi;
-    const double rpm = opt.encoder ? rpm_estimator.push(t, s.theta_rad) : rpm_true;
+    const double rpm = encoder ? rpm_estimator.push(t, s.theta_rad) : rpm_true;
     double i_meas = s.i_A;
     double v_gen = s.v_gen_V;
     if (opt.noise_i_A > 0.0) i_meas += opt.noise_i_A * unit(rng);
     if (opt.noise_v_gen_V > 0.0) v_gen += opt.noise_v_gen_V * unit(rng);
     if (opt.adc) i_meas = adc.quantise(i_meas);
 
+    const double rpm_measured = rpm_measured_col ? reader[*rpm_measured_col] : rpm;
+    const bool load_closed = std::isfinite(r_load);
+    double rpm_residual = 0.0;
+    double rpm_residual_rms = 0.0;
+    double i_residual = 0.0;
+    double i_residual_rms = 0.0;
+    if (rpm_measured_col) {
+      rpm_residual = rpm_measured - rpm;
+      rpm_residual_rms = rpm_regimes.add(clutch_state, load_closed, rpm_measured, rpm_residual);
+    }
+    if (i_measured_col) {
+      i_residual = reader[*i_measured_col] - i_meas;
+      i_residual_rms = i_regimes.add(clutch_state, load_closed, rpm_measured, i_residual);
+    }
     for (std::size_t c = 0; c < plan.size(); ++c) {
       switch (plan[c].what) {
         case Out::Input: row[c] = reader[plan[c].input]; break;
@@ -288,6 +379,10 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
         case Out::IGen: row[c] = s.i_gen_A; break;
         case Out::VGen: row[c] = v_gen; break;
         case Out::Theta: row[c] = s.theta_rad; break;
+        case Out::RpmResidual: row[c] = rpm_residual; break;
+        case Out::RpmResidualRms: row[c] = rpm_residual_rms; break;
+        case Out::IResidual: row[c] = i_residual; break;
+        case Out::IResidualRms: row[c] = i_residual_rms; break;
       }
     }
     writer.row(row);
@@ -295,6 +390,8 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
     first = false;
   } while (reader.next());
   writer.finish();
+  if (rpm_measured_col) rpm_regimes.report(report, "rpm", "rpm");
+  if (i_measured_col) i_regimes.report(report, "i", "A");
 }
 
 void run_stdio(const RunOptions& options) {

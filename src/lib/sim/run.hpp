@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <iosfwd>
+#include <iostream>
 #include <limits>
 #include <string>
 #include <vector>
@@ -28,6 +29,11 @@ struct RunOptions {
   bool adc = false;                   ///< i through the board's 10-bit ADC (1 ohm shunt, 2.5 V offset)
   std::uint64_t seed = 1;
   double max_step_s = 1e-3;           ///< largest integration step (see model::SimOptions)
+  /// The input is a measured run (a capture): its rpm (and i) stay beside the model's as
+  /// rpm_measured (i_measured), with rpm_residual = rpm_measured - rpm (i_residual) and the
+  /// running RMS of the residual in the row's regime; the per-regime RMS goes to `report` at
+  /// the end. The model's rpm goes through the capture's own rpm_estimator when it states one.
+  bool compare = false;
 };
 
 /// Reads the input table from `in` (named `source` in messages), simulates, writes the
@@ -35,7 +41,8 @@ struct RunOptions {
 /// in, in memory that does not grow with the run. When `in` reads through an FdInput, the
 /// output is flushed whenever the input pauses (a live pipe sees each row at once). Throws
 /// mcg::Error for bad input, after writing the rows before it.
-void run(const RunOptions& options, std::istream& in, const std::string& source, std::ostream& out);
+void run(const RunOptions& options, std::istream& in, const std::string& source, std::ostream& out,
+         std::ostream& report = std::cerr);
 
 /// run() on the standard input and output, live.
 void run_stdio(const RunOptions& options);

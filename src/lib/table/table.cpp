@@ -309,7 +309,12 @@ void Writer::meta(std::string_view key, std::string_view value) {
 void Writer::header(const std::vector<std::string>& names) {
   m_names = names;
   m_digits.assign(names.size(), k_default_digits);
-  m_buffer += column_list(names);
+  // Every name, as it is: column_list() is the shortened form for messages.
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    MCG_DEMAND(names[c].find_first_of(",\n\r") == std::string::npos);
+    if (c) m_buffer += ',';
+    m_buffer += names[c];
+  }
   m_buffer += '\n';
   flush_if_full();
 }
