@@ -83,7 +83,10 @@ if wanted bode; then
 fi
 
 if wanted fit; then "$build/bench/bench_fit" | tee -a "$raw" >/dev/null; fi
-if wanted gap; then "$build/bench/bench_gap" | tee -a "$raw" >/dev/null; fi
+if wanted gap; then
+  "$build/bench/bench_gap" | tee -a "$raw" >/dev/null
+  "$build/bench/bench_gap_null" | tee -a "$raw" >/dev/null
+fi
 
 if wanted design; then
   plant='0.0146/((s/60+1)(s/850+1)(s/1800+1))'
