@@ -9,14 +9,14 @@ sim=$tools/mcg-sim
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-# rows SECONDS: the closed-loop program at 1 ms, the speed command stepping every 0.5 s, the
-# load toggling every 0.7 s, the clutch engaged.
+# rows SECONDS: the closed-loop program at 1 ms, the speed command (a whole rpm in the board's
+# 120..720) stepping every 0.5 s, the load toggling every 0.7 s, the clutch engaged.
 rows() {
   awk -v n="$(($1 * 1000))" 'BEGIN {
     print "t,rpm_cmd,clutch,r_load"
     for (k = 0; k < n; k++) {
       t = k / 1000; s = sin(0.37 * int(t / 0.5)); if (s < 0) s = -s
-      printf "%.3f,%.6g,2,%s\n", t, 100 + 1400 * s, ((t - 1.4 * int(t / 1.4)) < 0.7) ? "5.6" : "inf"
+      printf "%.3f,%d,2,%s\n", t, int(150 + 550 * s), ((t - 1.4 * int(t / 1.4)) < 0.7) ? "5.6" : "inf"
     }
   }'
 }
