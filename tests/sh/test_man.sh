@@ -31,10 +31,13 @@ $("$tool" "$sub" --help 2>&1)"
     if printf '%s' "$text" | grep -qF -- "$opt"; then check ok; else check bad "$name: $opt is in --help but not in $name.1"; fi
   done
 done
-# mcg-sim(1)'s EFFECTS against the catalog the tool prints: each effect has an entry that names
-# each of its parameters and states its default.
+# The built mcg-sim(1) (its EFFECTS generated from the catalog) lints clean, and each effect the
+# tool prints has an entry that names each of its parameters and states its default.
 if [ -x "$tool_dir/mcg-sim" ]; then
-  effects_page="$src/man/mcg-sim.1"
+  effects_page="$tool_dir/../../man/mcg-sim.1"
+  if [ ! -f "$effects_page" ]; then check bad "the built mcg-sim.1 is missing"; fi
+  out=$(mandoc -T lint -W warning "$effects_page" 2>&1)
+  if [ -z "$out" ]; then check ok; else check bad "built mcg-sim.1: $out"; fi
   while IFS=$'\t' read -r effect param unit def lo hi meaning; do
     para=$(awk -v e="$effect" '/^\.SH /{s = ($0 == ".SH EFFECTS")} s && $0 == ".B " e {p = 1; next}
       p && /^\.(TP|SH)/ {p = 0} p' "$effects_page")

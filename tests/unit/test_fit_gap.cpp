@@ -304,10 +304,10 @@ TEST(GapCogging, OrderIsTheStrongestLineOverTheShaftAngle) {
   const Program p = prbs(3.0, 2.5, 0.8, 41, 0, k_inf);
   const table::Table t = measure(p, {"cogging:T_c_Nm=0.0019,N_per_rev=11,phase_rad=-1.2"}, 41, "cog.csv");
   const GapData data = prepare_gap_data({t}, {t}, model::builtin_rig(), 0.6);
-  EXPECT_EQ(cogging_orders(model::Model{}, data.train, 2).front(), 11.0);
+  EXPECT_EQ(angle_orders(model::Model{}, data.train, 2).front(), 11.0);
   const table::Table plain = measure(p, {"cogging:T_c_Nm=0.0015,N_per_rev=23,phase_rad=0.7"}, 41, "cog23.csv");
   const GapData data23 = prepare_gap_data({plain}, {plain}, model::builtin_rig(), 0.6);
-  EXPECT_EQ(cogging_orders(model::Model{}, data23.train, 2).front(), 23.0);
+  EXPECT_EQ(angle_orders(model::Model{}, data23.train, 2).front(), 23.0);
 }
 
 }  // namespace

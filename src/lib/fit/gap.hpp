@@ -151,14 +151,14 @@ struct GapReport {
   std::vector<std::vector<std::vector<double>>> simulated_before, simulated_after;
 };
 
-/// Highest cogging order searched, cycles per revolution.
-inline constexpr std::size_t k_max_cogging_order = 100;
+/// Highest order of the motor angle searched, cycles per revolution.
+inline constexpr std::size_t k_max_angle_order = 100;
 
 /// Cycles per revolution of the strongest position-periodic components of the speed
 /// residual (measured minus `model`) over the runs: P(N) = |sum_n r_n exp(-i N theta_n)|^2
 /// over the moving samples, theta the measured angle (the integral of the measured speed),
-/// N = 2..k_max_cogging_order. Returns the `keep` strongest N, strongest first.
-std::vector<double> cogging_orders(const model::Model& model, const std::vector<Run>& runs, std::size_t keep);
+/// N = 2..k_max_angle_order. Returns the `keep` strongest N, strongest first.
+std::vector<double> angle_orders(const model::Model& model, const std::vector<Run>& runs, std::size_t keep);
 
 /// Runs the diagnosis of `model` on `data`.
 GapReport diagnose_gap(const model::Model& model, const GapData& data, const GapSettings& settings);

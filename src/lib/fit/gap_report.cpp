@@ -138,10 +138,14 @@ std::string params_text(const GapCandidate& c) {
     const std::string item = fmt::format("{}={}+-{}", c.free[k], number(c.values[k]), number(c.std_errors[k], 2));
     (c.free[k].rfind("param_mismatch.", 0) == 0 ? nominal_part : effect_part).push_back(item);
   }
-  if (const model::Effect* cog = c.model.effect("cogging"); cog != nullptr && c.evaluated &&
-                                                             std::find(c.effects.begin(), c.effects.end(), "cogging") !=
-                                                                 c.effects.end()) {
-    effect_part.push_back(fmt::format("cogging.N_per_rev={}", number(cog->get("N_per_rev"))));
+  // A harmonic order is picked from the data's spectrum, not fitted: shown without an error.
+  for (const auto& name : c.effects) {
+    const model::EffectSpec* spec = model::find_effect(name);
+    const model::Effect* e = c.model.effect(name);
+    if (c.evaluated && spec != nullptr && e != nullptr && !spec->plan.angle_order_key.empty()) {
+      effect_part.push_back(
+          fmt::format("{}.{}={}", name, spec->plan.angle_order_key, number(e->get(spec->plan.angle_order_key))));
+    }
   }
   std::string out;
   for (const auto& part : {effect_part, nominal_part}) {

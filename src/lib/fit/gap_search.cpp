@@ -29,65 +29,42 @@ const std::vector<std::string>& mismatch_scales() {
   return names;
 }
 
-/// How one catalog effect is fitted: the parameters set free and a coarse grid of
-/// starting points (the best grid point on the training cost starts the fit).
-struct EffectPlan {
-  std::string name;
-  std::vector<std::string> free;                  ///< effect parameter keys fitted
-  std::vector<std::vector<double>> grid;          ///< per free key, starting values tried
-};
-
-/// The grids span what the physics allows on a small DC machine sampled at 1 kHz, roughly
-/// evenly in log space, each value a start only (the fit moves it):
-///   stribeck    v_s from slow creep (2 rad/s) to a tenth of the no-load speed; shape 1
-///               (Tustin's exponential) and 2 (the Gaussian form), the classical two
-///   dead_time   half a sample to 16 samples (a slow PWM or filter chain)
-///   supply_sag  a bench supply's leads (0.3 ohm) to a small battery's 3 ohm
-///   hbridge     MOSFET to bipolar on-resistance; deadbands of 0.5-6 % of the PWM period
-///   brush_drop  metal-graphite (0.2 V) to carbon brushes (2 V for the pair)
-///   clutch_compliance  two-rotor modes from 4 to 60 Hz with the rig's rotors; zeta from a
-///               bare steel spring (0.03) to an elastomer (0.3)
-///   clutch_engage_lag  capacities from below the friction to ten times it; a relay's 5 ms
-///               to a slow solenoid's 100 ms
-///   cogging     amplitudes from a quarter to the whole Coulomb level; eight phases
-///   thermal     a small can motor's R_th of 5-60 K/W; winding time constants 5-60 s
-const std::vector<EffectPlan>& effect_plans() {
-  static const std::vector<EffectPlan> plans = {
-      {"stribeck", {"v_s_rad_s", "shape_exp"}, {{2.0, 5.0, 12.0, 30.0, 80.0}, {1.0, 2.0}}},
-      {"dead_time", {"tau_d_s"}, {{0.0005, 0.001, 0.002, 0.004, 0.008, 0.016}}},
-      {"supply_sag", {"R_s_ohm"}, {{0.3, 1.0, 3.0}}},
-      {"hbridge", {"R_on_ohm", "deadband"}, {{0.1, 0.5}, {0.005, 0.02, 0.06}}},
-      {"brush_drop", {"V_b_V"}, {{0.2, 0.5, 1.0, 2.0}}},
-      {"clutch_compliance", {"k_Nm_per_rad", "zeta"}, {{0.01, 0.03, 0.1, 0.3, 1.0}, {0.03, 0.1, 0.3}}},
-      {"clutch_engage_lag", {"T_max_Nm", "tau_s"}, {{0.01, 0.05, 0.2}, {0.005, 0.03, 0.1}}},
-      {"cogging",
-       {"T_c_Nm", "phase_rad"},
-       {{0.0006, 0.001, 0.0016, 0.0025}, {-2.75, -1.96, -1.18, -0.39, 0.39, 1.18, 1.96, 2.75}}},
-      {"thermal", {"R_th_K_W", "tau_th_s"}, {{5.0, 20.0, 60.0}, {5.0, 60.0}}},
-  };
-  return plans;
+/// The catalog's candidate effects (each module's plan says how it is fitted).
+std::vector<const model::EffectSpec*> candidate_effects() {
+  std::vector<const model::EffectSpec*> out;
+  for (const auto& spec : model::effect_catalog()) {
+    if (spec.plan.candidate) out.push_back(&spec);
+  }
+  return out;
 }
 
-const EffectPlan* find_plan(std::string_view name) {
-  for (const auto& p : effect_plans()) {
-    if (p.name == name) return &p;
-  }
-  return nullptr;
+/// The candidate effect `name`, or nullptr.
+const model::EffectSpec* find_plan(std::string_view name) {
+  const model::EffectSpec* spec = model::find_effect(name);
+  return spec != nullptr && spec->plan.candidate ? spec : nullptr;
 }
 
 /// Why an effect cannot be identified from the training runs (empty: it can).
-std::string not_excited(std::string_view effect, const std::vector<Run>& runs) {
+std::string not_excited(const model::EffectPlan& plan, const std::vector<Run>& runs) {
   bool engaged = false;
   bool engages = false;
+  bool forward = false;
+  bool reverse = false;
   for (const Run& run : runs) {
     const auto& c = run.inputs.clutch;
     for (std::size_t n = 0; n < c.size(); ++n) {
       if (c[n] == 2.0) engaged = true;
       if (n > 0 && c[n] == 2.0 && c[n - 1] != 2.0) engages = true;
+      forward = forward || run.inputs.v_V[n] > 0.0;
+      reverse = reverse || run.inputs.v_V[n] < 0.0;
     }
   }
-  if (effect == "clutch_compliance" && !engaged) return "not excited: clutch never engaged in training";
-  if (effect == "clutch_engage_lag" && !engages) return "not excited: no engagement in training";
+  using Needs = model::EffectPlan::Needs;
+  if (plan.needs == Needs::both_directions && !(forward && reverse)) {
+    return "not excited: the drive never reverses in training";
+  }
+  if (plan.needs == Needs::clutch_engaged && !engaged) return "not excited: clutch never engaged in training";
+  if (plan.needs == Needs::clutch_engagement && !engages) return "not excited: no engagement in training";
   return {};
 }
 
@@ -130,13 +107,15 @@ std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed) {
 
 /// Searches the effect's grid (the cartesian product of its starting values, on each of the
 /// `bases`) on the training cost and returns the best point.
-model::Model grid_start(const std::vector<model::Model>& bases, const EffectPlan& plan, const std::vector<Run>& runs,
-                        const std::vector<double>& cogging_n, std::chrono::steady_clock::time_point deadline) {
+model::Model grid_start(const std::vector<model::Model>& bases, const model::EffectSpec& effect,
+                        const std::vector<Run>& runs, const std::vector<double>& orders,
+                        std::chrono::steady_clock::time_point deadline) {
+  const model::EffectPlan& plan = effect.plan;
   std::vector<std::vector<double>> axes = plan.grid;
   std::vector<std::string> keys = plan.free;
-  if (plan.name == "cogging" && !cogging_n.empty()) {
-    keys.push_back("N_per_rev");
-    axes.push_back(cogging_n);
+  if (!plan.angle_order_key.empty() && !orders.empty()) {
+    keys.push_back(plan.angle_order_key);
+    axes.push_back(orders);
   }
   std::size_t points = 1;
   for (const auto& a : axes) points *= a.size();
@@ -148,7 +127,7 @@ model::Model grid_start(const std::vector<model::Model>& bases, const EffectPlan
       model::Model trial = base;
       std::size_t rest = p;
       for (std::size_t k = 0; k < keys.size(); ++k) {
-        model::set_parameter(trial, plan.name + "." + keys[k], axes[k][rest % axes[k].size()]);
+        model::set_parameter(trial, effect.name + "." + keys[k], axes[k][rest % axes[k].size()]);
         rest /= axes[k].size();
       }
       const double cost = training_cost(trial, runs);
@@ -162,7 +141,7 @@ model::Model grid_start(const std::vector<model::Model>& bases, const EffectPlan
 }
 
 GapCandidate run_job(const Job& job, const GapData& data, const std::vector<OutputFloor>& floors,
-                     const GapSettings& settings, unsigned jacobian_threads, const std::vector<double>& cogging_n) {
+                     const GapSettings& settings, unsigned jacobian_threads, const std::vector<double>& orders) {
   GapCandidate c;
   c.name = job.name;
   c.effects = job.effects;
@@ -178,13 +157,13 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     }
   }
   for (const auto& e : job.grid_effects) {
-    if (const EffectPlan* plan = find_plan(e)) {
+    if (const model::EffectSpec* plan = find_plan(e)) {
       std::vector<model::Model> bases{start};
       for (model::Model other : job.other_starts) {
         add_effect(other, e);
         bases.push_back(std::move(other));
       }
-      start = grid_start(bases, *plan, data.train, cogging_n, settings.deadline);
+      start = grid_start(bases, *plan, data.train, orders, settings.deadline);
     }
   }
   FitProblem problem;
@@ -220,7 +199,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     c.std_errors.push_back(fit.nls.std_errors[k]);
   }
   for (const auto& e : job.effects) {
-    if (const EffectPlan* plan = find_plan(e)) c.added_parameters += plan->free.size();
+    if (const model::EffectSpec* plan = find_plan(e)) c.added_parameters += plan->plan.free.size();
   }
   const bool out_of_time = settings.deadline != std::chrono::steady_clock::time_point::max() &&
                            std::chrono::steady_clock::now() >= settings.deadline;
@@ -238,7 +217,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
 /// Runs the jobs on `threads` workers; each result lands at its job's index.
 std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& data,
                                    const std::vector<OutputFloor>& floors, const GapSettings& settings,
-                                   unsigned threads, const std::vector<double>& cogging_n, std::size_t& done,
+                                   unsigned threads, const std::vector<double>& orders, std::size_t& done,
                                    std::size_t total) {
   std::vector<GapCandidate> out(jobs.size());
   std::mutex mutex;
@@ -258,7 +237,7 @@ std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& 
       return;
     }
     try {
-      out[k] = run_job(jobs[k], data, floors, settings, jac_threads, cogging_n);
+      out[k] = run_job(jobs[k], data, floors, settings, jac_threads, orders);
     } catch (const Error& e) {
       // A candidate the data cannot fit is reported as such; the others go on.
       GapCandidate& c = out[k];
@@ -292,7 +271,7 @@ void check_excluded(const std::vector<std::string>& excluded) {
   for (const auto& e : excluded) {
     if (find_plan(e) == nullptr) {
       std::string names;
-      for (const auto& p : effect_plans()) names += (names.empty() ? "" : ", ") + p.name;
+      for (const auto* p : candidate_effects()) names += (names.empty() ? "" : ", ") + p->name;
       fail("--exclude: {} is not a candidate effect (one of {})", quote(e), names);
     }
   }
@@ -394,7 +373,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data, con
   none.evaluated = true;
 
   std::size_t done = 0;
-  std::size_t total = 2 + effect_plans().size() + settings.pair_effects * (settings.pair_effects - 1) / 2;
+  std::size_t total = 2 + candidate_effects().size() + settings.pair_effects * (settings.pair_effects - 1) / 2;
 
   // The refit of the nominal parameters, warm start of every effect candidate.
   model::Model base = model;
@@ -408,11 +387,12 @@ Candidates search_candidates(const model::Model& model, const GapData& data, con
   // Single effects.
   std::vector<Job> jobs;
   std::vector<GapCandidate> skipped;
-  const std::vector<double> cogging_n = cogging_orders(pm.model, data.train, 2);
-  for (const EffectPlan& plan : effect_plans()) {
+  const std::vector<double> orders = angle_orders(pm.model, data.train, 2);
+  for (const model::EffectSpec* spec : candidate_effects()) {
+    const model::EffectSpec& plan = *spec;
     if (model.effect(plan.name) != nullptr) continue;
     if (std::find(settings.excluded.begin(), settings.excluded.end(), plan.name) != settings.excluded.end()) continue;
-    const std::string why = not_excited(plan.name, data.train);
+    const std::string why = not_excited(plan.plan, data.train);
     if (!why.empty()) {
       GapCandidate c;
       c.name = plan.name;
@@ -428,13 +408,13 @@ Candidates search_candidates(const model::Model& model, const GapData& data, con
     }
     Job job{plan.name, {plan.name}, pm.model, mismatch_free(settings.fixed), {plan.name}, 15, {}, {base}};
     add_effect(job.start, plan.name);
-    for (const auto& key : plan.free) {
+    for (const auto& key : plan.plan.free) {
       job.free.push_back(plan.name + "." + key);
       job.stage1_free.push_back(plan.name + "." + key);
     }
     jobs.push_back(std::move(job));
   }
-  std::vector<GapCandidate> singles = run_jobs(jobs, data, floors, settings, threads, cogging_n, done, total);
+  std::vector<GapCandidate> singles = run_jobs(jobs, data, floors, settings, threads, orders, done, total);
 
   // The refit must not lose to an effect fit that merely found better nominal values: when
   // some candidate's nominal scales alone fit the training runs better, refit from there.
@@ -490,14 +470,14 @@ Candidates search_candidates(const model::Model& model, const GapData& data, con
       job.other_starts.front().effects.push_back(*first.model.effect(first.name));
       job.other_starts.front().effects.push_back(*second.model.effect(second.name));
       for (const GapCandidate* single : {&first, &second}) {
-        for (const auto& key : find_plan(single->name)->free) job.stage1_free.push_back(single->name + "." + key);
+        for (const auto& key : find_plan(single->name)->plan.free) job.stage1_free.push_back(single->name + "." + key);
       }
-      for (const auto& key : find_plan(second.name)->free) job.free.push_back(second.name + "." + key);
+      for (const auto& key : find_plan(second.name)->plan.free) job.free.push_back(second.name + "." + key);
       pair_jobs.push_back(std::move(job));
     }
   }
   total = done + pair_jobs.size();
-  std::vector<GapCandidate> pairs = run_jobs(pair_jobs, data, floors, settings, threads, cogging_n, done, total);
+  std::vector<GapCandidate> pairs = run_jobs(pair_jobs, data, floors, settings, threads, orders, done, total);
   const GapCandidate* best_single = strong.empty() ? nullptr : strong.front();
   for (auto& c : pairs) {
     c.fpe = fpe(c.score, c.free.size());
@@ -518,8 +498,8 @@ Candidates search_candidates(const model::Model& model, const GapData& data, con
 
 }  // namespace gap_detail
 
-std::vector<double> cogging_orders(const model::Model& model, const std::vector<Run>& runs, std::size_t keep) {
-  std::vector<double> power(k_max_cogging_order + 1, 0.0);
+std::vector<double> angle_orders(const model::Model& model, const std::vector<Run>& runs, std::size_t keep) {
+  std::vector<double> power(k_max_angle_order + 1, 0.0);
   for (const Run& run : runs) {
     const auto it = std::find(run.outputs.begin(), run.outputs.end(), "rpm");
     if (it == run.outputs.end()) continue;
@@ -527,21 +507,21 @@ std::vector<double> cogging_orders(const model::Model& model, const std::vector<
     const auto& y = run.measured[o];
     const auto sim = simulate_as_measured(model, run);
     // The measured angle: the trapezoidal integral of the measured speed.
-    std::vector<std::complex<double>> acc(k_max_cogging_order + 1, {0.0, 0.0});
+    std::vector<std::complex<double>> acc(k_max_angle_order + 1, {0.0, 0.0});
     double theta = 0.0;
     for (std::size_t n = 1; n < y.size(); ++n) {
       const double dt = run.inputs.t_s[n] - run.inputs.t_s[n - 1];
       if (std::isfinite(y[n]) && std::isfinite(y[n - 1])) theta += 0.5 * (y[n] + y[n - 1]) * dt * std::numbers::pi / 30.0;
       const double r = y[n] - sim[o][n];
       if (!std::isfinite(r) || y[n] == 0.0) continue;
-      for (std::size_t order = 2; order <= k_max_cogging_order; ++order) {
+      for (std::size_t order = 2; order <= k_max_angle_order; ++order) {
         acc[order] += r * std::polar(1.0, -static_cast<double>(order) * theta);
       }
     }
-    for (std::size_t order = 2; order <= k_max_cogging_order; ++order) power[order] += std::norm(acc[order]);
+    for (std::size_t order = 2; order <= k_max_angle_order; ++order) power[order] += std::norm(acc[order]);
   }
   std::vector<double> orders;
-  for (std::size_t order = 2; order <= k_max_cogging_order; ++order) orders.push_back(static_cast<double>(order));
+  for (std::size_t order = 2; order <= k_max_angle_order; ++order) orders.push_back(static_cast<double>(order));
   std::stable_sort(orders.begin(), orders.end(), [&](double a, double b) {
     return power[static_cast<std::size_t>(a)] > power[static_cast<std::size_t>(b)];
   });

@@ -94,16 +94,49 @@ struct EffectParamSpec {
   std::string doc;
 };
 
-/// One entry of the effect catalog.
+struct Compiled;
+
+/// How `mcg-fit gap` tries an effect as a candidate: the parameters it sets free, a coarse
+/// grid of starting values for each (the best grid point on the training cost starts the
+/// fit), and what the training runs must contain to excite the effect at all.
+struct EffectPlan {
+  enum class Needs { nothing, clutch_engaged, clutch_engagement, both_directions };
+  bool candidate = true;                    ///< false: not tried as an added effect
+  std::vector<std::string> free;            ///< effect parameter keys fitted
+  std::vector<std::vector<double>> grid;    ///< per free key, starting values tried
+  Needs needs = Needs::nothing;
+  /// A parameter that is a harmonic order of the motor angle (cogging's N_per_rev): its
+  /// starting values are the strongest orders of the residual over the measured angle.
+  std::string angle_order_key;
+
+  static EffectPlan fit(std::vector<std::string> free, std::vector<std::vector<double>> grid,
+                        Needs needs = Needs::nothing, std::string angle_order_key = {}) {
+    EffectPlan plan;
+    plan.free = std::move(free);
+    plan.grid = std::move(grid);
+    plan.needs = needs;
+    plan.angle_order_key = std::move(angle_order_key);
+    return plan;
+  }
+  static EffectPlan not_a_candidate() {
+    EffectPlan plan;
+    plan.candidate = false;
+    return plan;
+  }
+};
+
+/// One entry of the effect catalog: one module under model/effects/ defines it whole.
 struct EffectSpec {
   std::string name;
   std::string summary;    ///< one line
   std::string equation;   ///< the physics, plain text
   std::vector<EffectParamSpec> params;
+  /// Resolves the effect into the plant's hooks (model/effects/compiled.hpp).
+  void (*compile)(const Effect& effect, Compiled& plant) = nullptr;
+  EffectPlan plan;
 };
 
-/// The catalog, fixed order: stribeck, dead_time, supply_sag, hbridge, brush_drop,
-/// clutch_compliance, clutch_engage_lag, cogging, thermal, param_mismatch.
+/// The catalog, in the order of its registry (model/effects/catalog.cpp).
 const std::vector<EffectSpec>& effect_catalog();
 /// The spec of effect `name`, or nullptr.
 const EffectSpec* find_effect(std::string_view name);
@@ -111,6 +144,9 @@ const EffectSpec* find_effect(std::string_view name);
 /// equation), then one tab-separated row per parameter: effect, parameter, unit, default,
 /// min, max, meaning (under a header row of those names).
 void write_effect_catalog(std::ostream& out);
+/// The catalog as the EFFECTS entries of mcg-sim(1), in roff: per effect a tagged paragraph
+/// naming it, each parameter with its default, range and unit, what it is and its equation.
+void write_effect_catalog_roff(std::ostream& out);
 /// An effect with all parameters at their defaults. Throws mcg::Error for an unknown name.
 Effect default_effect(std::string_view name);
 /// Parses "NAME" or "NAME:key=value,key=value". Unknown names/keys, malformed numbers and

@@ -13,6 +13,7 @@
 #include <deque>
 #include <numbers>
 
+#include "model/effects/compiled.hpp"
 #include "model/model.hpp"
 
 namespace mcg::model {
@@ -33,115 +34,9 @@ constexpr int k_max_events_per_step = 16;
 
 enum class Coupling { none, rigid, spring, slip };
 
-Friction operator+(const Friction& a, const Friction& b) {
-  Friction f;
-  f.Ts_Nm = a.Ts_Nm + b.Ts_Nm;
-  f.Tc_Nm = a.Tc_Nm + b.Tc_Nm;
-  for (std::size_t k = 0; k < 3; ++k) f.viscous[k] = a.viscous[k] + b.viscous[k];
-  return f;
-}
-
 int sign_of(double x) { return x > 0.0 ? 1 : (x < 0.0 ? -1 : 0); }
 
 }  // namespace
-
-/// The model with every effect resolved into plain numbers, for the inner loop.
-struct Compiled {
-  Params p;
-  Friction motor_side[3];   ///< friction on the motor body when the bodies are separate, per state
-  Friction rigid;           ///< motor + engaged clutch + generator
-  Friction gen;             ///< the generator's own
-  double J_total = 0.0;
-  double delay_s = 0.0;
-  bool stribeck = false;
-  double v_s = 1.0, shape = 1.0;
-  double R_s = 0.0;
-  double R_on2 = 0.0, deadband = 0.0;
-  double V_b = 0.0;
-  bool compliance = false;
-  double k_spring = 0.0, c_spring = 0.0;
-  bool lag = false;
-  double T_max = 0.0, tau_lag = 1.0;
-  bool cogging = false;
-  double T_cog = 0.0, N_cog = 0.0, phase_cog = 0.0;
-  bool thermal = false;
-  double R_th = 1.0, C_th = 1.0, alpha = 0.0, dT0 = 0.0;
-
-  explicit Compiled(const Model& model) : p(model.params) {
-    delay_s = p.dead_time_s;
-    if (const Effect* e = model.effect("param_mismatch")) {
-      for (Machine* m : {&p.motor, &p.generator}) {
-        m->Kt_Nm_A *= e->get("Kt_scale");
-        m->Ke_V_s_rad *= e->get("Kt_scale");
-        m->J_kg_m2 *= e->get("J_scale");
-        m->R_ohm *= e->get("R_scale");
-        m->L_H *= e->get("L_scale");
-      }
-      for (Friction* f : {&p.motor.friction, &p.generator.friction, &p.clutch_disengaged, &p.clutch_engaged}) {
-        f->Tc_Nm *= e->get("coulomb_scale");
-        f->Ts_Nm *= e->get("static_scale");
-        for (double& c : f->viscous) c *= e->get("viscous_scale");
-      }
-    }
-    motor_side[0] = p.motor.friction;
-    motor_side[1] = p.motor.friction + p.clutch_disengaged;
-    motor_side[2] = p.motor.friction + p.clutch_engaged;
-    gen = p.generator.friction;
-    rigid = motor_side[2] + gen;
-    J_total = p.motor.J_kg_m2 + p.generator.J_kg_m2;
-    if (const Effect* e = model.effect("stribeck")) {
-      stribeck = true;
-      v_s = e->get("v_s_rad_s");
-      shape = e->get("shape_exp");
-    }
-    if (const Effect* e = model.effect("dead_time")) delay_s += e->get("tau_d_s");
-    if (const Effect* e = model.effect("supply_sag")) R_s = e->get("R_s_ohm");
-    if (const Effect* e = model.effect("hbridge")) {
-      R_on2 = 2.0 * e->get("R_on_ohm");
-      deadband = e->get("deadband");
-    }
-    if (const Effect* e = model.effect("brush_drop")) V_b = e->get("V_b_V");
-    if (const Effect* e = model.effect("clutch_compliance")) {
-      compliance = true;
-      k_spring = e->get("k_Nm_per_rad");
-      const double J_red = p.motor.J_kg_m2 * p.generator.J_kg_m2 / J_total;
-      c_spring = 2.0 * e->get("zeta") * std::sqrt(k_spring * J_red);
-    }
-    if (const Effect* e = model.effect("clutch_engage_lag")) {
-      lag = true;
-      T_max = e->get("T_max_Nm");
-      tau_lag = e->get("tau_s");
-    }
-    if (const Effect* e = model.effect("cogging")) {
-      cogging = true;
-      T_cog = e->get("T_c_Nm");
-      N_cog = e->get("N_per_rev");
-      phase_cog = e->get("phase_rad");
-    }
-    if (const Effect* e = model.effect("thermal")) {
-      thermal = true;
-      R_th = e->get("R_th_K_W");
-      C_th = e->get("tau_th_s") / R_th;
-      alpha = e->get("alpha_per_K");
-      dT0 = e->get("dT0_K");
-    }
-  }
-
-  /// Kinetic friction magnitude at speed x = dir * w (x may dip slightly below 0 inside an
-  /// RK4 stage; the polynomial continues smoothly there).
-  double kinetic(const Friction& f, double x) const {
-    double F = f.kinetic_Nm(x);
-    if (stribeck && x > 0.0) {
-      F += (f.Ts_Nm - f.Tc_Nm) * std::exp(-std::pow(x / v_s, shape));
-    } else if (stribeck) {
-      F += f.Ts_Nm - f.Tc_Nm;
-    }
-    return F;
-  }
-  /// Breakaway level: the static level, or the kinetic level at 0+ if that is larger
-  /// (otherwise a released body would be pulled back at once).
-  double breakaway(const Friction& f) const { return std::max(f.Ts_Nm, f.Tc_Nm); }
-};
 
 class PlantImpl {
  public:
@@ -287,7 +182,7 @@ class PlantImpl {
   }
   void drive_torques(const Vec& y, double t, Coupling coupling, double& Tm, double& Tg) const {
     Tm = m_c.p.motor.Kt_Nm_A * y[I_M];
-    if (m_c.cogging) Tm += m_c.T_cog * std::sin(m_c.N_cog * y[TH_M] + m_c.phase_cog);
+    if (!m_c.motor_torque.empty()) Tm += m_c.extra_motor_torque(y[TH_M], y[W_M]);
     Tg = -m_c.p.generator.Kt_Nm_A * gen_current(y);
     switch (coupling) {
       case Coupling::none:

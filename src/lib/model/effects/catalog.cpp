@@ -1,93 +1,59 @@
-// The effect catalog: names, parameters with units, defaults and bounds, and the physics of each.
-// The dynamics of every effect live in model/plant.cpp; this file is their documentation and
-// the parser of "NAME:key=value,..." specifications.
+// The effect catalog: the registry of the effect modules (one file each in this directory,
+// with its parameters, equations, compile hook and diagnosis plan), the plant's compilation
+// of a model's effects, and the parser of "NAME:key=value,..." specifications.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <ostream>
 
 #include "common/error.hpp"
 #include "config/ini.hpp"
+#include "model/effects/compiled.hpp"
 #include "model/model.hpp"
 #include "table/table.hpp"
 
 namespace mcg::model {
 
-// Defaults are typical values for a small brushed DC motor, not any example's:
-//   stribeck        v_s 10 rad/s (about 3 % of the rig's no-load speed), shape 1.5 between
-//                   Tustin's exponential (1) and the Gaussian form (2)
-//   dead_time       2 ms: two samples of a 1 kHz loop
-//   supply_sag      1 ohm: a bench supply's leads and sense resistor
-//   hbridge         0.2 ohm per switch, 2 % of the PWM period lost to dead time
-//   brush_drop      0.5 V for the pair of metal-graphite brushes
-//   clutch_compliance k 0.1 N m/rad: the two rotors' mode at 27 Hz, between the 16 ms
-//                   mechanical pole and the 1 kHz sampling; zeta 0.1, a lightly damped coupling
-//   clutch_engage_lag 0.05 N m: ten times the rig's friction; 20 ms build-up
-//   cogging         1 mN m, 14 per revolution: the least common multiple of 7 slots and 2
-//                   poles, the usual small-motor armature
-//   thermal         10 K/W and 30 s: a small can motor's winding
+// The registry: one line per effect module (model/effects/<name>.cpp defines EffectSpec
+// <name>()), in the order the catalog lists and compiles them.
+#define MCG_EFFECT_MODULES(X) \
+  X(stribeck)                 \
+  X(dead_time)                \
+  X(supply_sag)               \
+  X(hbridge)                  \
+  X(brush_drop)               \
+  X(clutch_compliance)        \
+  X(clutch_engage_lag)        \
+  X(cogging)                  \
+  X(thermal)                  \
+  X(param_mismatch)
+
+namespace effects {
+#define MCG_DECLARE_EFFECT(name) EffectSpec name();
+MCG_EFFECT_MODULES(MCG_DECLARE_EFFECT)
+#undef MCG_DECLARE_EFFECT
+}  // namespace effects
+
 const std::vector<EffectSpec>& effect_catalog() {
-  static const std::vector<EffectSpec> catalog = {
-      {"stribeck",
-       "kinetic friction falls from the static level to the Coulomb level over a velocity scale",
-       "every friction element: F(w) = sign(w) [Tc + (Ts - Tc) exp(-(|w|/v_s)^shape_exp) + P(|w|)]; "
-       "breakaway level Ts unchanged",
-       {{"v_s_rad_s", 10.0, 0.1, 200.0, "rad/s", "Stribeck velocity"},
-        {"shape_exp", 1.5, 0.5, 3.0, "1", "exponent of the Stribeck curve"}}},
-      {"dead_time",
-       "transport delay of the applied voltage (clutch and relay commands are not delayed)",
-       "v_m(t) = v(t - tau_d), added to the nominal drive.dead_time_s",
-       {{"tau_d_s", 0.002, 0.0, 0.05, "s", "delay"}}},
-      {"supply_sag",
-       "the bridge is fed through a source resistance, its output drops with current and duty",
-       "v_m = v - |d| R_s i, d = v / supply_V (average over the PWM period, no bulk capacitor)",
-       {{"R_s_ohm", 1.0, 0.0, 20.0, "ohm", "source resistance"}}},
-      {"hbridge",
-       "H-bridge switch on-resistance and a duty deadband (switching blanking time)",
-       "d' = sign(d) max(0, |d| - deadband); v_m = d' supply_V - 2 R_on i (two conducting switches)",
-       {{"R_on_ohm", 0.2, 0.0, 5.0, "ohm", "on-resistance of one switch"},
-        {"deadband", 0.02, 0.0, 0.3, "1", "duty lost per PWM period"}}},
-      {"brush_drop",
-       "constant brush contact voltage drop against the current, motor and generator",
-       "L di/dt = ... - V_b tanh(i / 0.01 A) in both armature circuits",
-       {{"V_b_V", 0.5, 0.0, 3.0, "V", "contact drop"}}},
-      {"clutch_compliance",
-       "a torsional spring and damper between motor and generator when engaged",
-       "T_s = k phi + c (w_m - w_g), c = 2 zeta sqrt(k Jm Jg/(Jm + Jg)); phi = 0 at engagement; engaged "
-       "clutch friction on the motor side, generator friction and load on the far side",
-       {{"k_Nm_per_rad", 0.1, 1e-3, 10.0, "N m/rad", "spring stiffness"},
-        {"zeta", 0.1, 0.0, 2.0, "1", "damping ratio of the two-rotor mode"}}},
-      {"clutch_engage_lag",
-       "the clutch torque capacity builds up after an engage command; the plates slip until they lock",
-       "T_cap(t) = T_max (1 - exp(-(t - t_e)/tau)); slipping: T = T_cap sign(w_m - w_g); lock when the "
-       "slip speed reaches 0 and the torque needed to stay locked is <= T_cap (and slip when it exceeds it)",
-       {{"T_max_Nm", 0.05, 1e-3, 1.0, "N m", "full torque capacity"},
-        {"tau_s", 0.02, 1e-4, 0.5, "s", "build-up time constant"}}},
-      {"cogging",
-       "position-dependent torque ripple on the motor shaft",
-       "T_cog = T_c sin(N theta + phase), theta = motor angle since the start; shifts breakaway too",
-       {{"T_c_Nm", 1e-3, 0.0, 0.02, "N m", "amplitude"},
-        {"N_per_rev", 14.0, 1.0, 200.0, "1/rev", "cycles per revolution"},
-        {"phase_rad", 0.0, -3.141592653589793, 3.141592653589793, "rad", "phase at theta = 0"}}},
-      {"thermal",
-       "winding resistance rises as the winding heats (motor and generator, each its own winding)",
-       "R = R0 (1 + alpha dT); (tau_th/R_th) d(dT)/dt = i^2 R - dT/R_th, dT(0) = dT0_K",
-       {{"R_th_K_W", 10.0, 0.1, 200.0, "K/W", "thermal resistance winding to ambient"},
-        {"tau_th_s", 30.0, 0.1, 3600.0, "s", "thermal time constant"},
-        {"alpha_per_K", 0.00393, 0.0, 0.01, "1/K", "temperature coefficient (copper 0.00393)"},
-        {"dT0_K", 0.0, 0.0, 150.0, "K", "initial temperature rise"}}},
-      {"param_mismatch",
-       "no new structure: the nominal parameters are off by factors",
-       "Kt, Ke (motor and generator) *= Kt_scale; both J *= J_scale; every Tc *= coulomb_scale; every Ts "
-       "*= static_scale; every viscous polynomial *= viscous_scale; both R *= R_scale; both L *= L_scale",
-       {{"Kt_scale", 1.0, 0.5, 2.0, "1", "torque and EMF constants"},
-        {"J_scale", 1.0, 0.5, 2.0, "1", "rotor inertias"},
-        {"coulomb_scale", 1.0, 0.2, 5.0, "1", "Coulomb levels"},
-        {"static_scale", 1.0, 0.2, 5.0, "1", "static levels"},
-        {"viscous_scale", 1.0, 0.0, 5.0, "1", "viscous polynomials"},
-        {"R_scale", 1.0, 0.5, 2.0, "1", "armature resistances"},
-        {"L_scale", 1.0, 0.2, 5.0, "1", "armature inductances"}}},
-  };
+#define MCG_LIST_EFFECT(name) effects::name(),
+  static const std::vector<EffectSpec> catalog = {MCG_EFFECT_MODULES(MCG_LIST_EFFECT)};
+#undef MCG_LIST_EFFECT
   return catalog;
+}
+
+Compiled::Compiled(const Model& model) : p(model.params), delay_s(model.params.dead_time_s) {
+  for (const EffectSpec& spec : effect_catalog()) {
+    if (const Effect* e = model.effect(spec.name)) spec.compile(*e, *this);
+  }
+  motor_side[0] = p.motor.friction;
+  motor_side[1] = p.motor.friction + p.clutch_disengaged;
+  motor_side[2] = p.motor.friction + p.clutch_engaged;
+  gen = p.generator.friction;
+  rigid = motor_side[2] + gen;
+  J_total = p.motor.J_kg_m2 + p.generator.J_kg_m2;
+  c_spring = 2.0 * zeta_spring * std::sqrt(k_spring * p.motor.J_kg_m2 * p.generator.J_kg_m2 / J_total);
+  C_th = tau_th / R_th;
 }
 
 void write_effect_catalog(std::ostream& out) {
@@ -99,6 +65,43 @@ void write_effect_catalog(std::ostream& out) {
           << config::format_number(p.default_value) << '\t' << config::format_number(p.lower) << '\t'
           << config::format_number(p.upper) << '\t' << p.doc << '\n';
     }
+  }
+}
+
+namespace {
+
+/// Text safe inside a roff paragraph: backslashes and minus signs escaped.
+std::string roff(std::string_view text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '\\') {
+      out += "\\e";
+    } else if (c == '-') {
+      out += "\\-";
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+void write_effect_catalog_roff(std::ostream& out) {
+  for (const EffectSpec& e : effect_catalog()) {
+    out << ".TP\n.B " << roff(e.name) << "\n";
+    std::string params;
+    for (const EffectParamSpec& p : e.params) {
+      if (!params.empty()) params += "; ";
+      params += fmt::format("{} ({}, {}..{}{}{}): {}", p.name, config::format_number(p.default_value),
+                            config::format_number(p.lower), config::format_number(p.upper),
+                            p.unit == "1" ? "" : " ", p.unit == "1" ? "" : p.unit, p.doc);
+    }
+    // Each sentence on its own line: roff starts no line with a control character here.
+    std::string summary = e.summary;
+    if (!summary.empty() && summary[0] >= 'a' && summary[0] <= 'z')
+      summary[0] = static_cast<char>(summary[0] - 'a' + 'A');
+    out << "\\&" << roff(params) << ".\n\\&" << roff(summary) << ":\n\\&" << roff(e.equation) << ".\n";
   }
 }
 
@@ -196,7 +199,8 @@ Effect parse_effect(std::string_view text, std::string_view where) {
       if (p.name == key) ps = &p;
     }
     if (ps == nullptr) {
-      fail("{}: effect {} has no parameter {} (has: {})", where, quote(spec->name), quote(key), known_keys(*spec));
+      fail("{}: effect {} has no parameter {} (has: {})", where, quote(spec->name), quote(key),
+           known_keys(*spec));
     }
     for (auto s : seen) {
       if (s == key) fail("{}: parameter {} given twice", where, quote(key));

@@ -1,0 +1,22 @@
+// brush_drop: a constant contact voltage drop of the brushes. Default 0.5 V for a pair of
+// metal-graphite brushes; the diagnosis starts from 0.2 V to carbon brushes' 2 V.
+#include "model/effects/compiled.hpp"
+
+namespace mcg::model::effects {
+
+namespace {
+
+void compile(const Effect& e, Compiled& c) { c.V_b = e.get("V_b_V"); }
+
+}  // namespace
+
+EffectSpec brush_drop() {
+  return {"brush_drop",
+          "constant brush contact voltage drop against the current, motor and generator",
+          "L di/dt = ... - V_b tanh(i / 0.01 A) in both armature circuits",
+          {{"V_b_V", 0.5, 0.0, 3.0, "V", "contact drop"}},
+          compile,
+          EffectPlan::fit({"V_b_V"}, {{0.2, 0.5, 1.0, 2.0}})};
+}
+
+}  // namespace mcg::model::effects

@@ -1,0 +1,36 @@
+// cogging: position-dependent torque ripple on the motor shaft. Default 1 mN m at 14 per
+// revolution, the least common multiple of 7 slots and 2 poles of the usual small-motor
+// armature. The diagnosis starts amplitudes from a quarter to the whole Coulomb level, eight
+// phases, and the orders the residual's spectrum over the measured angle shows strongest.
+#include "model/effects/compiled.hpp"
+
+namespace mcg::model::effects {
+
+namespace {
+
+/// T = T_c sin(N theta + phase), k = {T_c, N, phase}.
+double ripple(const std::array<double, 4>& k, double theta_rad, double /*omega_rad_s*/) {
+  return k[0] * std::sin(k[1] * theta_rad + k[2]);
+}
+
+void compile(const Effect& e, Compiled& c) {
+  c.motor_torque.push_back({ripple, {e.get("T_c_Nm"), e.get("N_per_rev"), e.get("phase_rad"), 0.0}});
+}
+
+}  // namespace
+
+EffectSpec cogging() {
+  return {
+      "cogging",
+      "position-dependent torque ripple on the motor shaft",
+      "T_cog = T_c sin(N theta + phase), theta = motor angle since the start; shifts breakaway too",
+      {{"T_c_Nm", 1e-3, 0.0, 0.02, "N m", "amplitude"},
+       {"N_per_rev", 14.0, 1.0, 200.0, "1/rev", "cycles per revolution"},
+       {"phase_rad", 0.0, -3.141592653589793, 3.141592653589793, "rad", "phase at theta = 0"}},
+      compile,
+      EffectPlan::fit({"T_c_Nm", "phase_rad"},
+                      {{0.0006, 0.001, 0.0016, 0.0025}, {-2.75, -1.96, -1.18, -0.39, 0.39, 1.18, 1.96, 2.75}},
+                      EffectPlan::Needs::nothing, "N_per_rev")};
+}
+
+}  // namespace mcg::model::effects

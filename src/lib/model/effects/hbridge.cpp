@@ -1,0 +1,27 @@
+// hbridge: switch on-resistance and a duty deadband. Default 0.2 ohm per switch and 2 % of
+// the PWM period lost to dead time; the diagnosis starts from MOSFET to bipolar on-resistance
+// and deadbands of 0.5-6 % of the period.
+#include "model/effects/compiled.hpp"
+
+namespace mcg::model::effects {
+
+namespace {
+
+void compile(const Effect& e, Compiled& c) {
+  c.R_on2 = 2.0 * e.get("R_on_ohm");
+  c.deadband = e.get("deadband");
+}
+
+}  // namespace
+
+EffectSpec hbridge() {
+  return {"hbridge",
+          "H-bridge switch on-resistance and a duty deadband (switching blanking time)",
+          "d' = sign(d) max(0, |d| - deadband); v_m = d' supply_V - 2 R_on i (two conducting switches)",
+          {{"R_on_ohm", 0.2, 0.0, 5.0, "ohm", "on-resistance of one switch"},
+           {"deadband", 0.02, 0.0, 0.3, "1", "duty lost per PWM period"}},
+          compile,
+          EffectPlan::fit({"R_on_ohm", "deadband"}, {{0.1, 0.5}, {0.005, 0.02, 0.06}})};
+}
+
+}  // namespace mcg::model::effects

@@ -1,0 +1,30 @@
+// stribeck: kinetic friction falls from the static level to the Coulomb level over a
+// velocity scale. Default v_s 10 rad/s (about 3 % of the rig's no-load speed), shape 1.5
+// between Tustin's exponential (1) and the Gaussian form (2). The diagnosis starts v_s from
+// slow creep (2 rad/s) to a tenth of the no-load speed, with the classical shapes 1 and 2.
+#include "model/effects/compiled.hpp"
+
+namespace mcg::model::effects {
+
+namespace {
+
+void compile(const Effect& e, Compiled& c) {
+  c.stribeck = true;
+  c.v_s = e.get("v_s_rad_s");
+  c.shape = e.get("shape_exp");
+}
+
+}  // namespace
+
+EffectSpec stribeck() {
+  return {"stribeck",
+          "kinetic friction falls from the static level to the Coulomb level over a velocity scale",
+          "every friction element: F(w) = sign(w) [Tc + (Ts - Tc) exp(-(|w|/v_s)^shape_exp) + P(|w|)]; "
+          "breakaway level Ts unchanged",
+          {{"v_s_rad_s", 10.0, 0.1, 200.0, "rad/s", "Stribeck velocity"},
+           {"shape_exp", 1.5, 0.5, 3.0, "1", "exponent of the Stribeck curve"}},
+          compile,
+          EffectPlan::fit({"v_s_rad_s", "shape_exp"}, {{2.0, 5.0, 12.0, 30.0, 80.0}, {1.0, 2.0}})};
+}
+
+}  // namespace mcg::model::effects

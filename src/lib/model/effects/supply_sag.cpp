@@ -1,0 +1,22 @@
+// supply_sag: the bridge fed through a source resistance. Default 1 ohm, a bench supply's
+// leads and sense resistor; the diagnosis starts from 0.3 ohm (leads) to a small battery's 3.
+#include "model/effects/compiled.hpp"
+
+namespace mcg::model::effects {
+
+namespace {
+
+void compile(const Effect& e, Compiled& c) { c.R_s = e.get("R_s_ohm"); }
+
+}  // namespace
+
+EffectSpec supply_sag() {
+  return {"supply_sag",
+          "the bridge is fed through a source resistance, its output drops with current and duty",
+          "v_m = v - |d| R_s i, d = v / supply_V (average over the PWM period, no bulk capacitor)",
+          {{"R_s_ohm", 1.0, 0.0, 20.0, "ohm", "source resistance"}},
+          compile,
+          EffectPlan::fit({"R_s_ohm"}, {{0.3, 1.0, 3.0}})};
+}
+
+}  // namespace mcg::model::effects

@@ -1,0 +1,31 @@
+// thermal: winding resistance rises as the winding heats. Default 10 K/W and 30 s, a small
+// can motor's winding; the diagnosis starts R_th from 5 to 60 K/W and tau_th from 5 to 60 s.
+#include "model/effects/compiled.hpp"
+
+namespace mcg::model::effects {
+
+namespace {
+
+void compile(const Effect& e, Compiled& c) {
+  c.thermal = true;
+  c.R_th = e.get("R_th_K_W");
+  c.tau_th = e.get("tau_th_s");
+  c.alpha = e.get("alpha_per_K");
+  c.dT0 = e.get("dT0_K");
+}
+
+}  // namespace
+
+EffectSpec thermal() {
+  return {"thermal",
+          "winding resistance rises as the winding heats (motor and generator, each its own winding)",
+          "R = R0 (1 + alpha dT); (tau_th/R_th) d(dT)/dt = i^2 R - dT/R_th, dT(0) = dT0_K",
+          {{"R_th_K_W", 10.0, 0.1, 200.0, "K/W", "thermal resistance winding to ambient"},
+           {"tau_th_s", 30.0, 0.1, 3600.0, "s", "thermal time constant"},
+           {"alpha_per_K", 0.00393, 0.0, 0.01, "1/K", "temperature coefficient (copper 0.00393)"},
+           {"dT0_K", 0.0, 0.0, 150.0, "K", "initial temperature rise"}},
+          compile,
+          EffectPlan::fit({"R_th_K_W", "tau_th_s"}, {{5.0, 20.0, 60.0}, {5.0, 60.0}})};
+}
+
+}  // namespace mcg::model::effects
