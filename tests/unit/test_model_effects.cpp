@@ -1,6 +1,7 @@
 // The effect catalog: parsing, and each effect's physics against its closed form.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -33,19 +34,39 @@ std::string error_of(const std::string& spec) {
   return test::error_of([&] { parse_effect(spec, "--effect"); });
 }
 
-TEST(ModelEffects, CatalogHasTheFixedNamesInOrder) {
+TEST(ModelEffects, EveryModuleIsCompleteAndItsPlanNamesItsParameters) {
   std::vector<std::string> names;
-  for (const auto& e : effect_catalog()) names.push_back(e.name);
-  EXPECT_EQ(names, (std::vector<std::string>{"stribeck", "dead_time", "supply_sag", "hbridge", "brush_drop",
-                                             "clutch_compliance", "clutch_engage_lag", "cogging", "thermal",
-                                             "param_mismatch"}));
   for (const auto& e : effect_catalog()) {
+    EXPECT_EQ(std::count(names.begin(), names.end(), e.name), 0) << e.name << " registered twice";
+    names.push_back(e.name);
+    EXPECT_NE(e.compile, nullptr) << e.name;
+    EXPECT_FALSE(e.summary.empty()) << e.name;
+    EXPECT_FALSE(e.equation.empty()) << e.name;
+    auto has = [&](const std::string& key) {
+      return std::any_of(e.params.begin(), e.params.end(), [&](const auto& p) { return p.name == key; });
+    };
     for (const auto& p : e.params) {
       EXPECT_LE(p.lower, p.default_value) << e.name << "." << p.name;
       EXPECT_GE(p.upper, p.default_value) << e.name << "." << p.name;
       EXPECT_FALSE(p.unit.empty()) << e.name << "." << p.name;
     }
+    if (!e.plan.candidate) continue;
+    ASSERT_EQ(e.plan.free.size(), e.plan.grid.size()) << e.name;
+    for (std::size_t k = 0; k < e.plan.free.size(); ++k) {
+      EXPECT_TRUE(has(e.plan.free[k])) << e.name << " plan frees unknown " << e.plan.free[k];
+      for (double v : e.plan.grid[k]) {
+        const auto& p = *std::find_if(e.params.begin(), e.params.end(),
+                                      [&](const auto& q) { return q.name == e.plan.free[k]; });
+        EXPECT_TRUE(v >= p.lower && v <= p.upper) << e.name << "." << p.name << " grid value " << v;
+      }
+    }
+    if (!e.plan.angle_order_key.empty()) {
+      EXPECT_TRUE(has(e.plan.angle_order_key)) << e.name;
+    }
   }
+  // The nominal refit is the diagnosis' reference, never a candidate.
+  ASSERT_NE(find_effect("param_mismatch"), nullptr);
+  EXPECT_FALSE(find_effect("param_mismatch")->plan.candidate);
 }
 
 TEST(ModelEffects, ParseFillsDefaultsAndRoundTrips) {
@@ -64,7 +85,8 @@ TEST(ModelEffects, ParseErrorsNameTheBadText) {
   EXPECT_EQ(error_of("stribeck:v_s_rad_s"), "--effect: expected key=value, got 'v_s_rad_s'");
   EXPECT_EQ(error_of("stribeck:"), "--effect: no parameters after ':' in 'stribeck:'");
   EXPECT_EQ(error_of("stribeck:v_s_rad_s=1,v_s_rad_s=2"), "--effect: parameter 'v_s_rad_s' given twice");
-  EXPECT_EQ(error_of("thermal:R_th_K_W=-1"), "--effect: thermal.R_th_K_W = -1 is out of range [0.1, 200] K/W");
+  EXPECT_EQ(error_of("thermal:R_th_K_W=-1"),
+            "--effect: thermal.R_th_K_W = -1 is out of range [0.1, 200] K/W");
   EXPECT_EQ(error_of("brush_drop:V_b_V=nan"), "--effect: brush_drop.V_b_V: invalid number 'nan'");
 }
 
@@ -79,7 +101,8 @@ TEST(ModelEffects, StribeckLowersKineticFrictionAtLowSpeed) {
   const Params p = builtin_rig();
   const Friction& f = p.motor.friction;
   const auto [w, i] = steady(with("stribeck:v_s_rad_s=12,shape_exp=2.2"), 0.6);
-  EXPECT_NEAR(p.motor.Kt_Nm_A * i, f.kinetic_Nm(w) + (f.Ts_Nm - f.Tc_Nm) * std::exp(-std::pow(w / 12.0, 2.2)), 1e-9);
+  EXPECT_NEAR(p.motor.Kt_Nm_A * i, f.kinetic_Nm(w) + (f.Ts_Nm - f.Tc_Nm) * std::exp(-std::pow(w / 12.0, 2.2)),
+              1e-9);
   EXPECT_LT(w, steady(Model{}, 0.6).first);
 }
 
