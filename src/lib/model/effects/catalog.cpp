@@ -27,6 +27,7 @@ namespace mcg::model {
   X(clutch_engage_lag)        \
   X(cogging)                  \
   X(thermal)                  \
+  X(friction_asymmetry)       \
   X(param_mismatch)
 
 namespace effects {

@@ -1,0 +1,34 @@
+// friction_asymmetry: the motor shaft's friction differs by direction (brush angle, bearing
+// preload, a lead screw's load; every real motor tried showed it). Moving forward the
+// kinetic and static levels are Tc + dT and Ts + dT, in reverse Tc - dT and Ts - dT. That is
+// the symmetric friction plus a constant torque -dT on the shaft, moving or stuck, so the
+// plant's torque hook carries it with exact stick-slip. |dT| beyond the friction levels is a
+// constant load (gravity on an arm), which the same equation describes.
+// Default 0.5 mN m, a fifth of the rig's Coulomb level; the diagnosis starts from a tenth to
+// twice that level, either sign.
+#include "model/effects/compiled.hpp"
+
+namespace mcg::model::effects {
+
+namespace {
+
+double bias(const std::array<double, 4>& k, double /*theta_rad*/, double /*omega_rad_s*/) { return -k[0]; }
+
+void compile(const Effect& e, Compiled& c) {
+  c.motor_torque.push_back({bias, {e.get("dT_Nm"), 0.0, 0.0, 0.0}});
+}
+
+}  // namespace
+
+EffectSpec friction_asymmetry() {
+  return {"friction_asymmetry",
+          "the motor shaft's friction is higher in one direction than the other",
+          "forward F = Tc + dT (breakaway Ts + dT), reverse F = Tc - dT (Ts - dT): the symmetric friction "
+          "plus a constant torque -dT on the motor shaft",
+          {{"dT_Nm", 5e-4, -0.05, 0.05, "N m", "half the forward-minus-reverse friction level"}},
+          compile,
+          EffectPlan::fit({"dT_Nm"}, {{-0.005, -0.0015, -0.0003, 0.0003, 0.0015, 0.005}},
+                          EffectPlan::Needs::both_directions)};
+}
+
+}  // namespace mcg::model::effects
