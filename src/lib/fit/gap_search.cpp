@@ -270,9 +270,7 @@ namespace gap_detail {
 void check_excluded(const std::vector<std::string>& excluded) {
   for (const auto& e : excluded) {
     if (find_plan(e) == nullptr) {
-      std::string names;
-      for (const auto* p : candidate_effects()) names += (names.empty() ? "" : ", ") + p->name;
-      fail("--exclude: {} is not a candidate effect (one of {})", quote(e), names);
+      fail("--exclude: {} is not a candidate effect ({})", quote(e), model::unknown_effect_hint(e, true));
     }
   }
 }

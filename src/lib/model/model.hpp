@@ -147,6 +147,9 @@ void write_effect_catalog(std::ostream& out);
 /// The catalog as the EFFECTS entries of mcg-sim(1), in roff: per effect a tagged paragraph
 /// naming it, each parameter with its default, range and unit, what it is and its equation.
 void write_effect_catalog_roff(std::ostream& out);
+/// The tail of a message about an unknown effect name: the nearest name of the catalog (of
+/// its diagnosis candidates only, when `candidates_only`) if it is close, and where to look.
+std::string unknown_effect_hint(std::string_view name, bool candidates_only = false);
 /// An effect with all parameters at their defaults. Throws mcg::Error for an unknown name.
 Effect default_effect(std::string_view name);
 /// Parses "NAME" or "NAME:key=value,key=value". Unknown names/keys, malformed numbers and

@@ -200,7 +200,7 @@ Model model_from_ini(const config::Ini& ini, Model base) {
       const std::string where = entries.empty() || entries.front()->origin.empty()
                                     ? std::string("config")
                                     : entries.front()->origin;
-      fail("{}: [{}]: unknown effect {}", where, section, quote(name));
+      fail("{}: [{}]: unknown effect {} ({})", where, section, quote(name), unknown_effect_hint(name));
     }
     Effect effect = default_effect(name);
     for (const auto& existing : base.effects) {

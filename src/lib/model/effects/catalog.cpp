@@ -115,14 +115,43 @@ const EffectSpec* find_effect(std::string_view name) {
 
 namespace {
 
-std::string known_names() {
-  std::string out;
-  for (const auto& spec : effect_catalog()) {
-    if (!out.empty()) out += ", ";
-    out += spec.name;
+/// Levenshtein distance, for suggestions.
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
   }
-  return out;
+  return row[b.size()];
 }
+
+}  // namespace
+
+std::string unknown_effect_hint(std::string_view name, bool candidates_only) {
+  const EffectSpec* best = nullptr;
+  std::size_t best_distance = 0;
+  for (const auto& spec : effect_catalog()) {
+    if (candidates_only && !spec.plan.candidate) continue;
+    const std::size_t d = spec.name.starts_with(name) && !name.empty() ? 1 : edit_distance(name, spec.name);
+    if (best == nullptr || d < best_distance) {
+      best = &spec;
+      best_distance = d;
+    }
+  }
+  const std::string all = "mcg-sim --list-effects lists them all";
+  if (best != nullptr && best_distance <= std::max<std::size_t>(2, name.size() / 4)) {
+    return fmt::format("did you mean {}? {}", quote(best->name), all);
+  }
+  return all;
+}
+
+namespace {
 
 std::string known_keys(const EffectSpec& spec) {
   std::string out;
@@ -171,7 +200,7 @@ void Effect::set(std::string_view key, double value) {
 
 Effect default_effect(std::string_view name) {
   const EffectSpec* spec = find_effect(name);
-  if (spec == nullptr) fail("unknown effect {} (known: {})", quote(name), known_names());
+  if (spec == nullptr) fail("unknown effect {} ({})", quote(name), unknown_effect_hint(name));
   Effect e;
   e.name = spec->name;
   for (const auto& p : spec->params) e.params.emplace_back(p.name, p.default_value);
@@ -182,7 +211,7 @@ Effect parse_effect(std::string_view text, std::string_view where) {
   const auto colon = text.find(':');
   const std::string_view name = trim(text.substr(0, colon));
   const EffectSpec* spec = find_effect(name);
-  if (spec == nullptr) fail("{}: unknown effect {} (known: {})", where, quote(name), known_names());
+  if (spec == nullptr) fail("{}: unknown effect {} ({})", where, quote(name), unknown_effect_hint(name));
   Effect effect = default_effect(name);
   if (colon == std::string_view::npos) return effect;
   std::string_view rest = text.substr(colon + 1);
