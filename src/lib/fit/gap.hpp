@@ -10,7 +10,9 @@
 //   EFFECT          the refitted model plus one catalog effect, its parameters started from
 //                   the best point of a coarse grid (on the refit and on the model as
 //                   given), fitted alone, then refitted jointly with the nominal scales
-//   A+B             pairs of the strongest significant effects, refitted jointly
+//   A+B, A+B+C      mixtures by forward selection: the best significant effect extended by
+//                   one effect at a time from the best singles, refitted jointly; an
+//                   extension joins when it is significant against the model it extends
 // The refit is repeated from any effect fit's nominal scales that fit the training runs
 // better, so that an effect never wins merely by a better nominal start.
 // Each candidate is scored on the validation runs only, with the residual of every output
@@ -21,7 +23,7 @@
 //   score_ref - score > max(k_abs, k_rel (score_ref - outputs))
 // i.e. it removes a clear part of the gap above the noise that the reference leaves.
 // The diagnosis: `none` unless the model as given misses by more than the noise allows;
-// the best significant effect (or pair) over the refit; else `param_mismatch` if the refit
+// the largest accepted mixture, else the best significant effect over the refit; else `param_mismatch` if the refit
 // alone is significant. That choice is accepted only when it explains the gap: its score
 // is near the noise or it removes a stated share of the excess (k_gap_near_noise,
 // k_gap_explained_share); otherwise, and when nothing is significant, `unexplained`, with
@@ -61,10 +63,13 @@ inline constexpr double k_gap_explained_share = 0.75;
 /// excitation's signal, so a smaller excess is not trusted over the chain).
 inline constexpr double k_gap_data_floor_factor = 2.0;
 
+/// Most effects named together (A+B+C).
+inline constexpr std::size_t k_gap_max_mixture = 3;
+
 /// How the diagnosis runs.
 struct GapSettings {
   unsigned threads = 0;                ///< candidates fitted at once; 0 = all cores
-  std::size_t pair_effects = 3;        ///< pairs are formed among this many strongest effects
+  std::size_t pool_effects = 4;        ///< mixtures are formed from this many best single effects
   int max_evaluations = 0;             ///< simulation budget per candidate fit; 0 = by size
   /// Nominal parameters pinned at measured values (--fix): the refit leaves the scale that
   /// would move them at 1 (motor.R_ohm: R_scale, motor.J_kg_m2: J_scale, Kt/Ke: Kt_scale,

@@ -1,13 +1,13 @@
 // The gap diagnosis' decision: when a candidate is significant, how candidates rank, and
 // the verdict with its one-sentence reason.
-#include "fit/gap_parts.hpp"
-
 #include <fmt/format.h>
 
 #include <algorithm>
-#include "common/demand.hpp"
 #include <cmath>
 #include <limits>
+
+#include "common/demand.hpp"
+#include "fit/gap_parts.hpp"
 
 namespace mcg::fit::gap_detail {
 
@@ -26,7 +26,7 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
   GapCandidate& none = candidates.none;
   GapCandidate& pm = candidates.pm;
   std::vector<GapCandidate>& singles = candidates.singles;
-  std::vector<GapCandidate>& pairs = candidates.pairs;
+  std::vector<GapCandidate>& mixtures = candidates.mixtures;
   std::vector<GapCandidate>& skipped = candidates.skipped;
   const GapCandidate* best_single = nullptr;
   for (const auto& c : singles) {
@@ -35,36 +35,45 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
   const double before_score = none.score;
   const double excess = before_score - static_cast<double>(outputs);
   // The share of the excess over the noise that the model as given leaves and `c` removes.
-  auto removed = [&](const GapCandidate& c) { return excess > 0.0 ? (before_score - c.score) / excess : 0.0; };
+  auto removed = [&](const GapCandidate& c) {
+    return excess > 0.0 ? (before_score - c.score) / excess : 0.0;
+  };
   // The decision.
   pm.significant = gap && improves(pm.score, before_score, outputs);
   std::string diagnosis = "none";
   const GapCandidate* chosen = nullptr;
   if (!gap) {
-    report.reason = fmt::format("the model as given matches the validation runs within the noise (score {:.2f} for "
-                                "{} output{}, noise alone gives about {})",
-                                before_score, outputs, outputs > 1 ? "s" : "", outputs);
-  } else if (!pairs.empty() && pairs.front().significant) {
-    chosen = &pairs.front();
-    report.reason = fmt::format("both effects together close significantly more of the gap than {} alone",
-                                best_single->name);
+    report.reason = fmt::format(
+        "the model as given matches the validation runs within the noise (score {:.2f} for "
+        "{} output{}, noise alone gives about {})",
+        before_score, outputs, outputs > 1 ? "s" : "", outputs);
+  } else if (!candidates.best_mixture.empty()) {
+    for (const auto& c : mixtures) {
+      if (c.name == candidates.best_mixture) chosen = &c;
+    }
+    MCG_DEMAND(chosen != nullptr);
+    report.reason = fmt::format(
+        "the {} effects together close significantly more of the gap than {} alone, each "
+        "added one significant against the model it extends",
+        chosen->effects.size(), best_single->name);
   } else if (best_single != nullptr) {
     chosen = best_single;
-    report.reason = fmt::format("{} closes significantly more of the gap than refitting the nominal parameters",
-                                best_single->name);
+    report.reason = fmt::format(
+        "{} closes significantly more of the gap than refitting the nominal parameters", best_single->name);
   } else if (pm.significant) {
     chosen = &pm;
     report.reason = "refitting the nominal parameters closes the gap; no effect adds to it beyond the noise";
   }
   // Accepted only when it explains the gap: near the noise, or most of the excess removed.
-  const bool near_noise = chosen != nullptr && chosen->score <= (1.0 + k_gap_near_noise) * static_cast<double>(outputs);
+  const bool near_noise =
+      chosen != nullptr && chosen->score <= (1.0 + k_gap_near_noise) * static_cast<double>(outputs);
   if (chosen != nullptr && (near_noise || removed(*chosen) >= k_gap_explained_share)) {
     diagnosis = chosen->name;
   } else if (gap) {
     diagnosis = "unexplained";
     // The best candidate by FPE stands for what the catalog can do; its residual is analysed.
     const GapCandidate* best = chosen;
-    for (const std::vector<GapCandidate>* group : {&singles, &pairs}) {
+    for (const std::vector<GapCandidate>* group : {&singles, &mixtures}) {
       for (const auto& c : *group) {
         if (c.evaluated && std::isfinite(c.fpe) && (best == nullptr || c.fpe < best->fpe)) best = &c;
       }
@@ -77,7 +86,8 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
     u.status = fmt::format("best candidate {} removes {:.0f} % of the score above the noise", best->name,
                            100.0 * removed(*best));
     report.reason = fmt::format(
-        "no candidate explains the gap: the best, {}, leaves a validation score of {:.2f} against about {} for "
+        "no candidate explains the gap: the best, {}, leaves a validation score of {:.2f} against about {} "
+        "for "
         "noise alone and removes {:.0f} % of the excess (accepted: within {:.0f} % of the noise, or {:.0f} % "
         "removed)",
         best->name, best->score, outputs, 100.0 * removed(*best), 100.0 * k_gap_near_noise,
@@ -88,9 +98,10 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
 
   const auto cut = [](const GapCandidate& c) { return c.status.starts_with(k_out_of_time); };
   report.partial = cut(pm) || std::any_of(singles.begin(), singles.end(), cut) ||
-                   std::any_of(pairs.begin(), pairs.end(), cut);
+                   std::any_of(mixtures.begin(), mixtures.end(), cut);
   if (report.partial) {
-    report.reason += "; PARTIAL: the time budget ran out, the candidates marked so were not fitted to the end";
+    report.reason +=
+        "; PARTIAL: the time budget ran out, the candidates marked so were not fitted to the end";
   }
   std::vector<GapCandidate> all;
   if (diagnosis == "unexplained") {
@@ -100,7 +111,7 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
   all.push_back(std::move(none));
   all.push_back(std::move(pm));
   for (auto& c : singles) all.push_back(std::move(c));
-  for (auto& c : pairs) all.push_back(std::move(c));
+  for (auto& c : mixtures) all.push_back(std::move(c));
   const auto ranked = all.begin() + (diagnosis == "unexplained" ? 1 : 0);
   std::stable_sort(ranked, all.end(), [](const auto& a, const auto& b) { return a.fpe < b.fpe; });
   for (auto& c : skipped) all.push_back(std::move(c));

@@ -1,6 +1,6 @@
 // The parts of the gap diagnosis (see gap.hpp for the method), shared between its files:
 //   gap_data.cpp      the measured runs: split, measurement metadata, noise floors
-//   gap_search.cpp    scoring of a model, the candidates and their fits (refits, singles, pairs)
+//   gap_search.cpp    scoring of a model, the candidates and their fits (refits, singles, mixtures)
 //   gap_decision.cpp  significance, ranking and the verdict
 //   gap_report.cpp    where the residual lies, and the CSV / text / residual outputs
 //   gap.cpp           diagnose_gap() from those parts, and the subcommand
@@ -57,9 +57,10 @@ struct Candidates {
   GapCandidate none;                    ///< the model as given
   GapCandidate pm;                      ///< the refit of the nominal parameters
   std::vector<GapCandidate> singles;    ///< one effect each, best FPE first
-  std::vector<GapCandidate> pairs;      ///< best FPE first
+  std::vector<GapCandidate> mixtures;   ///< every extension forward selection fitted, best FPE first
   std::vector<GapCandidate> skipped;    ///< effects the training runs do not excite
   std::string best_single;              ///< the best significant single effect, empty if none
+  std::string best_mixture;             ///< the largest mixture forward selection accepted, empty if none
 };
 
 /// Fits every candidate. `gap`: the model as given misses by more than the noise (singles

@@ -1,19 +1,18 @@
 // The gap diagnosis' search: how a model is scored, how each candidate is fitted (the
-// nominal refit, one effect, pairs), and the order in which they are tried.
-#include "fit/gap_parts.hpp"
-
-#include "common/error.hpp"
-#include "common/parallel.hpp"
-
+// nominal refit, one effect, mixtures by forward selection), and the order in which they are tried.
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <mutex>
 #include <numbers>
-#include <limits>
+
+#include "common/error.hpp"
+#include "common/parallel.hpp"
+#include "fit/gap_parts.hpp"
 
 namespace mcg::fit {
 
@@ -71,12 +70,12 @@ std::string not_excited(const model::EffectPlan& plan, const std::vector<Run>& r
 struct Job {
   std::string name;
   std::vector<std::string> effects;
-  model::Model start;       ///< effects present with starting values (grid applied later)
+  model::Model start;  ///< effects present with starting values (grid applied later)
   std::vector<std::string> free;
-  std::vector<std::string> grid_effects;  ///< effects whose plan grid is searched before the fit
-  int evaluations_per_parameter = 10;     ///< simulation budget per free parameter (and one)
-  std::vector<std::string> stage1_free;   ///< fitted alone first (the added effect's parameters)
-  std::vector<model::Model> other_starts; ///< further nominal models the grid is searched on
+  std::vector<std::string> grid_effects;   ///< effects whose plan grid is searched before the fit
+  int evaluations_per_parameter = 10;      ///< simulation budget per free parameter (and one)
+  std::vector<std::string> stage1_free;    ///< fitted alone first (the added effect's parameters)
+  std::vector<model::Model> other_starts;  ///< further nominal models the grid is searched on
 };
 
 void add_effect(model::Model& m, std::string_view name) {
@@ -141,7 +140,8 @@ model::Model grid_start(const std::vector<model::Model>& bases, const model::Eff
 }
 
 GapCandidate run_job(const Job& job, const GapData& data, const std::vector<OutputFloor>& floors,
-                     const GapSettings& settings, unsigned jacobian_threads, const std::vector<double>& orders) {
+                     const GapSettings& settings, unsigned jacobian_threads,
+                     const std::vector<double>& orders) {
   GapCandidate c;
   c.name = job.name;
   c.effects = job.effects;
@@ -174,7 +174,9 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   problem.nls.check_smoothness = false;
   problem.bounds = settings.bounds;
   if (settings.deadline != std::chrono::steady_clock::time_point::max()) {
-    problem.nls.stop = [deadline = settings.deadline] { return std::chrono::steady_clock::now() >= deadline; };
+    problem.nls.stop = [deadline = settings.deadline] {
+      return std::chrono::steady_clock::now() >= deadline;
+    };
   }
   auto budget = [&](std::size_t free) {
     return settings.max_evaluations > 0 ? settings.max_evaluations
@@ -203,7 +205,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   }
   const bool out_of_time = settings.deadline != std::chrono::steady_clock::time_point::max() &&
                            std::chrono::steady_clock::now() >= settings.deadline;
-  c.status = out_of_time             ? std::string(k_out_of_time) + ", fit stopped early"
+  c.status = out_of_time         ? std::string(k_out_of_time) + ", fit stopped early"
              : fit.nls.converged ? "fitted"
                                  : "fitted, budget spent";
   c.evaluated = true;
@@ -257,7 +259,8 @@ std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& 
         const std::chrono::duration<double> rest = settings.deadline - std::chrono::steady_clock::now();
         left = fmt::format(", {:.0f} s of the budget left", std::max(0.0, rest.count()));
       }
-      settings.progress(fmt::format("fitted {} ({}/{}{}): {}", jobs[k].name, done, total, left, out[k].status));
+      settings.progress(
+          fmt::format("fitted {} ({}/{}{}): {}", jobs[k].name, done, total, left, out[k].status));
     }
   });
   return out;
@@ -352,8 +355,9 @@ double training_rms_rpm(const model::Model& model, const std::vector<Run>& runs)
   return count > 0 ? std::sqrt(sq / static_cast<double>(count)) : k_nan;
 }
 
-Candidates search_candidates(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors,
-                             const Evaluation& before, bool gap, const GapSettings& settings) {
+Candidates search_candidates(const model::Model& model, const GapData& data,
+                             const std::vector<OutputFloor>& floors, const Evaluation& before, bool gap,
+                             const GapSettings& settings) {
   const unsigned threads = parallel::worker_count(settings.threads, std::numeric_limits<std::size_t>::max());
   const std::size_t outputs = floors.size();
   const auto n_val = static_cast<double>(validation_count(data) * outputs);
@@ -371,7 +375,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data, con
   none.evaluated = true;
 
   std::size_t done = 0;
-  std::size_t total = 2 + candidate_effects().size() + settings.pair_effects * (settings.pair_effects - 1) / 2;
+  std::size_t total = 2 + candidate_effects().size();
 
   // The refit of the nominal parameters, warm start of every effect candidate.
   model::Model base = model;
@@ -389,7 +393,8 @@ Candidates search_candidates(const model::Model& model, const GapData& data, con
   for (const model::EffectSpec* spec : candidate_effects()) {
     const model::EffectSpec& plan = *spec;
     if (model.effect(plan.name) != nullptr) continue;
-    if (std::find(settings.excluded.begin(), settings.excluded.end(), plan.name) != settings.excluded.end()) continue;
+    if (std::find(settings.excluded.begin(), settings.excluded.end(), plan.name) != settings.excluded.end())
+      continue;
     const std::string why = not_excited(plan.plan, data.train);
     if (!why.empty()) {
       GapCandidate c;
@@ -423,8 +428,9 @@ Candidates search_candidates(const model::Model& model, const GapData& data, con
     for (const auto& c : singles) {
       if (!c.evaluated) continue;
       model::Model trial = pm.model;
-      *std::find_if(trial.effects.begin(), trial.effects.end(), [](const auto& e) { return e.name == "param_mismatch"; }) =
-          *c.model.effect("param_mismatch");
+      *std::find_if(trial.effects.begin(), trial.effects.end(), [](const auto& e) {
+        return e.name == "param_mismatch";
+      }) = *c.model.effect("param_mismatch");
       const double cost = training_cost(trial, data.train);
       if (cost < best) {
         best = cost;
@@ -435,7 +441,8 @@ Candidates search_candidates(const model::Model& model, const GapData& data, con
       if (settings.progress) settings.progress("refitting param_mismatch from a better start");
       ++total;
       Job again{"param_mismatch", {}, start, mismatch_free(settings.fixed), {}, 10, {}, {}};
-      GapCandidate refit = std::move(run_jobs({again}, data, floors, settings, threads, {}, done, total).front());
+      GapCandidate refit =
+          std::move(run_jobs({again}, data, floors, settings, threads, {}, done, total).front());
       refit.fpe = fpe(refit.score, refit.free.size());
       if (refit.evaluated && training_cost(refit.model, data.train) < pm_cost) pm = std::move(refit);
     }
@@ -447,49 +454,87 @@ Candidates search_candidates(const model::Model& model, const GapData& data, con
   }
   std::sort(singles.begin(), singles.end(), [](const auto& a, const auto& b) { return a.fpe < b.fpe; });
 
-  // Pairs of the strongest significant effects, each started from the better single fit
-  // with the other effect's fitted values.
-  std::vector<const GapCandidate*> strong;
+  // Mixtures by forward selection: the best significant single is extended by one effect at
+  // a time from a pool of the singles that did best (significant or not: a weaker effect's
+  // single fit is distorted by the stronger one it cannot explain), each extension refitted
+  // jointly; the best extension joins when it is significant against the model it extends,
+  // up to k_gap_max_mixture effects. Every extension tried is reported.
+  std::vector<const GapCandidate*> pool;
   for (const auto& c : singles) {
-    if (c.significant && strong.size() < settings.pair_effects) strong.push_back(&c);
-  }
-  std::vector<Job> pair_jobs;
-  for (std::size_t a = 0; a < strong.size(); ++a) {
-    for (std::size_t b = a + 1; b < strong.size(); ++b) {
-      const GapCandidate& first = *strong[a];
-      const GapCandidate& second = *strong[b];
-      // Named in catalog order, so that a pair reads the same whichever single fitted better.
-      const bool in_order = find_plan(first.name) < find_plan(second.name);
-      const std::string name = in_order ? first.name + "+" + second.name : second.name + "+" + first.name;
-      // Started from the better single's model with the other effect added, or from the
-      // model as given with both effects at their single-fit values.
-      Job job{name, {first.name, second.name}, first.model, first.free, {}, 10, {}, {base}};
-      job.start.effects.push_back(*second.model.effect(second.name));
-      job.other_starts.front().effects.push_back(*first.model.effect(first.name));
-      job.other_starts.front().effects.push_back(*second.model.effect(second.name));
-      for (const GapCandidate* single : {&first, &second}) {
-        for (const auto& key : find_plan(single->name)->plan.free) job.stage1_free.push_back(single->name + "." + key);
-      }
-      for (const auto& key : find_plan(second.name)->plan.free) job.free.push_back(second.name + "." + key);
-      pair_jobs.push_back(std::move(job));
+    if (c.evaluated && std::isfinite(c.score) && c.score < before.score &&
+        pool.size() < settings.pool_effects) {
+      pool.push_back(&c);
     }
   }
-  total = done + pair_jobs.size();
-  std::vector<GapCandidate> pairs = run_jobs(pair_jobs, data, floors, settings, threads, orders, done, total);
-  const GapCandidate* best_single = strong.empty() ? nullptr : strong.front();
-  for (auto& c : pairs) {
-    c.fpe = fpe(c.score, c.free.size());
-    c.significant = best_single != nullptr && improves(c.score, best_single->score, outputs) &&
-                    improves(c.score, ref_score, outputs);
+  const GapCandidate* best_single = nullptr;
+  for (const auto& c : singles) {
+    if (c.significant) {
+      best_single = &c;
+      break;
+    }
   }
-  std::sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) { return a.fpe < b.fpe; });
+  std::vector<GapCandidate> mixtures;
+  std::string best_mixture;
+  if (best_single != nullptr) {
+    GapCandidate current = *best_single;
+    while (current.effects.size() < k_gap_max_mixture) {
+      std::vector<Job> round;
+      for (const GapCandidate* single : pool) {
+        const std::string& added = single->name;
+        if (std::find(current.effects.begin(), current.effects.end(), added) != current.effects.end())
+          continue;
+        std::vector<std::string> members = current.effects;
+        members.push_back(added);
+        // Named in catalog order, so that a mixture reads the same whichever way it was found.
+        std::sort(members.begin(), members.end(),
+                  [](const std::string& x, const std::string& y) { return find_plan(x) < find_plan(y); });
+        std::string name;
+        for (const auto& m : members) name += (name.empty() ? "" : "+") + m;
+        // Started from the current model with the added effect at its single-fit values, or
+        // from the model as given with every member at its single-fit values.
+        Job job{name, members, current.model, current.free, {}, 10, {}, {base}};
+        job.start.effects.push_back(*single->model.effect(added));
+        for (const auto& m : members) {
+          for (const auto& c : singles) {
+            if (c.name == m) job.other_starts.front().effects.push_back(*c.model.effect(m));
+          }
+        }
+        for (const auto& key : find_plan(added)->plan.free) {
+          job.stage1_free.push_back(added + "." + key);
+          job.free.push_back(added + "." + key);
+        }
+        round.push_back(std::move(job));
+      }
+      if (round.empty()) break;
+      total = done + round.size();
+      std::vector<GapCandidate> fitted =
+          run_jobs(round, data, floors, settings, threads, orders, done, total);
+      for (auto& c : fitted) c.fpe = fpe(c.score, c.free.size());
+      std::sort(fitted.begin(), fitted.end(), [](const auto& x, const auto& y) { return x.fpe < y.fpe; });
+      for (auto& c : fitted) {
+        c.significant =
+            c.evaluated && improves(c.score, current.score, outputs) && improves(c.score, ref_score, outputs);
+      }
+      const bool extended = !fitted.empty() && fitted.front().significant;
+      if (extended) {
+        current = fitted.front();
+        best_mixture = current.name;
+        if (settings.progress)
+          settings.progress(fmt::format("{} extends the best model significantly", current.name));
+      }
+      for (auto& c : fitted) mixtures.push_back(std::move(c));
+      if (!extended) break;
+    }
+  }
+  std::sort(mixtures.begin(), mixtures.end(), [](const auto& x, const auto& y) { return x.fpe < y.fpe; });
 
   Candidates out;
   if (best_single != nullptr) out.best_single = best_single->name;
+  out.best_mixture = best_mixture;
   out.none = std::move(none);
   out.pm = std::move(pm);
   out.singles = std::move(singles);
-  out.pairs = std::move(pairs);
+  out.mixtures = std::move(mixtures);
   out.skipped = std::move(skipped);
   return out;
 }
@@ -509,7 +554,8 @@ std::vector<double> angle_orders(const model::Model& model, const std::vector<Ru
     double theta = 0.0;
     for (std::size_t n = 1; n < y.size(); ++n) {
       const double dt = run.inputs.t_s[n] - run.inputs.t_s[n - 1];
-      if (std::isfinite(y[n]) && std::isfinite(y[n - 1])) theta += 0.5 * (y[n] + y[n - 1]) * dt * std::numbers::pi / 30.0;
+      if (std::isfinite(y[n]) && std::isfinite(y[n - 1]))
+        theta += 0.5 * (y[n] + y[n - 1]) * dt * std::numbers::pi / 30.0;
       const double r = y[n] - sim[o][n];
       if (!std::isfinite(r) || y[n] == 0.0) continue;
       for (std::size_t order = 2; order <= k_max_angle_order; ++order) {
@@ -519,7 +565,8 @@ std::vector<double> angle_orders(const model::Model& model, const std::vector<Ru
     for (std::size_t order = 2; order <= k_max_angle_order; ++order) power[order] += std::norm(acc[order]);
   }
   std::vector<double> orders;
-  for (std::size_t order = 2; order <= k_max_angle_order; ++order) orders.push_back(static_cast<double>(order));
+  for (std::size_t order = 2; order <= k_max_angle_order; ++order)
+    orders.push_back(static_cast<double>(order));
   std::stable_sort(orders.begin(), orders.end(), [&](double a, double b) {
     return power[static_cast<std::size_t>(a)] > power[static_cast<std::size_t>(b)];
   });
