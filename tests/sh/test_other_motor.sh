@@ -4,7 +4,8 @@
 #  - a 30:1 gearmotor sampled at 100 Hz, its speed measured at the output shaft.
 # The given model has R and L measured (right) and Kt = Ke, J and Tc wrong by 20-70 %.
 # The default free set (J, Kt = Ke, Tc) recovers them within 2 % and says converged = yes;
-# freeing R with Kt on speed-only data is flagged (correlations beyond 0.99, exit 3).
+# freeing R with Kt on speed-only data is flagged (correlations beyond 0.99, exit 3); given
+# without friction, the gap diagnosis names the missing friction levels.
 # Args: TOOL_DIR SOURCE_DIR.
 set -euo pipefail
 tools=$1
@@ -78,6 +79,24 @@ for seed in 3 4; do
       >"$work/small-$seed.csv"
 done
 fit_case small "$work/small-truth.ini" "$work/small-given.ini" 1 "$work/small-3.csv" "$work/small-4.csv"
+
+# The same motor given without any friction: mcg-fit gap names the missing friction as
+# additive levels (its scales would multiply zero) and finds the Coulomb and viscous levels.
+motor_ini 2.4 0.0003 0.0135 1.8e-6 0 0 0 >"$work/small-frictionless.ini"
+mcg-fit gap --config "$work/small-frictionless.ini" --train "$work/small-3.csv" --validate "$work/small-4.csv" \
+  >"$work/small-gap.csv" 2>"$work/small-gap.err" || fail "small gap: exit $?: $(tail -1 "$work/small-gap.err")"
+row=$(grep -v '^#' "$work/small-gap.csv" | sed -n 2p)
+if [[ "$(cut -d, -f1 <<<"$row")" != friction_levels ]]; then
+  fail "small gap: diagnosis $(cut -d, -f1 <<<"$row"), expected friction_levels"
+else
+  tc=$(grep -o 'friction_levels.Tc_Nm=[^+]*' <<<"$row" | cut -d= -f2)
+  c1=$(grep -o 'friction_levels.c1_Nm_s_rad=[^+]*' <<<"$row" | cut -d= -f2)
+  if awk -v tc="$tc" -v c1="$c1" 'BEGIN { exit !(tc > 0.0011 * 0.95 && tc < 0.0011 * 1.05 && c1 > 2.5e-6 * 0.9 && c1 < 2.5e-6 * 1.1) }'; then
+    echo "ok   small gap: friction_levels, Tc = $tc N m (truth 0.0011), c1 = $c1 (truth 2.5e-6)"
+  else
+    fail "small gap: friction_levels with Tc = $tc, c1 = $c1 (truth 0.0011, 2.5e-6)"
+  fi
+fi
 
 # 30:1 gearmotor at 100 Hz, 360 counts/rev on the motor over 10 ms, speed at the output.
 motor_ini 4.2 0.00015 0.0062 6e-7 0.0005 0.0004 4e-7 >"$work/gear-truth.ini"

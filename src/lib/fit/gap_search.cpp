@@ -10,6 +10,7 @@
 #include <mutex>
 #include <numbers>
 
+#include "common/demand.hpp"
 #include "common/error.hpp"
 #include "common/parallel.hpp"
 #include "fit/gap_parts.hpp"
@@ -93,9 +94,31 @@ std::string scale_of(std::string_view name) {
   return {};
 }
 
-std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed) {
+/// The nominal scales a refit moves: those --fix does not pin, that multiply something in
+/// `p` (a model without friction has no Coulomb level to scale: its scale is undetermined)
+/// and that none of `effects` supersedes (friction_levels adds to the levels they scale).
+std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, const model::Params& p,
+                                       const std::vector<std::string>& effects = {}) {
+  const model::Friction* all[] = {&p.motor.friction, &p.generator.friction, &p.clutch_disengaged,
+                                  &p.clutch_engaged};
+  auto any = [&](auto level) { return std::any_of(std::begin(all), std::end(all), level); };
+  const bool coulomb = any([](const model::Friction* f) { return f->Tc_Nm != 0.0; });
+  const bool statics = any([](const model::Friction* f) { return f->Ts_Nm != 0.0; });
+  const bool viscous = any([](const model::Friction* f) {
+    return std::any_of(f->viscous.begin(), f->viscous.end(), [](double c) { return c != 0.0; });
+  });
   std::vector<std::string> free;
   for (const auto& s : mismatch_scales()) {
+    if ((s == "coulomb_scale" && !coulomb) || (s == "static_scale" && !statics) ||
+        (s == "viscous_scale" && !viscous)) {
+      continue;
+    }
+    const bool superseded = std::any_of(effects.begin(), effects.end(), [&](const std::string& e) {
+      const model::EffectSpec* spec = model::find_effect(e);
+      return spec != nullptr && std::find(spec->plan.supersedes.begin(), spec->plan.supersedes.end(), s) !=
+                                    spec->plan.supersedes.end();
+    });
+    if (superseded) continue;
     if (std::none_of(fixed.begin(), fixed.end(), [&](const std::string& f) { return scale_of(f) == s; })) {
       free.push_back("param_mismatch." + s);
     }
@@ -112,6 +135,13 @@ model::Model grid_start(const std::vector<model::Model>& bases, const model::Eff
   const model::EffectPlan& plan = effect.plan;
   std::vector<std::vector<double>> axes = plan.grid;
   std::vector<std::string> keys = plan.free;
+  if (plan.grid_scale != nullptr) {
+    const std::vector<double> scale = plan.grid_scale(bases.front().params);
+    MCG_DEMAND(scale.size() == axes.size());
+    for (std::size_t k = 0; k < axes.size(); ++k) {
+      for (double& v : axes[k]) v *= scale[k];
+    }
+  }
   if (!plan.angle_order_key.empty() && !orders.empty()) {
     keys.push_back(plan.angle_order_key);
     axes.push_back(orders);
@@ -380,7 +410,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   // The refit of the nominal parameters, warm start of every effect candidate.
   model::Model base = model;
   add_effect(base, "param_mismatch");
-  Job pm_job{"param_mismatch", {}, base, mismatch_free(settings.fixed), {}, 20, {}, {}};
+  Job pm_job{"param_mismatch", {}, base, mismatch_free(settings.fixed, model.params), {}, 20, {}, {}};
   if (settings.progress) settings.progress("fitting param_mismatch (nominal parameters)");
   std::vector<GapCandidate> pm_result = run_jobs({pm_job}, data, floors, settings, threads, {}, done, total);
   GapCandidate pm = std::move(pm_result.front());
@@ -409,7 +439,8 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       ++done;
       continue;
     }
-    Job job{plan.name, {plan.name}, pm.model, mismatch_free(settings.fixed), {plan.name}, 15, {}, {base}};
+    Job job{plan.name,   {plan.name}, pm.model, mismatch_free(settings.fixed, model.params, {plan.name}),
+            {plan.name}, 15,          {},       {base}};
     add_effect(job.start, plan.name);
     for (const auto& key : plan.plan.free) {
       job.free.push_back(plan.name + "." + key);
@@ -440,7 +471,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
     if (best < pm_cost) {
       if (settings.progress) settings.progress("refitting param_mismatch from a better start");
       ++total;
-      Job again{"param_mismatch", {}, start, mismatch_free(settings.fixed), {}, 10, {}, {}};
+      Job again{"param_mismatch", {}, start, mismatch_free(settings.fixed, model.params), {}, 10, {}, {}};
       GapCandidate refit =
           std::move(run_jobs({again}, data, floors, settings, threads, {}, done, total).front());
       refit.fpe = fpe(refit.score, refit.free.size());
@@ -492,7 +523,11 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         for (const auto& m : members) name += (name.empty() ? "" : "+") + m;
         // Started from the current model with the added effect at its single-fit values, or
         // from the model as given with every member at its single-fit values.
-        Job job{name, members, current.model, current.free, {}, 10, {}, {base}};
+        Job job{name, members, current.model, mismatch_free(settings.fixed, model.params, members), {},
+                10,   {},      {base}};
+        for (const auto& f : current.free) {
+          if (!f.starts_with("param_mismatch.")) job.free.push_back(f);
+        }
         job.start.effects.push_back(*single->model.effect(added));
         for (const auto& m : members) {
           for (const auto& c : singles) {

@@ -297,7 +297,10 @@ std::vector<std::string> fit_warnings(const NlsResult& n, const std::vector<std:
     const double from_lo = logs ? std::log(v / lo) : v - lo;
     const double from_hi = logs ? std::log(hi / v) : hi - v;
     // At a bound the Jacobian steps out of the range: its standard error says nothing more.
-    if (std::isfinite(span) && from_lo <= k_at_bound * span) {
+    // A positive parameter bounded by 0 is fitted in log coordinates: it nears the bound only
+    // by orders of magnitude, so only a value that is 0 in all but name is at it.
+    const double lo_margin = lo == 0.0 && v > 0.0 ? 1e-6 * span : k_at_bound * span;
+    if (std::isfinite(span) && from_lo <= lo_margin) {
       out.push_back(fmt::format("{} = {:.6g}{} is at its lower bound", n.names[k], v, unit));
       continue;
     }

@@ -108,6 +108,13 @@ struct EffectPlan {
   /// A parameter that is a harmonic order of the motor angle (cogging's N_per_rev): its
   /// starting values are the strongest orders of the residual over the measured angle.
   std::string angle_order_key;
+  /// Per free key, the factor the grid values are multiplied by for the given nominal
+  /// parameters (grids in units of the motor's own size, e.g. its stall torque, so they fit
+  /// any motor); nullptr: the grid is absolute.
+  std::vector<double> (*grid_scale)(const Params& nominal) = nullptr;
+  /// Keys of param_mismatch the refit holds at 1 while this effect is in the model (they
+  /// would move what the effect's own parameters move).
+  std::vector<std::string> supersedes;
 
   static EffectPlan fit(std::vector<std::string> free, std::vector<std::vector<double>> grid,
                         Needs needs = Needs::nothing, std::string angle_order_key = {}) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <ostream>
 
 #include "common/error.hpp"
@@ -27,6 +28,7 @@ namespace mcg::model {
   X(clutch_engage_lag)        \
   X(cogging)                  \
   X(thermal)                  \
+  X(friction_levels)          \
   X(friction_asymmetry)       \
   X(param_mismatch)
 
@@ -134,21 +136,24 @@ std::size_t edit_distance(std::string_view a, std::string_view b) {
 }  // namespace
 
 std::string unknown_effect_hint(std::string_view name, bool candidates_only) {
-  const EffectSpec* best = nullptr;
-  std::size_t best_distance = 0;
+  // The nearest names: every name `name` begins (a prefix names a family), else the closest.
+  std::vector<std::string> nearest;
+  std::size_t best_distance = std::numeric_limits<std::size_t>::max();
   for (const auto& spec : effect_catalog()) {
     if (candidates_only && !spec.plan.candidate) continue;
     const std::size_t d = spec.name.starts_with(name) && !name.empty() ? 1 : edit_distance(name, spec.name);
-    if (best == nullptr || d < best_distance) {
-      best = &spec;
+    if (d < best_distance) {
       best_distance = d;
+      nearest.clear();
     }
+    if (d == best_distance) nearest.push_back(quote(spec.name));
   }
   const std::string all = "mcg-sim --list-effects lists them all";
-  if (best != nullptr && best_distance <= std::max<std::size_t>(2, name.size() / 4)) {
-    return fmt::format("did you mean {}? {}", quote(best->name), all);
-  }
-  return all;
+  if (nearest.empty() || best_distance > std::max<std::size_t>(2, name.size() / 4)) return all;
+  std::string names = nearest.front();
+  for (std::size_t k = 1; k < nearest.size(); ++k)
+    names += (k + 1 == nearest.size() ? " or " : ", ") + nearest[k];
+  return fmt::format("did you mean {}? {}", names, all);
 }
 
 namespace {

@@ -1,0 +1,52 @@
+// friction_levels: Coulomb, static and viscous friction on the motor shaft beyond the
+// model's own, as additive levels. A model given without friction (or with too little) has
+// nothing for param_mismatch's scales to multiply; this adds it, with exact stick-slip
+// through the plant's friction (not a torque term). The diagnosis starts the levels at
+// fractions of the motor's own stall torque Kt supply_V / R (Coulomb 0.2 %, 1 %, 4 %: from a
+// precision motor's bearings to a gearmotor's brushes and seals; static excess 0.1 % and 1 %)
+// and the viscous level at 0.1 % and 1 % of stall torque per no-load speed supply_V / Ke, so
+// the grid fits any motor. The starts are not 0: the fit moves positive levels in log
+// coordinates, by ratios.
+#include "model/effects/compiled.hpp"
+
+namespace mcg::model::effects {
+
+namespace {
+
+void compile(const Effect& e, Compiled& c) {
+  Friction& f = c.p.motor.friction;
+  f.Tc_Nm += e.get("Tc_Nm");
+  f.Ts_Nm += e.get("Tc_Nm") + e.get("Ts_excess_Nm");
+  f.viscous[0] += e.get("c1_Nm_s_rad");
+}
+
+std::vector<double> stall_scale(const Params& p) {
+  const double stall_Nm = p.motor.Kt_Nm_A * p.supply_V / p.motor.R_ohm;
+  const double no_load_rad_s = p.supply_V / p.motor.Ke_V_s_rad;
+  return {stall_Nm, stall_Nm, stall_Nm / no_load_rad_s};
+}
+
+EffectPlan plan() {
+  EffectPlan p = EffectPlan::fit({"Tc_Nm", "Ts_excess_Nm", "c1_Nm_s_rad"},
+                                 {{0.002, 0.01, 0.04}, {0.001, 0.01}, {0.001, 0.01}});
+  p.grid_scale = stall_scale;
+  p.supersedes = {"coulomb_scale", "static_scale", "viscous_scale"};
+  return p;
+}
+
+}  // namespace
+
+EffectSpec friction_levels() {
+  return {
+      "friction_levels",
+      "Coulomb, static and viscous friction on the motor shaft beyond the model's own",
+      "motor Tc += Tc_Nm, Ts += Tc_Nm + Ts_excess_Nm, c1 += c1_Nm_s_rad: F(w) = sign(w) (Tc + c1 |w| + ...) "
+      "moving, held up to Ts at rest",
+      {{"Tc_Nm", 1e-3, 0.0, 10.0, "N m", "added Coulomb level"},
+       {"Ts_excess_Nm", 0.0, 0.0, 10.0, "N m", "added static level above the added Coulomb level"},
+       {"c1_Nm_s_rad", 0.0, 0.0, 1.0, "N m s/rad", "added viscous coefficient"}},
+      compile,
+      plan()};
+}
+
+}  // namespace mcg::model::effects
