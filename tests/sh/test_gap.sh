@@ -101,6 +101,15 @@ run_case outside_dead_time unexplained "dead_time:tau_d_s=0.0025" "prbs_at 8 2.5
 run_case outside_brush_drop unexplained "brush_drop:V_b_V=1.1" "stairs_low 6 1" "chirp_at 7 2 2" \
   "what is left of the speed residual lies mostly in" --exclude brush_drop
 
+# Outside the catalog, the shape of what is missing: the catalog-free discrepancy fit names
+# a position ripple at its order, and a direction-dependent friction as a constant torque.
+run_case outside_cogging unexplained "cogging:T_c_Nm=0.0019,N_per_rev=11,phase_rad=-1.2" "stairs_low 2.5 0" \
+  "prbs_at 2.2 0.8 0 4" "N m sin(11 theta - 1.2" --exclude cogging
+prbs_reversing() { mcg-sweep prbs --bias 0 --amp 6 --clock 0.02 --duration 3 --clutch 2 --seed "$1"; }
+chirp_reversing() { mcg-sweep chirp --bias 0 --amp 7 --f0 0.5 --f1 20 --duration 3 --clutch 2; }
+run_case outside_asymmetry unexplained "friction_asymmetry:dT_Nm=0.0011" "prbs_reversing 1" "chirp_reversing" \
+  "  - 0.001" --exclude friction_asymmetry
+
 # A time budget too short for the search: the ranking so far, marked partial, exit status 4.
 status=0
 mcg-fit gap --train "$work/dead_time-train.csv" --validate "$work/dead_time-validate.csv" --budget 0.2 --progress \

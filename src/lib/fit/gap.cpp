@@ -1,17 +1,17 @@
 // The sim-to-real gap diagnosis (see gap.hpp for the method; gap_parts.hpp for its parts).
-#include "fit/gap_parts.hpp"
-
-#include "common/error.hpp"
-#include "common/tool.hpp"
-#include "config/ini.hpp"
-#include "table/table.hpp"
-
-#include "common/demand.hpp"
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <fstream>
 #include <ostream>
+
+#include "common/demand.hpp"
+#include "common/error.hpp"
+#include "common/tool.hpp"
+#include "config/ini.hpp"
+#include "fit/discrepancy.hpp"
+#include "fit/gap_parts.hpp"
+#include "table/table.hpp"
 
 namespace mcg::fit {
 
@@ -37,15 +37,18 @@ std::string where_left(const GapReport& report) {
     }
     if (best == nullptr || best->share < 0.5) return;
     // A regime holding most of the samples holds most of any residual: not a finding.
-    if (by_samples && all > 0 && best->share < 1.25 * static_cast<double>(best->samples) / static_cast<double>(all)) {
+    if (by_samples && all > 0 &&
+        best->share < 1.25 * static_cast<double>(best->samples) / static_cast<double>(all)) {
       return;
     }
     parts.push_back(fmt::format("{} {} ({:.0f} %)", group, best->regime, 100.0 * best->share));
   };
-  for (const char* group : {"direction", "speed", "clutch", "load", "timing"}) strongest(regimes, group, true);
+  for (const char* group : {"direction", "speed", "clutch", "load", "timing"})
+    strongest(regimes, group, true);
   if (speed) strongest(report.bands_after, "band", false);
   if (parts.empty()) return "; what is left is spread over every regime and band";
-  std::string out = fmt::format("; what is left of the {} residual lies mostly in", speed ? "speed" : "current");
+  std::string out =
+      fmt::format("; what is left of the {} residual lies mostly in", speed ? "speed" : "current");
   for (std::size_t k = 0; k < parts.size(); ++k) out += (k == 0 ? " " : ", ") + parts[k];
   return out;
 }
@@ -80,11 +83,18 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   report.simulated_before = before.simulated;
   const Evaluation after = evaluate(report.candidates.front().model, data, report.floors);
   report.simulated_after = after.simulated;
-  analyse(data, report.simulated_before, report.regimes_before, report.bands_before, report.current_regimes_before,
-          report.white_before);
-  analyse(data, report.simulated_after, report.regimes_after, report.bands_after, report.current_regimes_after,
-          report.white_after);
+  analyse(data, report.simulated_before, report.regimes_before, report.bands_before,
+          report.current_regimes_before, report.white_before);
+  analyse(data, report.simulated_after, report.regimes_after, report.bands_after,
+          report.current_regimes_after, report.white_after);
   if (report.diagnosis == "unexplained") report.reason += where_left(report);
+  if (report.diagnosis == "unexplained" || settings.discrepancy) {
+    if (settings.progress) settings.progress("fitting the catalog-free discrepancy terms");
+    // The reference is the diagnosis' model (for unexplained: the best candidate's).
+    report.discrepancy =
+        fit_discrepancy(report.candidates.front().model, data,
+                        angle_orders(report.candidates.front().model, data.train, 2), report.floors);
+  }
   return report;
 }
 
@@ -100,7 +110,8 @@ int run_gap(const GapOptions& options, std::ostream& out, std::ostream& err) {
   settings.fixed = fix_parameters(model, options.fix);
   check_excluded(options.exclude);
   settings.excluded = options.exclude;
-  if (!(options.from_s < options.to_s)) fail("--from {} s is not before --to {} s", options.from_s, options.to_s);
+  if (!(options.from_s < options.to_s))
+    fail("--from {} s is not before --to {} s", options.from_s, options.to_s);
   auto load = [&](const std::vector<std::string>& paths) {
     std::vector<table::Table> tables;
     for (const auto& p : paths) {
@@ -114,6 +125,7 @@ int run_gap(const GapOptions& options, std::ostream& out, std::ostream& err) {
   for (auto& run : data.train) run.gear_ratio = options.gear_ratio;
   for (auto& sr : data.validate) sr.run.gear_ratio = options.gear_ratio;
   settings.threads = options.threads;
+  settings.discrepancy = options.discrepancy;
   settings.deadline = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                     std::chrono::duration<double>(options.budget_s));
   if (options.progress) {

@@ -78,6 +78,7 @@ struct GapSettings {
   std::vector<std::string> excluded;   ///< catalog effects not tried as candidates (--exclude)
   std::map<std::string, std::pair<double, double>> bounds;  ///< [bounds] of the INI
   std::function<void(const std::string&)> progress;  ///< progress lines (none when empty)
+  bool discrepancy = false;            ///< fit the discrepancy whatever the verdict
   /// When the time budget runs out: fits under way stop at their next iteration, candidates
   /// not started are reported as not fitted, and the report is marked partial.
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
@@ -138,6 +139,31 @@ struct GapCandidate {
   bool evaluated = false;             ///< false when skipped (not excited)
 };
 
+/// One term of the catalog-free discrepancy fit (fit/discrepancy.hpp).
+struct DiscrepancyTerm {
+  std::string equation;      ///< "+0.00112 N m * sign(w)"
+  std::string basis;         ///< "sign(w)"
+  double coefficient = 0.0;  ///< in the unit of `unit`
+  double std_error = 0.0;
+  std::string unit;          ///< "N m", "N m s/rad", "kg m^2"
+};
+
+struct DiscrepancyResult {
+  std::vector<DiscrepancyTerm> terms;  ///< the survivors, largest share first
+  std::size_t library_size = 0;
+  std::size_t train_windows = 0;
+  std::size_t validation_windows = 0;
+  /// Share of the torque residual the terms explain, %, 1 - ||y - Phi xi||^2 / ||y||^2.
+  double train_explained_pct = 0.0;
+  double validation_explained_pct = 0.0;
+  /// The reference model with the terms, simulated on the validation runs.
+  model::Model model;
+  double rms_before_rpm = 0.0;   ///< validation speed RMS of the reference model
+  double rms_after_rpm = 0.0;    ///< ... and with the terms
+  double floor_rpm = 0.0;
+  std::string note;              ///< why nothing was fitted, when `terms` is empty
+};
+
 /// The diagnosis.
 struct GapReport {
   std::string split_note;
@@ -147,6 +173,8 @@ struct GapReport {
   std::string diagnosis;                 ///< = candidates.front().name
   bool partial = false;                  ///< the time budget ran out before every candidate was fitted
   std::string reason;                    ///< one sentence: why this diagnosis
+  /// The catalog-free discrepancy fit: for an unexplained gap, and on request (--discrepancy).
+  std::optional<DiscrepancyResult> discrepancy;
   /// Where the gap lies before and after (the diagnosis' model), pooled over validation runs.
   std::vector<RegimeStat> regimes_before, regimes_after;
   std::vector<RegimeStat> bands_before, bands_after;
@@ -194,6 +222,7 @@ struct GapOptions {
   double gear_ratio = 1.0;       ///< motor turns per turn of the measured shaft
   double budget_s = 120.0;       ///< wall-clock budget of the diagnosis (partial results after it)
   bool progress = false;         ///< progress lines on `err`
+  bool discrepancy = false;      ///< the catalog-free discrepancy fit whatever the verdict
 };
 
 /// Exit status of `mcg-fit gap` when the time budget ran out (the results so far are written).

@@ -1,15 +1,14 @@
 // The gap diagnosis' report: where the residual lies (regimes, bands, whiteness) and the
 // CSV, text and residual-series outputs.
-#include "fit/gap_parts.hpp"
-
-#include "table/table.hpp"
-
 #include <fmt/format.h>
 
 #include <algorithm>
-#include "common/demand.hpp"
 #include <cmath>
 #include <ostream>
+
+#include "common/demand.hpp"
+#include "fit/gap_parts.hpp"
+#include "table/table.hpp"
 
 namespace mcg::fit {
 
@@ -50,9 +49,9 @@ std::vector<RegimeStat> pool(const std::vector<std::vector<RegimeStat>>& parts) 
 }
 
 /// The residual of output `name` of every validation run (NaN on unscored rows).
-std::vector<std::vector<double>> residual_series(const GapData& data,
-                                                 const std::vector<std::vector<std::vector<double>>>& simulated,
-                                                 const std::string& name) {
+std::vector<std::vector<double>> residual_series(
+    const GapData& data, const std::vector<std::vector<std::vector<double>>>& simulated,
+    const std::string& name) {
   std::vector<std::vector<double>> out;
   for (std::size_t r = 0; r < data.validate.size(); ++r) {
     const ScoredRun& sr = data.validate[r];
@@ -60,7 +59,8 @@ std::vector<std::vector<double>> residual_series(const GapData& data,
     const auto it = std::find(sr.run.outputs.begin(), sr.run.outputs.end(), name);
     if (it != sr.run.outputs.end()) {
       const auto o = static_cast<std::size_t>(it - sr.run.outputs.begin());
-      for (std::size_t n = sr.first_scored; n < res.size(); ++n) res[n] = sr.run.measured[o][n] - simulated[r][o][n];
+      for (std::size_t n = sr.first_scored; n < res.size(); ++n)
+        res[n] = sr.run.measured[o][n] - simulated[r][o][n];
     }
     out.push_back(std::move(res));
   }
@@ -97,12 +97,14 @@ void gap_detail::analyse(const GapData& data, const std::vector<std::vector<std:
     reg.push_back(regime_breakdown(ctx, rpm_res[r]));
     cur.push_back(regime_breakdown(ctx, i_res[r]));
     std::vector<double> dt;
-    for (std::size_t n = 1; n < run.inputs.t_s.size(); ++n) dt.push_back(run.inputs.t_s[n] - run.inputs.t_s[n - 1]);
+    for (std::size_t n = 1; n < run.inputs.t_s.size(); ++n)
+      dt.push_back(run.inputs.t_s[n] - run.inputs.t_s[n - 1]);
     std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
     const double dt_s = dt[dt.size() / 2];
     band.push_back(band_breakdown(rpm_res[r], dt_s));
     if (run.rpm_estimator) {
-      first_lag = std::max(first_lag, static_cast<std::size_t>(std::lround(run.rpm_estimator->window_s / dt_s)) + 1);
+      first_lag =
+          std::max(first_lag, static_cast<std::size_t>(std::lround(run.rpm_estimator->window_s / dt_s)) + 1);
     }
     joined_r.insert(joined_r.end(), rpm_res[r].begin(), rpm_res[r].end());
     joined_u.insert(joined_u.end(), run.inputs.v_V.begin(), run.inputs.v_V.end());
@@ -135,7 +137,8 @@ std::string params_text(const GapCandidate& c) {
   std::vector<std::string> effect_part;
   std::vector<std::string> nominal_part;
   for (std::size_t k = 0; k < c.free.size(); ++k) {
-    const std::string item = fmt::format("{}={}+-{}", c.free[k], number(c.values[k]), number(c.std_errors[k], 2));
+    const std::string item =
+        fmt::format("{}={}+-{}", c.free[k], number(c.values[k]), number(c.std_errors[k], 2));
     (c.free[k].rfind("param_mismatch.", 0) == 0 ? nominal_part : effect_part).push_back(item);
   }
   // A harmonic order is picked from the data's spectrum, not fitted: shown without an error.
@@ -143,8 +146,8 @@ std::string params_text(const GapCandidate& c) {
     const model::EffectSpec* spec = model::find_effect(name);
     const model::Effect* e = c.model.effect(name);
     if (c.evaluated && spec != nullptr && e != nullptr && !spec->plan.angle_order_key.empty()) {
-      effect_part.push_back(
-          fmt::format("{}.{}={}", name, spec->plan.angle_order_key, number(e->get(spec->plan.angle_order_key))));
+      effect_part.push_back(fmt::format("{}.{}={}", name, spec->plan.angle_order_key,
+                                        number(e->get(spec->plan.angle_order_key))));
     }
   }
   std::string out;
@@ -181,8 +184,8 @@ void write_regime_table(std::ostream& out, const std::string& title, const std::
     const auto& b = before[k];
     const auto& a = after[k];
     if (b.samples == 0) continue;
-    out << fmt::format("  {:<22} {:>8} {:>12.{}f} {:>6.1f}% {:>12.{}f} {:>6.1f}%\n", b.group + " " + b.regime, b.samples,
-                       b.rms, digits, 100.0 * b.share, a.rms, digits, 100.0 * a.share);
+    out << fmt::format("  {:<22} {:>8} {:>12.{}f} {:>6.1f}% {:>12.{}f} {:>6.1f}%\n", b.group + " " + b.regime,
+                       b.samples, b.rms, digits, 100.0 * b.share, a.rms, digits, 100.0 * a.share);
   }
 }
 
@@ -196,13 +199,25 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
   const double before_i = at_or_nan(none.rms, s.i);
   out << "# source: mcg-fit gap\n";
   out << "# diagnosis: " << report.diagnosis << "\n";
-  if (report.partial) out << "# partial: the time budget ran out; the ranking is of the candidates fitted so far\n";
+  if (report.partial)
+    out << "# partial: the time budget ran out; the ranking is of the candidates fitted so far\n";
   if (!report.split_note.empty()) out << "# split: " << report.split_note << "\n";
   for (const auto& f : report.floors) {
-    out << fmt::format("# noise_floor_{}: {} (measurement chain {}, from the data {})\n", f.output, number(f.floor),
-                       number(f.noise.chain), number(f.noise.data));
+    out << fmt::format("# noise_floor_{}: {} (measurement chain {}, from the data {})\n", f.output,
+                       number(f.floor), number(f.noise.chain), number(f.noise.data));
   }
   out << "# validation_samples: " << report.validation_samples << "\n";
+  if (report.discrepancy) {
+    const DiscrepancyResult& d = *report.discrepancy;
+    for (const auto& t : d.terms) out << "# discrepancy_term: " << t.equation << "\n";
+    if (d.terms.empty()) {
+      out << "# discrepancy: " << d.note << "\n";
+    } else {
+      out << fmt::format(
+          "# discrepancy: explains {} % of the torque residual in validation; validation rpm RMS {} -> {}\n",
+          number(d.validation_explained_pct, 3), number(d.rms_before_rpm), number(d.rms_after_rpm));
+    }
+  }
   out << "effect,rms_before_rpm,rms_after_rpm,shrink_pct,gap_before_rpm,gap_after_rpm,gap_shrink_pct,"
          "rms_before_i_A,rms_after_i_A,train_rms_rpm,score,fpe,n_params,n_added,params,significant,status\n";
   for (const auto& c : report.candidates) {
@@ -214,9 +229,8 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
     out << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", c.name, number(before_rpm, 6),
                        number(after_rpm, 6), number(shrink, 4), number(gap_before, 6), number(gap_after, 6),
                        number(gap_shrink, 4), number(before_i, 6), number(at_or_nan(c.rms, s.i), 6),
-                       number(c.train_rms_rpm, 6),
-                       number(c.score, 6), number(c.fpe, 6), c.free.size(), c.added_parameters, params_text(c),
-                       c.significant ? 1 : 0, c.status);
+                       number(c.train_rms_rpm, 6), number(c.score, 6), number(c.fpe, 6), c.free.size(),
+                       c.added_parameters, params_text(c), c.significant ? 1 : 0, c.status);
   }
 }
 
@@ -235,8 +249,9 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
   if (s.rpm != std::string::npos) {
     const double b = none.rms[s.rpm];
     const double a = diag.rms[s.rpm];
-    out << fmt::format("validation rpm RMS: {:.2f} -> {:.2f} rpm ({:.0f} % less); above the noise {:.2f} -> {:.2f} rpm\n",
-                       b, a, 100.0 * (b - a) / b, above_noise(b, s.floor_rpm), above_noise(a, s.floor_rpm));
+    out << fmt::format(
+        "validation rpm RMS: {:.2f} -> {:.2f} rpm ({:.0f} % less); above the noise {:.2f} -> {:.2f} rpm\n", b,
+        a, 100.0 * (b - a) / b, above_noise(b, s.floor_rpm), above_noise(a, s.floor_rpm));
   }
   if (s.i != std::string::npos) {
     out << fmt::format("validation i RMS: {:.4f} -> {:.4f} A\n", none.rms[s.i], diag.rms[s.i]);
@@ -245,8 +260,28 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
     out << (report.diagnosis == "unexplained" ? "best candidate's fitted parameters" : "fitted parameters")
         << " (+- one standard error): " << params_text(diag) << "\n";
   }
-  out << "\ncandidates, diagnosis first (score = validation MSE in noise units summed over outputs; FPE ranks):\n";
-  out << fmt::format("  {:<32} {:>10} {:>10} {:>9} {:>3}  {}\n", "effect", "rms rpm", "score", "fpe", "sig", "status");
+  if (report.discrepancy) {
+    const DiscrepancyResult& d = *report.discrepancy;
+    if (d.terms.empty()) {
+      out << "discrepancy (catalog-free): " << d.note << "\n";
+    } else {
+      out << fmt::format(
+          "discrepancy (catalog-free, {} of {} library terms kept): the torque the model lacks on the "
+          "motor shaft, w in rad/s at the motor, theta in rad:\n",
+          d.terms.size(), d.library_size);
+      for (const auto& t : d.terms) {
+        out << fmt::format("  {}   (+- {:.2g} {})\n", t.equation, t.std_error, t.unit);
+      }
+      out << fmt::format(
+          "  explains {:.0f} % of the torque residual in training, {:.0f} % in validation; added to the "
+          "model, validation rpm RMS {:.2f} -> {:.2f} rpm (noise floor {:.2f})\n",
+          d.train_explained_pct, d.validation_explained_pct, d.rms_before_rpm, d.rms_after_rpm, d.floor_rpm);
+    }
+  }
+  out << "\ncandidates, diagnosis first (score = validation MSE in noise units summed over outputs; FPE "
+         "ranks):\n";
+  out << fmt::format("  {:<32} {:>10} {:>10} {:>9} {:>3}  {}\n", "effect", "rms rpm", "score", "fpe", "sig",
+                     "status");
   for (const auto& c : report.candidates) {
     out << fmt::format("  {:<32} {:>10} {:>10} {:>9} {:>3}  {}\n", c.name, number(at_or_nan(c.rms, s.rpm)),
                        number(c.score), number(c.fpe), c.significant ? "yes" : "no", c.status);
@@ -258,18 +293,21 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
     write_regime_table(out, "by frequency band:", report.bands_before, report.bands_after, "rpm", 2);
   }
   if (s.i != std::string::npos) {
-    write_regime_table(out, "where the current gap lies (validation residual i):", report.current_regimes_before,
+    write_regime_table(out,
+                       "where the current gap lies (validation residual i):", report.current_regimes_before,
                        report.current_regimes_after, "A", 4);
   }
   auto checks = [&](const char* label, const Whiteness& w) {
-    out << fmt::format("  {}: autocorrelation Q = {:.0f} (99 % limit {:.0f}, {}; largest {:.3f} at lag {}), "
-                       "cross-correlation with v Q = {:.0f} (limit {:.0f}, {}; largest {:.3f} at lag {})\n",
-                       label, w.q_auto, w.q_auto_limit, w.white() ? "white" : "not white", w.max_auto,
-                       w.max_auto_lag, w.q_cross, w.q_cross_limit, w.independent() ? "independent" : "correlated",
-                       w.max_cross, w.max_cross_lag);
+    out << fmt::format(
+        "  {}: autocorrelation Q = {:.0f} (99 % limit {:.0f}, {}; largest {:.3f} at lag {}), "
+        "cross-correlation with v Q = {:.0f} (limit {:.0f}, {}; largest {:.3f} at lag {})\n",
+        label, w.q_auto, w.q_auto_limit, w.white() ? "white" : "not white", w.max_auto, w.max_auto_lag,
+        w.q_cross, w.q_cross_limit, w.independent() ? "independent" : "correlated", w.max_cross,
+        w.max_cross_lag);
   };
-  out << fmt::format("residual checks (speed; whiteness from lag {}, past the estimator window, to 50 samples):\n",
-                     report.white_before.first_lag);
+  out << fmt::format(
+      "residual checks (speed; whiteness from lag {}, past the estimator window, to 50 samples):\n",
+      report.white_before.first_lag);
   checks("before", report.white_before);
   checks("after ", report.white_after);
 }
@@ -283,7 +321,8 @@ void write_gap_residuals(std::ostream& out, const GapReport& report, const GapDa
   }
   std::vector<std::string> names = {"run", "t", "v", "clutch", "r_load", "transient"};
   for (const auto& f : report.floors) {
-    for (const char* suffix : {"", "_before", "_after", "_res_before", "_res_after"}) names.push_back(f.output + suffix);
+    for (const char* suffix : {"", "_before", "_after", "_res_before", "_res_after"})
+      names.push_back(f.output + suffix);
   }
   w.header(names);
   std::vector<double> row(names.size());

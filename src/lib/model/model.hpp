@@ -165,10 +165,20 @@ Effect parse_effect(std::string_view text, std::string_view where = "--effect");
 /// "NAME:key=value,..." with every parameter, numbers in shortest exact form.
 std::string format_effect(const Effect& effect);
 
+/// A torque on the motor shaft outside the catalog, T = basis(k, theta, omega) with the
+/// term's coefficient in k[3] by convention: what the gap diagnosis' discrepancy fit found,
+/// or an effect a test makes that the catalog does not have.
+struct ShaftTerm {
+  std::string equation;  ///< how it reads, e.g. "0.0012 N m sin(11 theta + 0.3)"
+  double (*basis)(const std::array<double, 4>& k, double theta_rad, double omega_rad_s) = nullptr;
+  std::array<double, 4> k{};
+};
+
 /// The model: nominal parameters plus active effects (each name at most once).
 struct Model {
   Params params = builtin_rig();
   std::vector<Effect> effects;
+  std::vector<ShaftTerm> shaft_terms;
 
   const Effect* effect(std::string_view name) const;
 };

@@ -1,0 +1,353 @@
+// The catalog-free discrepancy fit (see discrepancy.hpp for the method).
+#include "fit/discrepancy.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "fit/gap_parts.hpp"
+#include "model/effects/compiled.hpp"
+
+namespace mcg::fit {
+
+namespace {
+
+using Basis = double (*)(const std::array<double, 4>&, double, double);
+
+// Shaft-torque bases: k[3] is the coefficient (model::ShaftTerm's convention).
+double b_const(const std::array<double, 4>& k, double, double) { return k[3]; }
+double b_sign(const std::array<double, 4>& k, double, double w) { return k[3] * std::tanh(w / k[0]); }
+double b_w(const std::array<double, 4>& k, double, double w) { return k[3] * w; }
+double b_w_abs_w(const std::array<double, 4>& k, double, double w) { return k[3] * w * std::abs(w); }
+double b_w3(const std::array<double, 4>& k, double, double w) { return k[3] * w * w * w; }
+double b_stribeck(const std::array<double, 4>& k, double, double w) {
+  return k[3] * std::tanh(w / k[0]) * std::exp(-std::pow(std::abs(w) / k[1], k[2]));
+}
+double b_sin(const std::array<double, 4>& k, double theta, double) {
+  return k[3] * std::sin(k[0] * theta + k[1]);
+}
+
+/// One library column: a shaft-torque basis with its numbers (k[3] = 1 to evaluate).
+struct Candidate {
+  std::string text;
+  std::string unit;
+  Basis basis = nullptr;
+  std::array<double, 4> k{0.0, 0.0, 0.0, 1.0};
+  double order = 0.0;  ///< harmonic order for sin/cos columns (paired), else 0
+};
+
+/// A run's measured motor speed (rad/s) and angle (rad), or empty when speed is not measured.
+struct Measured {
+  std::vector<double> w;
+  std::vector<double> theta;
+  std::vector<double> i;  ///< measured current, NaN where not measured
+};
+
+Measured measured_of(const Run& run) {
+  Measured m;
+  const std::size_t rows = run.inputs.t_s.size();
+  for (std::size_t o = 0; o < run.outputs.size(); ++o) {
+    const double per = run.outputs[o] == "rpm"     ? std::numbers::pi / 30.0
+                       : run.outputs[o] == "omega" ? 1.0
+                                                   : 0.0;
+    if (per > 0.0) {
+      m.w.resize(rows);
+      for (std::size_t n = 0; n < rows; ++n) m.w[n] = run.measured[o][n] * per * run.gear_ratio;
+    }
+    if (run.outputs[o] == "i") m.i = run.measured[o];
+  }
+  if (m.w.empty()) return m;
+  // A counting estimator reports the mean speed over its window, half a window late: the
+  // speed at t is read at t + W/2 (the angle's harmonics are phase-sensitive to it).
+  if (run.rpm_estimator && rows > 1) {
+    const double dt = (run.inputs.t_s.back() - run.inputs.t_s.front()) / static_cast<double>(rows - 1);
+    const double shift = 0.5 * run.rpm_estimator->window_s / dt;
+    const auto whole = static_cast<std::size_t>(shift);
+    const double frac = shift - static_cast<double>(whole);
+    std::vector<double> w(rows, std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t n = 0; n + whole + 1 < rows; ++n)
+      w[n] = (1.0 - frac) * m.w[n + whole] + frac * m.w[n + whole + 1];
+    m.w = std::move(w);
+  }
+  if (m.i.empty()) m.i.assign(rows, std::numeric_limits<double>::quiet_NaN());
+  m.theta.assign(rows, 0.0);
+  for (std::size_t n = 1; n < rows; ++n) {
+    const double dt = run.inputs.t_s[n] - run.inputs.t_s[n - 1];
+    const double step = 0.5 * (m.w[n] + m.w[n - 1]) * dt;
+    m.theta[n] = m.theta[n - 1] + (std::isfinite(step) ? step : 0.0);
+  }
+  return m;
+}
+
+/// Weak-form rows of one run from row `first` on: y (the torque integral the model lacks) and
+/// the library's integrals, one row per window in which the shaft moves throughout.
+void windows(const model::Compiled& c, const Run& run, std::size_t first,
+             const std::vector<Candidate>& library, double w_max, std::vector<double>& y,
+             std::vector<std::vector<double>>& phi) {
+  const Measured m = measured_of(run);
+  if (m.w.empty()) return;
+  const model::Inputs& in = run.inputs;
+  const std::size_t rows = in.t_s.size();
+  if (rows < 2) return;
+  const double dt_typ = (in.t_s.back() - in.t_s.front()) / static_cast<double>(rows - 1);
+  const auto width =
+      std::max<std::size_t>(4, static_cast<std::size_t>(std::llround(k_discrepancy_window_s / dt_typ)));
+  const model::Machine& mm = c.p.motor;
+  const model::Machine& mg = c.p.generator;
+  const double R = mm.R_ohm + c.R_on2;
+  // The current along the measured speed (measured where it is).
+  std::vector<double> i(rows, 0.0);
+  for (std::size_t n = 0; n + 1 < rows; ++n) {
+    const double cur = std::isfinite(m.i[n]) ? m.i[n] : i[n];
+    i[n] = cur;
+    const double v = std::clamp(in.v_V[n], -c.p.supply_V, c.p.supply_V);
+    const double w = std::isfinite(m.w[n]) ? m.w[n] : 0.0;
+    const double i_ss = (v - mm.Ke_V_s_rad * w) / R;
+    i[n + 1] = i_ss + (cur - i_ss) * std::exp(-R * (in.t_s[n + 1] - in.t_s[n]) / mm.L_H);
+  }
+  if (std::isfinite(m.i[rows - 1])) i[rows - 1] = m.i[rows - 1];
+  auto torque = [&](std::size_t n) {
+    const int clutch = static_cast<int>(in.clutch[n]);
+    const model::Friction& f = clutch == 2 ? c.rigid : c.motor_side[static_cast<std::size_t>(clutch)];
+    const double w = m.w[n];
+    const double dir = w > 0.0 ? 1.0 : -1.0;
+    double T = mm.Kt_Nm_A * i[n] - dir * c.kinetic(f, std::abs(w)) + c.extra_motor_torque(m.theta[n], w);
+    if (clutch == 2 && std::isfinite(in.r_load_ohm[n])) {
+      T -= mg.Kt_Nm_A * mg.Ke_V_s_rad * w / (mg.R_ohm + in.r_load_ohm[n]);
+    }
+    return T;
+  };
+  // Near rest the shaft may be held by static friction while the estimator still reports a
+  // speed: windows stay above three counts of the estimator (or 1 % of the top speed) and
+  // keep one direction.
+  double w_min = 0.01 * w_max;
+  if (run.rpm_estimator) {
+    w_min = std::max(w_min, 3.0 * 2.0 * std::numbers::pi /
+                                (run.rpm_estimator->counts_per_rev * run.rpm_estimator->window_s) *
+                                run.gear_ratio);
+  }
+  for (std::size_t a = first; a + width < rows; a += width) {
+    const std::size_t b = a + width;
+    bool ok = true;
+    for (std::size_t n = a; n <= b && ok; ++n) {
+      ok = std::isfinite(m.w[n]) && std::abs(m.w[n]) >= w_min && (m.w[n] > 0.0) == (m.w[a] > 0.0) &&
+           in.clutch[n] == in.clutch[a] && in.r_load_ohm[n] == in.r_load_ohm[a];
+    }
+    if (!ok) continue;
+    const double J = in.clutch[a] == 2.0 ? c.J_total : mm.J_kg_m2;
+    double integral = 0.0;
+    std::vector<double> row(library.size(), 0.0);
+    for (std::size_t n = a; n < b; ++n) {
+      const double h = 0.5 * (in.t_s[n + 1] - in.t_s[n]);
+      integral += h * (torque(n) + torque(n + 1));
+      for (std::size_t k = 0; k < library.size(); ++k) {
+        const Candidate& cand = library[k];
+        row[k] +=
+            h * (cand.basis(cand.k, m.theta[n], m.w[n]) + cand.basis(cand.k, m.theta[n + 1], m.w[n + 1]));
+      }
+    }
+    y.push_back(J * (m.w[b] - m.w[a]) - integral);
+    phi.push_back(std::move(row));
+  }
+}
+
+Eigen::MatrixXd matrix_of(const std::vector<std::vector<double>>& rows,
+                          const std::vector<std::size_t>& cols) {
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(cols.size()));
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    for (std::size_t j = 0; j < cols.size(); ++j) {
+      A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(j)) = rows[r][cols[j]];
+    }
+  }
+  return A;
+}
+
+std::string signed_number(double v) { return fmt::format("{}{:.4g}", v < 0.0 ? "- " : "+ ", std::abs(v)); }
+
+}  // namespace
+
+DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& data,
+                                  const std::vector<double>& angle_orders,
+                                  const std::vector<OutputFloor>& floors) {
+  DiscrepancyResult out;
+  out.model = reference;
+  const std::size_t f_rpm = gap_detail::floor_index(floors, "rpm");
+  if (f_rpm == std::string::npos) {
+    out.note = "the discrepancy fit needs the measured speed";
+    return out;
+  }
+  out.floor_rpm = floors[f_rpm].floor;
+  const model::Compiled c(reference);
+  // Speed scales of the library from the training runs.
+  double w_max = 0.0;
+  for (const Run& run : data.train) {
+    for (double w : measured_of(run).w) {
+      if (std::isfinite(w)) w_max = std::max(w_max, std::abs(w));
+    }
+  }
+  if (!(w_max > 0.0)) {
+    out.note = "the shaft never turns in the training runs";
+    return out;
+  }
+  const double eps = 0.01 * w_max;
+  std::vector<Candidate> library = {
+      {"1", "N m", b_const},          {"sign(w)", "N m", b_sign, {eps, 0.0, 0.0, 1.0}},
+      {"w", "N m s/rad", b_w},        {"w|w|", "N m s^2/rad^2", b_w_abs_w},
+      {"w^3", "N m s^3/rad^3", b_w3},
+  };
+  // Stribeck-like drops at a twentieth and a fifth of the top speed, exponential and Gaussian.
+  for (double scale : {0.05, 0.2}) {
+    const double ws = scale * w_max;
+    library.push_back({fmt::format("sign(w) exp(-|w|/{:.3g})", ws), "N m", b_stribeck, {eps, ws, 1.0, 1.0}});
+    library.push_back(
+        {fmt::format("sign(w) exp(-(w/{:.3g})^2)", ws), "N m", b_stribeck, {eps, ws, 2.0, 1.0}});
+  }
+  for (double order : angle_orders) {
+    library.push_back({fmt::format("sin({:g} theta)", order), "N m", b_sin, {order, 0.0, 0.0, 1.0}, order});
+    library.push_back({fmt::format("cos({:g} theta)", order),
+                       "N m",
+                       b_sin,
+                       {order, std::numbers::pi / 2.0, 0.0, 1.0},
+                       order});
+  }
+  out.library_size = library.size();
+
+  std::vector<double> y;
+  std::vector<std::vector<double>> phi;
+  for (const Run& run : data.train) windows(c, run, 0, library, w_max, y, phi);
+  std::vector<double> yv;
+  std::vector<std::vector<double>> phiv;
+  for (const ScoredRun& sr : data.validate) windows(c, sr.run, sr.first_scored, library, w_max, yv, phiv);
+  out.train_windows = y.size();
+  out.validation_windows = yv.size();
+  if (y.size() < 3 * library.size()) {
+    out.note = fmt::format("too few windows in which the shaft turns ({} of 20 ms; {} needed)", y.size(),
+                           3 * library.size());
+    return out;
+  }
+  const Eigen::Map<const Eigen::VectorXd> Y(y.data(), static_cast<Eigen::Index>(y.size()));
+
+  // Forward stepwise sparse regression: of the terms (a harmonic with its sin/cos pair) that
+  // remove at least k_discrepancy_threshold of the training residual the model leaves and
+  // stand three standard errors from 0, the one that lowers the training residual most joins,
+  // provided it lowers the validation residual too (a term that does not carry over to
+  // held-out runs describes the training runs' noise); one at a time, so of collinear
+  // columns only one joins.
+  std::vector<std::size_t> active;
+  const Eigen::Map<const Eigen::VectorXd> Yv(yv.data(), static_cast<Eigen::Index>(yv.size()));
+  auto validation_rss = [&](const std::vector<std::size_t>& set, const Eigen::VectorXd& xi) {
+    if (yv.empty()) return 0.0;
+    return set.empty() ? Yv.squaredNorm() : (Yv - matrix_of(phiv, set) * xi).squaredNorm();
+  };
+  const double rss0 = Y.squaredNorm();
+  double rss = rss0;
+  double rss_v = validation_rss({}, {});
+  while (active.size() < library.size()) {
+    std::vector<std::pair<double, std::vector<std::size_t>>> options;
+    std::vector<Eigen::VectorXd> solutions;
+    for (std::size_t k = 0; k < library.size(); ++k) {
+      if (std::find(active.begin(), active.end(), k) != active.end()) continue;
+      if (library[k].order != 0.0 && library[k].k[1] != 0.0) continue;  // joins with its sin column
+      std::vector<std::size_t> trial = active;
+      trial.push_back(k);
+      if (library[k].order != 0.0) trial.push_back(k + 1);
+      const Eigen::MatrixXd A = matrix_of(phi, trial);
+      Eigen::VectorXd xi = A.colPivHouseholderQr().solve(Y);
+      const double r = (Y - A * xi).squaredNorm();
+      if (rss - r < k_discrepancy_threshold * rss0) continue;
+      const double sigma2 = r / static_cast<double>(std::max<Eigen::Index>(1, A.rows() - A.cols()));
+      const Eigen::MatrixXd cov =
+          sigma2 * (A.transpose() * A).completeOrthogonalDecomposition().pseudoInverse();
+      bool clear = true;
+      for (Eigen::Index j = static_cast<Eigen::Index>(active.size()); j < A.cols(); ++j) {
+        clear = clear && std::abs(xi[j]) >= 3.0 * std::sqrt(std::max(0.0, cov(j, j)));
+      }
+      if (!clear) continue;
+      options.emplace_back(r, std::move(trial));
+      solutions.push_back(std::move(xi));
+    }
+    std::vector<std::size_t> order(options.size());
+    for (std::size_t q = 0; q < order.size(); ++q) order[q] = q;
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t x, std::size_t y2) { return options[x].first < options[y2].first; });
+    bool joined = false;
+    for (std::size_t q : order) {
+      const double r_v = validation_rss(options[q].second, solutions[q]);
+      if (!yv.empty() && !(r_v < rss_v)) continue;
+      active = options[q].second;
+      rss = options[q].first;
+      rss_v = r_v;
+      joined = true;
+      break;
+    }
+    if (!joined) break;
+  }
+  if (active.empty()) {
+    out.note = "no term of the library explains a clear part of the torque residual";
+    return out;
+  }
+  // Final coefficients in physical units with their standard errors.
+  const Eigen::MatrixXd A = matrix_of(phi, active);
+  const Eigen::VectorXd coef = A.colPivHouseholderQr().solve(Y);
+  const Eigen::VectorXd res = Y - A * coef;
+  const double sigma2 =
+      res.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, A.rows() - A.cols()));
+  const Eigen::MatrixXd cov = sigma2 * (A.transpose() * A).completeOrthogonalDecomposition().pseudoInverse();
+  out.train_explained_pct = 100.0 * (1.0 - res.squaredNorm() / Y.squaredNorm());
+  if (!yv.empty()) {
+    out.validation_explained_pct =
+        100.0 * (1.0 - (Yv - matrix_of(phiv, active) * coef).squaredNorm() / Yv.squaredNorm());
+  }
+  // Terms by their part of the fitted residual; sin/cos pairs combined into one harmonic.
+  std::vector<std::pair<double, DiscrepancyTerm>> ranked;
+  model::Model& m = out.model;
+  for (std::size_t j = 0; j < active.size(); ++j) {
+    const Candidate& cand = library[active[j]];
+    const auto J = static_cast<Eigen::Index>(j);
+    const double part = (A.col(J) * coef[J]).norm();
+    DiscrepancyTerm t;
+    t.basis = cand.text;
+    t.coefficient = coef[J];
+    t.std_error = std::sqrt(std::max(0.0, cov(J, J)));
+    t.unit = cand.unit;
+    if (cand.order != 0.0) {
+      if (cand.k[1] != 0.0) continue;  // the cos column joins its sin column below
+      double c_cos = 0.0;
+      double part_cos = 0.0;
+      for (std::size_t q = 0; q < active.size(); ++q) {
+        const Candidate& other = library[active[q]];
+        if (other.order == cand.order && other.k[1] != 0.0) {
+          c_cos = coef[static_cast<Eigen::Index>(q)];
+          part_cos = (A.col(static_cast<Eigen::Index>(q)) * c_cos).norm();
+        }
+      }
+      const double amp = std::hypot(coef[J], c_cos);
+      const double phase = std::atan2(c_cos, coef[J]);
+      t.basis = fmt::format("sin({:g} theta + phase)", cand.order);
+      t.coefficient = amp;
+      t.equation =
+          fmt::format("{} N m sin({:g} theta {} rad)", signed_number(amp), cand.order, signed_number(phase));
+      m.shaft_terms.push_back({t.equation, b_sin, {cand.order, phase, 0.0, amp}});
+      ranked.emplace_back(std::hypot(part, part_cos), t);
+      continue;
+    }
+    t.equation = fmt::format("{} {} * {}", signed_number(t.coefficient), t.unit, cand.text);
+    std::array<double, 4> k = cand.k;
+    k[3] = t.coefficient;
+    m.shaft_terms.push_back({t.equation, cand.basis, k});
+    ranked.emplace_back(part, t);
+  }
+  std::stable_sort(ranked.begin(), ranked.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  for (auto& [part, t] : ranked) out.terms.push_back(std::move(t));
+  // The terms in the model, simulated on the validation runs.
+  out.rms_before_rpm = gap_detail::evaluate(reference, data, floors).rms[f_rpm];
+  out.rms_after_rpm = gap_detail::evaluate(m, data, floors).rms[f_rpm];
+  return out;
+}
+
+}  // namespace mcg::fit

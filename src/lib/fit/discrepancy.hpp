@@ -1,0 +1,44 @@
+// The shape of what the model misses, found without the catalog: sparse regression of the
+// torque residual the measured speed implies on a library of candidate terms.
+//
+// Method. Along each run the measured speed w (at the motor, rad/s) and angle theta (its
+// integral) drive the model's own equations: the armature current i follows
+//   L di/dt = v - R i - Ke w              (exact over each sample; the measured i when there is one)
+// and the model's torque on the moving shaft is T = Kt i - F(w) - T_gen(w), with the friction
+// and inertia of the clutch state. Over windows [a, b] of 20 ms in which the shaft moves,
+// the torque the model lacks satisfies (weak form: no derivative of a noisy speed)
+//   J (w(b) - w(a)) - int_a^b T dt = sum_k xi_k int_a^b phi_k dt.
+// The library phi_k: a constant, sign(w), w, w|w|, w^3, Stribeck-like drops
+// sign(w) exp(-|w|/w_s) and sign(w) exp(-(w/w_s)^2) at two speed scales, and sin and cos of
+// the strongest orders of the angle in the speed residual (inertia is a nominal parameter:
+// the refit's). A counting estimator's half-window lag is taken out of the measured speed
+// first. Forward stepwise sparse regression on the training runs adds one term at a time
+// while each removes a clear share of the residual (k_discrepancy_threshold), stands clear
+// of 0 and lowers the validation residual too, so of collinear terms only one joins. The
+// validation runs say how much of their torque residual the terms explain, and the terms,
+// added to the model as shaft torques, are simulated on them to say how far the speed gap
+// shrinks. Torques only: what the model misses on the voltage side (a delay, a drop) shows
+// here as the torque it causes, which a term of this library fits only in part.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fit/gap.hpp"
+
+namespace mcg::fit {
+
+/// A term joins when it removes at least this share of the torque residual the model leaves
+/// (||y||^2) and stands at least three standard errors from 0.
+inline constexpr double k_discrepancy_threshold = 0.05;
+/// Window of the weak form, s.
+inline constexpr double k_discrepancy_window_s = 0.02;
+
+/// Fits the discrepancy of `reference` on the training runs of `data` and scores it on the
+/// validation runs (speed must be measured). `angle_orders`: the orders of the motor angle
+/// the library's harmonics use.
+DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& data,
+                                  const std::vector<double>& angle_orders,
+                                  const std::vector<OutputFloor>& floors);
+
+}  // namespace mcg::fit
