@@ -68,6 +68,16 @@ std::string not_excited(const model::EffectPlan& plan, const std::vector<Run>& r
   return {};
 }
 
+/// True when `c` scores significantly better than its own fitted model without `effect`:
+/// the effect carries the gain (an effect fitted to nothing, whose presence merely changed
+/// what else was refitted, does not).
+bool carries_weight(const GapCandidate& c, const std::string& effect, const GapData& data,
+                    const std::vector<OutputFloor>& floors, std::size_t outputs) {
+  model::Model without = c.model;
+  std::erase_if(without.effects, [&](const model::Effect& e) { return e.name == effect; });
+  return improves(c.score, evaluate(without, data, floors).score, outputs);
+}
+
 struct Job {
   std::string name;
   std::vector<std::string> effects;
@@ -481,7 +491,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   const double ref_score = std::min(before.score, pm.score);
   for (auto& c : singles) {
     c.fpe = fpe(c.score, c.free.size());
-    c.significant = gap && improves(c.score, ref_score, outputs);
+    c.significant = gap && improves(c.score, ref_score, outputs) && carries_weight(c, c.name, data, floors, outputs);
   }
   std::sort(singles.begin(), singles.end(), [](const auto& a, const auto& b) { return a.fpe < b.fpe; });
 
@@ -549,6 +559,16 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       for (auto& c : fitted) {
         c.significant =
             c.evaluated && improves(c.score, current.score, outputs) && improves(c.score, ref_score, outputs);
+      }
+      // The best extension's gain must come from the effect it adds, not from the nominal
+      // values refitted beside it.
+      if (!fitted.empty() && fitted.front().significant) {
+        GapCandidate& best = fitted.front();
+        for (const auto& e : best.effects) {
+          if (std::find(current.effects.begin(), current.effects.end(), e) == current.effects.end()) {
+            best.significant = carries_weight(best, e, data, floors, outputs);
+          }
+        }
       }
       const bool extended = !fitted.empty() && fitted.front().significant;
       if (extended) {
