@@ -7,7 +7,8 @@ packages=(
   libcli11-dev libfmt-dev libeigen3-dev libserialport-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   sdcc sdcc-ucsim
-  gnuplot-nox mandoc groff-base socat parallel
+  gnuplot-x11 mandoc groff-base socat parallel
+  tmux xvfb x11-apps netpbm
 )
 if [ "${1:-}" = --fuzz ]; then
   packages+=(clang-14 libclang-rt-14-dev)

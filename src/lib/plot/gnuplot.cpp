@@ -1,23 +1,32 @@
 // Running gnuplot: one child process fed the whole script (data blocks inline) on its stdin.
 #include "plot/gnuplot.hpp"
 
-#include "common/error.hpp"
-#include "common/tool.hpp"
-#include "plot/script.hpp"
-
 #include <fcntl.h>
+#include <poll.h>
 #include <spawn.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <iostream>
 #include <iterator>
+#include <mutex>
 #include <sstream>
+#include <thread>
+
+#include "common/error.hpp"
+#include "common/tool.hpp"
+#include "plot/live.hpp"
+#include "plot/script.hpp"
 
 extern char** environ;
 
@@ -37,7 +46,8 @@ bool executable_exists(const std::string& program) {
     const std::string dir = colon == start ? "." : dirs.substr(start, colon - start);
     const std::string candidate = dir + "/" + program;
     struct stat st {};
-    if (::stat(candidate.c_str(), &st) == 0 && S_ISREG(st.st_mode) && ::access(candidate.c_str(), X_OK) == 0) {
+    if (::stat(candidate.c_str(), &st) == 0 && S_ISREG(st.st_mode) &&
+        ::access(candidate.c_str(), X_OK) == 0) {
       return true;
     }
     start = colon + 1;
@@ -97,6 +107,44 @@ class Child {
     m_in = -1;
   }
 
+  // Writes all of `text` and keeps the pipe open; false when the child stopped reading.
+  bool send(const std::string& text) {
+    std::size_t done = 0;
+    while (done < text.size()) {
+      const ssize_t n = ::write(m_in, text.data() + done, text.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) return false;
+      done += static_cast<std::size_t>(n);
+    }
+    return true;
+  }
+
+  // The child's output up to the line `marker` (consumed), waiting at most timeout_ms for it.
+  std::string read_until(const std::string& marker, int timeout_ms) {
+    const std::string tail = marker + "\n";
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+    for (;;) {
+      const std::size_t at = m_pending.find(tail);
+      if (at != std::string::npos && (at == 0 || m_pending[at - 1] == '\n')) {
+        std::string text = m_pending.substr(0, at);
+        m_pending.erase(0, at + tail.size());
+        return text;
+      }
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+      if (left.count() <= 0) fail("gnuplot did not finish a frame within {} s", timeout_ms / 1000);
+      pollfd pfd{m_out, POLLIN, 0};
+      const int ready = ::poll(&pfd, 1, static_cast<int>(left.count()));
+      if (ready < 0 && errno == EINTR) continue;
+      if (ready <= 0) continue;
+      char buffer[8192];
+      const ssize_t n = ::read(m_out, buffer, sizeof buffer);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) fail("gnuplot ended (exit status {})", wait());
+      m_pending.append(buffer, static_cast<std::size_t>(n));
+    }
+  }
+
   std::string read_all() {
     std::string text;
     char buffer[4096];
@@ -129,6 +177,7 @@ class Child {
   pid_t m_pid = -1;
   int m_in = -1;
   int m_out = -1;
+  std::string m_pending;
 };
 
 void require_gnuplot(const std::string& program) {
@@ -153,8 +202,9 @@ std::string window_terminal(const std::string& program) {
     }
   }
   if (found.empty()) {
-    fail("no window to plot in: this gnuplot has no interactive terminal (gnuplot-nox); use -o FILE "
-         "(.png, .svg, .pdf) or --term dumb");
+    fail(
+        "no window to plot in: this gnuplot has no interactive terminal (gnuplot-nox); use -o FILE "
+        "(.png, .svg, .pdf) or --term dumb");
   }
   const char* display = std::getenv("DISPLAY");
   const char* wayland = std::getenv("WAYLAND_DISPLAY");
@@ -165,6 +215,93 @@ std::string window_terminal(const std::string& program) {
 }
 
 std::string display_label(const std::string& path) { return path == "-" ? "stdin" : path; }
+
+/// Seconds gnuplot may take for one frame before the tool gives up on it.
+constexpr int k_frame_timeout_ms = 20000;
+
+void run_live(const Options& o, Spec spec, const std::string& program) {
+  if (spec.mode != Mode::series) fail("--live draws series against x; not with --bode, --xy or --rlocus");
+  if (o.files.size() + o.overlays.size() > 1) fail("--live follows one input (a file or stdin)");
+  if (!(o.window_s > 0.0) || !(o.interval_s > 0.0)) fail("--window and --interval must be positive");
+  const std::string path = o.files.empty() ? "-" : o.files.front();
+  std::ifstream file;
+  if (path != "-") {
+    file.open(path, std::ios::binary);
+    if (!file) fail("{}: cannot open: {}", path, std::strerror(errno));
+  }
+  std::istream& in = path == "-" ? std::cin : file;
+  table::Reader reader(in, display_label(path));
+  RingWindow ring(reader.columns(), reader.require(spec.x), o.window_s);
+  const table::Metadata meta = reader.metadata();
+
+  // The reader runs on its own thread, so a slow frame never holds up the input.
+  std::mutex mutex;
+  std::condition_variable arrived;
+  bool done = false;
+  std::string error;
+  std::thread thread([&] {
+    try {
+      while (reader.next()) {
+        const std::string where = fmt::format("{}:{}", reader.source(), reader.line());
+        const std::lock_guard lock(mutex);
+        ring.push(reader.row(), where);
+      }
+    } catch (const std::exception& e) {
+      const std::lock_guard lock(mutex);
+      error = e.what();
+    }
+    const std::lock_guard lock(mutex);
+    done = true;
+    arrived.notify_all();
+  });
+  struct Joiner {
+    std::thread& t;
+    ~Joiner() {
+      if (t.joinable()) t.join();
+    }
+  } joiner{thread};
+
+  const std::string final_path = spec.output.path;
+  const std::string part_path = final_path + ".part";
+  if (spec.output.kind == Output::Kind::png) spec.output.path = part_path;
+  std::vector<std::string> argv{program, "-d"};
+  if (spec.output.kind == Output::Kind::window) argv.emplace_back("-persist");
+  Child gnuplot(argv, true);
+  const bool tty = spec.output.kind == Output::Kind::dumb && ::isatty(STDOUT_FILENO) != 0;
+  std::size_t drawn = 0;
+  std::size_t frame = 0;
+  for (;;) {
+    bool finished = false;
+    table::Table window;
+    {
+      std::unique_lock lock(mutex);
+      arrived.wait_for(lock, std::chrono::duration<double>(o.interval_s), [&] { return done; });
+      finished = done;
+      if (ring.pushed() == drawn && !finished) continue;
+      if (ring.size() > 0 && ring.pushed() != drawn) window = ring.table(reader.source(), meta);
+      drawn = ring.pushed();
+    }
+    if (window.rows() > 0) {
+      ++frame;
+      const std::string marker = fmt::format("mcg-frame-{}", frame);
+      const std::string script = "reset\n" + build_script(spec, {{std::move(window), display_label(path)}}) +
+                                 "set print '-'\nprint '" + marker + "'\n";
+      if (!gnuplot.send(script)) fail("gnuplot ended (exit status {})", gnuplot.wait());
+      const std::string text = gnuplot.read_until(marker, k_frame_timeout_ms);
+      if (spec.output.kind == Output::Kind::png) {
+        if (std::rename(part_path.c_str(), final_path.c_str()) != 0) {
+          fail("-o {}: cannot replace: {}", final_path, std::strerror(errno));
+        }
+      } else if (spec.output.kind == Output::Kind::dumb) {
+        // On a terminal each frame replaces the last (cursor home, clear to the end).
+        std::cout << (tty ? "\x1b[H\x1b[J" : "") << text << std::flush;
+      }
+    }
+    if (finished) break;
+  }
+  thread.join();
+  if (!error.empty()) throw Error(error);
+}
 
 }  // namespace
 
@@ -200,6 +337,12 @@ void run(const Options& o) {
     spec.output.kind = Output::Kind::window;
     spec.output.window_term = window_terminal(program);
   }
+  if (o.live && !o.script.empty()) fail("--script writes one script; not with --live");
+  if (o.live && !plot) fail("--live draws: give -o FILE.png, --term dumb, or a window (no --script alone)");
+  if (o.live && spec.output.kind != Output::Kind::png && spec.output.kind != Output::Kind::dumb &&
+      spec.output.kind != Output::Kind::window) {
+    fail("--live rewrites a PNG, a text plot or a window; not {}", o.output);
+  }
   const bool tall = spec.mode == Mode::bode || spec.mode == Mode::rlocus;
   if (text) {
     spec.output.width = o.size ? (*o.size)[0] : 100;
@@ -209,6 +352,10 @@ void run(const Options& o) {
     spec.output.height = o.size ? (*o.size)[1] : (tall ? 800 : 600);
   }
 
+  if (o.live) {
+    run_live(o, spec, program);
+    return;
+  }
   std::vector<std::string> paths = o.files.empty() ? std::vector<std::string>{"-"} : o.files;
   paths.insert(paths.end(), o.overlays.begin(), o.overlays.end());
   std::vector<Input> inputs;

@@ -25,6 +25,9 @@ struct Options {
   std::string term;    ///< "dumb" for text on stdout
   std::string script;  ///< --script FILE: also (or, without -o/--term, only) write the script
   std::optional<std::vector<int>> size;  ///< width,height: pixels, or characters for dumb
+  bool live = false;        ///< --live: redraw as rows arrive
+  double window_s = 10.0;   ///< --window: the last this many units of x are shown
+  double interval_s = 0.5;  ///< --interval: seconds between redraws (a PNG is rewritten as often)
 };
 
 /// The gnuplot to run: $MCG_GNUPLOT if set, else "gnuplot" on PATH.
@@ -35,6 +38,14 @@ std::string gnuplot_program();
 /// --term the plot goes to an interactive window, or fails with a clear message when this
 /// gnuplot (gnuplot-nox) or this session (no DISPLAY) has none. Throws mcg::Error when
 /// gnuplot is missing or fails.
+///
+/// With `live` the one input (a file or stdin) is read row by row as it arrives, on a thread
+/// of its own, into a RingWindow of the last window_s of x; every interval_s, when rows have
+/// arrived, one persistent gnuplot draws the window: into the window terminal, as text
+/// redrawn in place (--term dumb: the frame replaces the previous one on a terminal), or into
+/// the PNG, written to a temporary file and renamed over it, so a viewer never sees half a
+/// frame. A slow gnuplot costs frames, never rows. At the end of the input the last frame is
+/// drawn; a malformed row ends it with the reader's error.
 void run(const Options& options);
 
 }  // namespace mcg::plot

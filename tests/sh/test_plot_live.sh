@@ -1,0 +1,106 @@
+#!/usr/bin/env bash
+# mcg-plot-gnuplot --live as a person watches it: a simulated run paced to about real time
+# drawn as it arrives, (a) into a PNG rewritten while the stream runs (every look at it a
+# whole PNG, showing the newest window), (b) as text redrawn in place in a tmux pane, (c) in
+# an x11 window under Xvfb, screenshotted. Args: TOOL_DIR SOURCE_DIR; exit 125 = skipped.
+set -u
+tools=$1
+export PATH="$tools:$PATH" LC_ALL=C
+for p in gnuplot tmux Xvfb xwd xwdtopnm pnmtopng ppmhist; do
+  command -v "$p" >/dev/null || { echo "skipped: $p missing"; exit 125; }
+done
+gnuplot -e "set print '-'; print GPVAL_TERMINALS" | grep -qw x11 || { echo "skipped: gnuplot without x11"; exit 125; }
+work=$(mktemp -d)
+session=mcg-live-$$
+xvfb_pid=
+cleanup() {
+  tmux kill-session -t "$session" 2>/dev/null
+  [[ -n "$xvfb_pid" ]] && kill "$xvfb_pid" 2>/dev/null
+  wait 2>/dev/null
+  rm -rf "$work"
+}
+trap cleanup EXIT
+failures=0
+fail() { echo "FAIL $*"; failures=$((failures + 1)); }
+
+# A 4 s run, sent at about real time (50 rows, then 50 ms).
+mcg-sweep prbs --bias 6 --amp 3 --clock 0.1 --duration 4 --seed 5 | mcg-sim >"$work/run.csv"
+cat >"$work/paced.sh" <<'PACE'
+awk '/^#/ || /^t,/ { print; next } { print } NR % 50 == 0 { fflush(); system("sleep 0.05") }' "$1"
+PACE
+
+# whole_png FILE: a PNG signature at the start and the IEND chunk at the end.
+whole_png() {
+  [[ "$(head -c 8 "$1" | od -An -tx1 | tr -d ' \n')" == 89504e470d0a1a0a ]] &&
+    [[ "$(tail -c 8 "$1" | od -An -tx1 | tr -d ' \n')" == 49454e44ae426082 ]]
+}
+
+# (a) A PNG rewritten as the rows arrive.
+bash "$work/paced.sh" "$work/run.csv" |
+  mcg-plot-gnuplot --live -y rpm --window 1 --interval 0.2 -o "$work/live.png" 2>"$work/png.err" &
+pid=$!
+looks=0 versions=0 last=
+for _ in $(seq 40); do
+  sleep 0.1
+  [[ -f "$work/live.png" ]] || continue
+  cp "$work/live.png" "$work/look.png" 2>/dev/null || continue
+  looks=$((looks + 1))
+  whole_png "$work/look.png" || fail "png: a look at the file found a partial PNG"
+  sum=$(md5sum <"$work/look.png")
+  [[ "$sum" != "$last" ]] && versions=$((versions + 1)) && last=$sum
+done
+wait "$pid" || fail "png: exit $? ($(tail -1 "$work/png.err"))"
+if ((versions >= 3)); then
+  echo "ok   png: $versions versions of the PNG in $looks looks while streaming, each whole"
+else
+  fail "png: only $versions versions in $looks looks"
+fi
+[[ -e "$work/live.png.part" ]] && fail "png: the temporary file was left behind"
+
+# (b) Text redrawn in place in a terminal.
+tmux new-session -d -s "$session" -x 110 -y 36 \
+  "bash $work/paced.sh $work/run.csv | mcg-plot-gnuplot --live --term dumb --size 100,30 -y rpm --window 1 --interval 0.2; echo live-exit=\$?; sleep 30"
+sleep 1.5
+tmux capture-pane -p -t "$session" >"$work/pane1.txt"
+sleep 1.2
+tmux capture-pane -p -t "$session" >"$work/pane2.txt"
+for pane in pane1 pane2; do
+  n=$(grep -c 't (s)' "$work/$pane.txt")
+  [[ $n -eq 1 ]] || fail "dumb: $pane shows the x label $n times (frames must replace each other)"
+done
+if cmp -s "$work/pane1.txt" "$work/pane2.txt"; then
+  fail "dumb: the pane did not change between looks"
+else
+  echo "ok   dumb: one frame on the pane at a time, redrawn as the stream goes on"
+fi
+for _ in $(seq 50); do
+  grep -q 'live-exit=' <(tmux capture-pane -p -t "$session") && break
+  sleep 0.2
+done
+tmux capture-pane -p -t "$session" | grep -q 'live-exit=0' || fail "dumb: did not end with status 0"
+
+# (c) A window under Xvfb, screenshotted while the stream runs.
+for display in $(seq 90 110); do
+  [[ -e /tmp/.X11-unix/X$display || -e /tmp/.X$display-lock ]] || break
+done
+Xvfb ":$display" -screen 0 1100x700x24 -nolisten tcp 2>"$work/xvfb.err" &
+xvfb_pid=$!
+for _ in $(seq 50); do
+  [[ -e /tmp/.X11-unix/X$display ]] && break
+  sleep 0.1
+done
+bash "$work/paced.sh" "$work/run.csv" |
+  DISPLAY=":$display" mcg-plot-gnuplot --live -y rpm --window 1 --interval 0.2 --size 1000,600 2>"$work/x11.err" &
+pid=$!
+sleep 2.5
+xwd -root -display ":$display" 2>/dev/null | xwdtopnm 2>/dev/null | pnmtopng >"$work/window.png" 2>/dev/null
+wait "$pid" || fail "x11: exit $? ($(tail -1 "$work/x11.err"))"
+colours=$(pngtopnm "$work/window.png" 2>/dev/null | ppmhist -noheader 2>/dev/null | wc -l)
+if ((colours >= 3)); then
+  echo "ok   x11: the window drew the plot ($colours colours on the screenshot)"
+  [[ -n "${MCG_KEEP_SCREENSHOT:-}" ]] && cp "$work/window.png" "$MCG_KEEP_SCREENSHOT"
+else
+  fail "x11: the screenshot is blank ($colours colours)"
+fi
+
+((failures == 0))
