@@ -8,7 +8,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   sdcc sdcc-ucsim
   gnuplot-x11 mandoc groff-base socat parallel
-  tmux xvfb x11-apps netpbm
+  libncurses-dev tmux xvfb x11-apps netpbm
 )
 if [ "${1:-}" = --fuzz ]; then
   packages+=(clang-14 libclang-rt-14-dev)

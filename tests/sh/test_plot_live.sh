@@ -14,7 +14,7 @@ work=$(mktemp -d)
 session=mcg-live-$$
 xvfb_pid=
 cleanup() {
-  tmux kill-session -t "$session" 2>/dev/null
+  tmux -L "$session" kill-server 2>/dev/null
   [[ -n "$xvfb_pid" ]] && kill "$xvfb_pid" 2>/dev/null
   wait 2>/dev/null
   rm -rf "$work"
@@ -58,12 +58,12 @@ fi
 [[ -e "$work/live.png.part" ]] && fail "png: the temporary file was left behind"
 
 # (b) Text redrawn in place in a terminal.
-tmux new-session -d -s "$session" -x 110 -y 36 \
+tmux -L "$session" new-session -d -s "$session" -x 110 -y 36 \
   "bash $work/paced.sh $work/run.csv | mcg-plot-gnuplot --live --term dumb --size 100,30 -y rpm --window 1 --interval 0.2; echo live-exit=\$?; sleep 30"
 sleep 1.5
-tmux capture-pane -p -t "$session" >"$work/pane1.txt"
+tmux -L "$session" capture-pane -p -t "$session" >"$work/pane1.txt"
 sleep 1.2
-tmux capture-pane -p -t "$session" >"$work/pane2.txt"
+tmux -L "$session" capture-pane -p -t "$session" >"$work/pane2.txt"
 for pane in pane1 pane2; do
   n=$(grep -c 't (s)' "$work/$pane.txt")
   [[ $n -eq 1 ]] || fail "dumb: $pane shows the x label $n times (frames must replace each other)"
@@ -74,10 +74,10 @@ else
   echo "ok   dumb: one frame on the pane at a time, redrawn as the stream goes on"
 fi
 for _ in $(seq 50); do
-  grep -q 'live-exit=' <(tmux capture-pane -p -t "$session") && break
+  grep -q 'live-exit=' <(tmux -L "$session" capture-pane -p -t "$session") && break
   sleep 0.2
 done
-tmux capture-pane -p -t "$session" | grep -q 'live-exit=0' || fail "dumb: did not end with status 0"
+tmux -L "$session" capture-pane -p -t "$session" | grep -q 'live-exit=0' || fail "dumb: did not end with status 0"
 
 # (c) A window under Xvfb, screenshotted while the stream runs.
 for display in $(seq 90 110); do

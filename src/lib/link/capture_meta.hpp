@@ -15,6 +15,8 @@ class Writer;
 namespace mcg::link {
 
 struct Connection;
+struct LinkOptions;
+struct StreamRow;
 
 /// The encoder behind every count the board reports (mcg-csv(5) `encoder`).
 inline constexpr const char* k_encoder_text = boardunits::k_board_encoder_text;
@@ -24,14 +26,14 @@ inline constexpr double k_load_resistor_ohm = 5.6;
 
 /// Where the board's outputs go: the H-bridge supply (duty -> v) and the load relay's resistor.
 struct RigOptions {
-  std::vector<std::string> configs;          ///< --config: the rig's INI (as mcg-sim's; supply_V)
-  double r_load_ohm = k_load_resistor_ohm;   ///< --r-load: the relay's resistor, ohm
+  std::vector<std::string> configs;         ///< --config: the rig's INI (as mcg-sim's; supply_V)
+  double r_load_ohm = k_load_resistor_ohm;  ///< --r-load: the relay's resistor, ohm
 };
 
 struct Rig {
   double supply_V;
   double r_load_ohm;
-  std::string supply_source;   ///< the INI files it came from, or "model default"
+  std::string supply_source;  ///< the INI files it came from, or "model default"
 };
 
 /// Reads the rig's INI files (model::model_from_ini; defaults without any).
@@ -42,6 +44,15 @@ Rig load_rig(const RigOptions& options);
 std::vector<std::pair<std::string, std::string>> board_config(Connection& c);
 
 /// `# supply_V`, `# r_load_relay_ohm` and `# board_config` metadata lines.
-void write_rig_meta(table::Writer& w, const Rig& rig, const std::vector<std::pair<std::string, std::string>>& config);
+void write_rig_meta(table::Writer& w, const Rig& rig,
+                    const std::vector<std::pair<std::string, std::string>>& config);
+
+/// The metadata and header of a stream capture (mcg-serial stream, the console's recording):
+/// source, board, port, sample period, the rpm estimator of `window_samples` samples, the
+/// encoder, timing, the rig; columns t, rpm, counts, duty, v, rpm_cmd, clutch, r_load.
+void write_stream_header(table::Writer& w, const Connection& c, const LinkOptions& link, int window_samples,
+                         const Rig& rig, const std::vector<std::pair<std::string, std::string>>& config);
+/// One row of a stream capture: v = duty supply_V, r_load the relay's resistor when closed.
+void write_stream_row(table::Writer& w, const StreamRow& r, const Rig& rig);
 
 }  // namespace mcg::link

@@ -1,21 +1,21 @@
 // mcg-serial stream: live stream blocks to CSV, with loss accounting.
+#include <fmt/format.h>
+
 #include <chrono>
 #include <cmath>
 #include <ostream>
 
-#include <fmt/format.h>
-
-#include "common/error.hpp"     // mcg::fail
-#include "config/ini.hpp"       // format_number
+#include "common/error.hpp"       // mcg::fail
+#include "config/ini.hpp"         // format_number
 #include "link/capture_meta.hpp"  // load_rig, board_config
-#include "link/connection.hpp"  // connect
-#include "link/interrupt.hpp"   // InterruptGuard
+#include "link/connection.hpp"    // connect
+#include "link/interrupt.hpp"     // InterruptGuard
 #include "link/serial.hpp"
-#include "link/stream_block.hpp"  // StreamAssembler
-#include "mcg/version.hpp"      // k_version
+#include "link/stream_block.hpp"        // StreamAssembler
+#include "mcg/version.hpp"              // k_version
 #include "measurement/measurement.hpp"  // CountEstimator, format_rpm_estimator
-#include "model/model.hpp"      // model_from_ini, k_open_circuit
-#include "table/table.hpp"      // Writer
+#include "model/model.hpp"              // model_from_ini, k_open_circuit
+#include "table/table.hpp"              // Writer
 
 namespace mcg::link {
 
@@ -23,16 +23,45 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 }  // namespace
+
+void write_stream_header(table::Writer& w, const Connection& c, const LinkOptions& link, int window_samples,
+                         const Rig& rig, const std::vector<std::pair<std::string, std::string>>& config) {
+  constexpr double k_sample_s = MCG_STREAM_PERIOD_MS * 1e-3;
+  w.meta("source", fmt::format("mcg-serial {} stream", k_version));
+  w.meta("board", c.board_text());
+  w.meta("port", link.port);
+  w.meta("sample_period", config::format_number(k_sample_s));
+  measurement::CountEstimator est;
+  est.window_s = window_samples * k_sample_s;
+  est.counts_per_rev = MCG_COUNTS_PER_REV;
+  w.meta("rpm_estimator", measurement::format_rpm_estimator(est));
+  w.meta("encoder", k_encoder_text);
+  w.meta(
+      "timing",
+      "duty, v, clutch, r_load, rpm_cmd of row n act over [t(n), t(n+1)) (duty: the mean over the "
+      "sample's 1 ms ticks); counts over (t - sample_period, t], rpm over the estimator window ending at t; "
+      "speed signed with the direction of the last non-zero drive");
+  write_rig_meta(w, rig, config);
+  w.header({"t", "rpm", "counts", "duty", "v", "rpm_cmd", "clutch", "r_load"});
+  w.finish();
+}
+
+void write_stream_row(table::Writer& w, const StreamRow& r, const Rig& rig) {
+  const double r_load = std::isnan(r.load) ? r.load : r.load != 0.0 ? rig.r_load_ohm : model::k_open_circuit;
+  w.row({r.t_s, r.rpm, r.counts, r.duty, r.duty * rig.supply_V, r.rpm_cmd, r.clutch, r_load});
+}
 
 int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostream& out, std::ostream& err) {
   constexpr double k_sample_s = MCG_STREAM_PERIOD_MS * 1e-3;
   const auto window_samples = static_cast<int>(std::llround(options.window_s / k_sample_s));
   if (window_samples < 1 || std::abs(window_samples * k_sample_s - options.window_s) > 1e-9) {
-    fail("--window: {} s is not a multiple of the {} s sample period", config::format_number(options.window_s),
-         config::format_number(k_sample_s));
+    fail("--window: {} s is not a multiple of the {} s sample period",
+         config::format_number(options.window_s), config::format_number(k_sample_s));
   }
   std::int64_t want = options.samples;
   if (options.seconds > 0.0) want = static_cast<std::int64_t>(std::llround(options.seconds / k_sample_s));
@@ -54,22 +83,7 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
   }
 
   table::Writer w(out);
-  w.meta("source", fmt::format("mcg-serial {} stream", k_version));
-  w.meta("board", c->board_text());
-  w.meta("port", link.port);
-  w.meta("sample_period", config::format_number(k_sample_s));
-  measurement::CountEstimator est;
-  est.window_s = window_samples * k_sample_s;
-  est.counts_per_rev = MCG_COUNTS_PER_REV;
-  w.meta("rpm_estimator", measurement::format_rpm_estimator(est));
-  w.meta("encoder", k_encoder_text);
-  w.meta("timing",
-         "duty, v, clutch, r_load, rpm_cmd of row n act over [t(n), t(n+1)) (duty: the mean over the "
-         "sample's 1 ms ticks); counts over (t - sample_period, t], rpm over the estimator window ending at t; "
-         "speed signed with the direction of the last non-zero drive");
-  write_rig_meta(w, rig, config);
-  w.header({"t", "rpm", "counts", "duty", "v", "rpm_cmd", "clutch", "r_load"});
-  w.finish();
+  write_stream_header(w, *c, link, window_samples, rig, config);
 
   StreamAssembler assembler(window_samples);
   std::int64_t written = 0;
@@ -81,7 +95,8 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
       const auto f = s.receive(0.1);
       if (!f) {
         if (seconds_since(last_block) > options.idle_timeout_s) {
-          ended_by = fmt::format("{}: no stream data for {} s", link.port, config::format_number(options.idle_timeout_s));
+          ended_by = fmt::format("{}: no stream data for {} s", link.port,
+                                 config::format_number(options.idle_timeout_s));
           break;
         }
         continue;
@@ -92,8 +107,7 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
       if (!assembler.push(f->payload, arrival_gap_s)) continue;
       for (const StreamRow& r : assembler.rows()) {
         if (want != 0 && written >= want) break;
-        const double r_load = std::isnan(r.load) ? r.load : r.load != 0.0 ? rig.r_load_ohm : model::k_open_circuit;
-        w.row({r.t_s, r.rpm, r.counts, r.duty, r.duty * rig.supply_V, r.rpm_cmd, r.clutch, r_load});
+        write_stream_row(w, r, rig);
         ++written;
       }
       w.finish();
@@ -116,8 +130,8 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
   if (lost > 0) {
     err << fmt::format(
         "mcg-serial: lost {} of {} samples ({} stream blocks; {} damaged frames, {} bytes of noise)\n", lost,
-        static_cast<std::uint64_t>(written), lost / MCG_STREAM_SAMPLES, st.bad_crc + st.too_long + st.timeouts,
-        st.skipped_bytes);
+        static_cast<std::uint64_t>(written), lost / MCG_STREAM_SAMPLES,
+        st.bad_crc + st.too_long + st.timeouts, st.skipped_bytes);
     if (!options.allow_loss) return k_exit_lost_samples;
   }
   return 0;

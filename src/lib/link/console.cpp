@@ -1,0 +1,531 @@
+// mcg-serial console (see console.hpp): the state and its drawing, and the loop that runs
+// them against the board. ncurses is used for the terminal only: keys in, lines out.
+#include "link/console.hpp"
+
+#include <curses.h>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <fstream>
+#include <mutex>
+#include <numbers>
+#include <optional>
+#include <sstream>
+#include <thread>
+
+#include "common/error.hpp"
+#include "config/ini.hpp"
+#include "link/capture_meta.hpp"
+#include "link/connection.hpp"
+#include "link/interrupt.hpp"
+#include "link/port.hpp"
+#include "link/stream_block.hpp"
+#include "model/model.hpp"
+#include "table/table.hpp"
+
+namespace mcg::link {
+
+ConsoleState::ConsoleState(double span_s) : m_span_s(span_s) {}
+
+void ConsoleState::add(const ConsoleSample& s) {
+  m_samples.push_back(s);
+  while (m_samples.front().t_s < s.t_s - m_span_s) m_samples.pop_front();
+  double sq = 0.0;
+  std::size_t n = 0;
+  for (const auto& x : m_samples) {
+    const double r = x.rpm - x.rpm_model;
+    if (std::isfinite(r)) {
+      sq += r * r;
+      ++n;
+    }
+  }
+  residual_rms_rpm = n > 0 ? std::sqrt(sq / static_cast<double>(n)) : 0.0;
+}
+
+ConsoleAction ConsoleState::key(int key) {
+  using Kind = ConsoleAction::Kind;
+  if (prompting()) {
+    if (key == k_key_escape) {
+      m_prompt.clear();
+      m_typed.clear();
+      status = "cancelled";
+    } else if (key == k_key_backspace || key == KEY_BACKSPACE || key == 8) {
+      if (!m_typed.empty()) m_typed.pop_back();
+    } else if (key == k_key_enter || key == '\r' || key == KEY_ENTER) {
+      ConsoleAction a;
+      a.kind = m_prompt_kind;
+      a.name = m_target;
+      a.value = m_typed;
+      if (a.kind == Kind::set && a.name.empty()) {
+        // "set NAME VALUE": the first word names the register.
+        const auto space = m_typed.find(' ');
+        a.name = m_typed.substr(0, space);
+        a.value = space == std::string::npos ? "" : m_typed.substr(space + 1);
+      }
+      m_prompt.clear();
+      m_typed.clear();
+      return a;
+    } else if (key >= 32 && key < 127) {
+      m_typed += static_cast<char>(key);
+    }
+    return {};
+  }
+  auto ask = [&](std::string prompt, Kind kind, std::string target) {
+    m_prompt = std::move(prompt);
+    m_prompt_kind = kind;
+    m_target = std::move(target);
+    return ConsoleAction{};
+  };
+  switch (key) {
+    case 'r':
+      return ask("rpm_cmd = ", Kind::set, "rpm_cmd");
+    case 'd':
+      return ask("duty (%) = ", Kind::set, "duty");
+    case 'm':
+      return ask("mode (open, p, pi, pid) = ", Kind::set, "mode");
+    case 'k':
+      return ask("kp = ", Kind::set, "kp");
+    case 's':
+      return ask("set (register value) ", Kind::set, "");
+    case 'c':
+      return {Kind::toggle_clutch, "clutch", ""};
+    case 'l':
+      return {Kind::toggle_load, "load", ""};
+    case 'g':
+      return ask("record the RAM log and dump it to: ", Kind::record_log, "");
+    case 'D':
+      return ask("dump the RAM log to: ", Kind::dump_log, "");
+    case 'o':
+      return ask("load design INI: ", Kind::load_ini, "");
+    case 'w':
+      if (recording) return {Kind::record_csv, "", ""};
+      return ask("record the stream to: ", Kind::record_csv, "");
+    case 'q':
+      return {Kind::quit, "", ""};
+    default:
+      return {};
+  }
+}
+
+namespace {
+
+std::string fit(std::string line, int width) {
+  if (width <= 0) return {};
+  if (line.size() > static_cast<std::size_t>(width)) line.resize(static_cast<std::size_t>(width));
+  return line;
+}
+
+/// Draws `series` (value of a sample, a mark) into rows [top, top + rows) of `grid` over the
+/// samples' time span, with the value range [lo, hi] and labels in the left margin.
+void chart(std::vector<std::string>& grid, int top, int rows, int left, int width,
+           const std::deque<ConsoleSample>& samples, double lo, double hi,
+           const std::vector<std::pair<double (*)(const ConsoleSample&), char>>& series) {
+  if (samples.empty() || rows < 2 || width - left < 10) return;
+  const double t0 = samples.front().t_s;
+  const double t1 = std::max(samples.back().t_s, t0 + 1e-9);
+  const int cols = width - left;
+  for (const auto& [value, mark] : series) {
+    for (const ConsoleSample& s : samples) {
+      const double v = value(s);
+      if (!std::isfinite(v)) continue;
+      const int col = left + static_cast<int>(std::lround((s.t_s - t0) / (t1 - t0) * (cols - 1)));
+      const double frac = hi > lo ? (v - lo) / (hi - lo) : 0.5;
+      const int row = top + rows - 1 - static_cast<int>(std::lround(std::clamp(frac, 0.0, 1.0) * (rows - 1)));
+      grid[static_cast<std::size_t>(row)][static_cast<std::size_t>(col)] = mark;
+    }
+  }
+  const std::string hi_label = fmt::format("{:>{}.0f}|", hi, left - 1);
+  const std::string lo_label = fmt::format("{:>{}.0f}|", lo, left - 1);
+  for (int r = top; r < top + rows; ++r)
+    grid[static_cast<std::size_t>(r)].replace(0, static_cast<std::size_t>(left),
+                                              std::string(static_cast<std::size_t>(left - 1), ' ') + "|");
+  grid[static_cast<std::size_t>(top)].replace(0, hi_label.size(), hi_label);
+  grid[static_cast<std::size_t>(top + rows - 1)].replace(0, lo_label.size(), lo_label);
+}
+
+std::string reg(const ConsoleState& s, const std::string& name) {
+  const auto it = s.registers.find(name);
+  return it == s.registers.end() ? "?" : it->second;
+}
+
+}  // namespace
+
+std::vector<std::string> render_console(const ConsoleState& state, int width, int height) {
+  std::vector<std::string> grid(static_cast<std::size_t>(std::max(height, 0)),
+                                std::string(static_cast<std::size_t>(std::max(width, 0)), ' '));
+  if (height < 12 || width < 40) {
+    if (height > 0) grid[0] = fit("too small: 40x12 at least", width);
+    return grid;
+  }
+  const auto& samples = state.samples();
+  std::string title = "mcg-serial console";
+  if (!samples.empty()) {
+    const ConsoleSample& last = samples.back();
+    title += fmt::format(
+        "   t {:.1f} s   rpm {:.0f}   model {:.0f}   cmd {:.0f}   duty {:.1f} %   residual RMS {:.1f} rpm",
+        last.t_s, last.rpm, last.rpm_model, last.rpm_cmd, 100.0 * last.duty, state.residual_rms_rpm);
+  } else {
+    title += "   waiting for the stream";
+  }
+  if (state.recording) title += fmt::format("   REC {} ({} rows)", state.recording_path, state.recorded_rows);
+  if (state.lost_samples > 0) title += fmt::format("   lost {}", state.lost_samples);
+  grid[0] = fit(title, width);
+
+  const int duty_rows = 4;
+  const int speed_top = 2;
+  const int speed_rows = height - speed_top - duty_rows - 5;
+  const int left = 7;
+  double lo = 0.0, hi = 0.0;
+  bool any = false;
+  for (const auto& s : samples) {
+    for (double v : {s.rpm, s.rpm_model, s.rpm_cmd}) {
+      if (!std::isfinite(v)) continue;
+      lo = any ? std::min(lo, v) : v;
+      hi = any ? std::max(hi, v) : v;
+      any = true;
+    }
+  }
+  if (any && hi - lo < 20.0) {
+    lo -= 10.0;
+    hi += 10.0;
+  }
+  grid[1] = fit(
+      fmt::format("{:>{}}speed, rpm: * measured  o model  - command (last {:.0f} s)", "", left, 10.0), width);
+  chart(grid, speed_top, speed_rows, left, width, samples, lo, hi,
+        {{[](const ConsoleSample& s) { return s.rpm_cmd; }, '-'},
+         {[](const ConsoleSample& s) { return s.rpm_model; }, 'o'},
+         {[](const ConsoleSample& s) { return s.rpm; }, '*'}});
+  const int duty_top = speed_top + speed_rows + 1;
+  grid[static_cast<std::size_t>(duty_top - 1)] = fit(fmt::format("{:>{}}duty, %", "", left), width);
+  chart(grid, duty_top, duty_rows, left, width, samples, -100.0, 100.0,
+        {{[](const ConsoleSample& s) { return 100.0 * s.duty; }, '#'}});
+  const int bottom = duty_top + duty_rows;
+  grid[static_cast<std::size_t>(bottom)] = fit(
+      fmt::format("board: mode {}  rpm_cmd {}  duty {} %  kp {}  b0 {}  b1 {}  clutch {}  load {}  flags {}",
+                  reg(state, "mode"), reg(state, "rpm_cmd"), reg(state, "duty"), reg(state, "kp"),
+                  reg(state, "b0"), reg(state, "b1"), reg(state, "clutch"), reg(state, "load"),
+                  reg(state, "flags")),
+      width);
+  grid[static_cast<std::size_t>(bottom + 1)] = fit(
+      "keys: r rpm_cmd  d duty  m mode  k kp  s set any  c clutch  l load  g record+dump log  D dump log  "
+      "o load INI  w record CSV  q quit",
+      width);
+  grid[static_cast<std::size_t>(height - 1)] =
+      fit(state.prompting() ? "> " + state.prompt_line() + "_" : state.status, width);
+  return grid;
+}
+
+namespace {
+
+/// The terminal in curses mode for as long as it lives; restored on every way out.
+class Screen {
+ public:
+  Screen() {
+    if (initscr() == nullptr) fail("console: cannot start the terminal screen");
+    cbreak();
+    noecho();
+    keypad(stdscr, TRUE);
+    nodelay(stdscr, TRUE);
+    curs_set(0);
+  }
+  ~Screen() { endwin(); }
+  Screen(const Screen&) = delete;
+  Screen& operator=(const Screen&) = delete;
+
+  void draw(const std::vector<std::string>& lines) {
+    erase();
+    for (std::size_t r = 0; r < lines.size(); ++r) mvaddnstr(static_cast<int>(r), 0, lines[r].c_str(), COLS);
+    refresh();
+  }
+};
+
+/// Runs the actions one at a time on a thread of its own, each as its subcommand would
+/// (through this console, the port owner), and polls the registers when idle.
+class Worker {
+ public:
+  Worker(LinkOptions link, double poll_s)
+      : m_link(std::move(link)), m_poll_s(poll_s), m_thread([this] { loop(); }) {}
+  ~Worker() {
+    {
+      const std::lock_guard lock(m_mutex);
+      m_stop = true;
+    }
+    m_wake.notify_all();
+    m_thread.join();
+  }
+  Worker(const Worker&) = delete;
+  Worker& operator=(const Worker&) = delete;
+
+  void post(ConsoleAction a) {
+    {
+      const std::lock_guard lock(m_mutex);
+      m_queue.push_back(std::move(a));
+    }
+    m_wake.notify_all();
+  }
+  /// Moves the news (status, register values) into `state`.
+  void collect(ConsoleState& state) {
+    const std::lock_guard lock(m_mutex);
+    if (!m_status.empty()) state.status = std::exchange(m_status, {});
+    for (auto& [k, v] : m_registers) state.registers[k] = v;
+  }
+
+ private:
+  void loop() {
+    auto next_poll = std::chrono::steady_clock::now();
+    for (;;) {
+      std::optional<ConsoleAction> action;
+      {
+        std::unique_lock lock(m_mutex);
+        m_wake.wait_until(lock, next_poll, [&] { return m_stop || !m_queue.empty(); });
+        if (m_stop) return;
+        if (!m_queue.empty()) {
+          action = std::move(m_queue.front());
+          m_queue.pop_front();
+        }
+      }
+      if (action) {
+        report(perform(*action));
+      } else {
+        poll();
+        next_poll = std::chrono::steady_clock::now() +
+                    std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                        std::chrono::duration<double>(m_poll_s));
+      }
+    }
+  }
+
+  void report(std::string text) {
+    const std::lock_guard lock(m_mutex);
+    m_status = std::move(text);
+  }
+
+  std::string get(const std::string& name) {
+    std::ostringstream out;
+    run_get(m_link, {name}, out);
+    std::string v = out.str();
+    while (!v.empty() && (v.back() == '\n' || v.back() == ' ')) v.pop_back();
+    return v;
+  }
+
+  void poll() {
+    static const std::vector<std::string> names = {"mode", "rpm_cmd", "duty", "kp",   "b0",
+                                                   "b1",   "clutch",  "load", "flags"};
+    std::map<std::string, std::string> values;
+    try {
+      std::ostringstream out;
+      run_get(m_link, names, out);
+      std::istringstream lines(out.str());
+      std::string line;
+      for (const auto& n : names) {
+        if (!std::getline(lines, line)) break;
+        values[n] = line;
+      }
+    } catch (const Error& e) {
+      report(fmt::format("polling the registers: {}", e.what()));
+      return;
+    }
+    const std::lock_guard lock(m_mutex);
+    m_registers = std::move(values);
+  }
+
+  std::string perform(const ConsoleAction& a) {
+    using Kind = ConsoleAction::Kind;
+    std::ostringstream out;
+    std::ostringstream err;
+    try {
+      switch (a.kind) {
+        case Kind::set:
+          if (a.name.empty() || a.value.empty()) return "set: give a register and a value";
+          run_set(m_link, a.name, a.value, err);
+          return fmt::format("{} = {}{}", a.name, get(a.name),
+                             err.str().empty() ? "" : "  (" + first_line(err.str()) + ")");
+        case Kind::toggle_clutch: {
+          const std::string now = get("clutch");
+          const std::string next = now == "engaged" || now == "2" ? "disengaged" : "engaged";
+          run_set(m_link, "clutch", next, err);
+          return fmt::format("clutch = {}", get("clutch"));
+        }
+        case Kind::toggle_load: {
+          const std::string now = get("load");
+          run_set(m_link, "load", now == "1" || now == "on" ? "0" : "1", err);
+          return fmt::format("load = {}", get("load"));
+        }
+        case Kind::record_log:
+        case Kind::dump_log: {
+          if (a.value.empty()) return "dump: give a file";
+          DumpOptions d;
+          d.record = a.kind == Kind::record_log;
+          std::ostringstream csv;
+          run_dump(m_link, d, csv, err);
+          std::ofstream file(a.value);
+          file << csv.str();
+          if (!file) return fmt::format("dump: cannot write {}", a.value);
+          return fmt::format("RAM log written to {}", a.value);
+        }
+        case Kind::load_ini:
+          if (a.value.empty()) return "load: give an INI file";
+          run_load(m_link, a.value, out, err);
+          return fmt::format("loaded {}", a.value);
+        case Kind::none:
+        case Kind::record_csv:
+        case Kind::quit:
+          return {};
+      }
+    } catch (const Error& e) {
+      return fmt::format("refused: {}", e.what());
+    }
+    return {};
+  }
+
+  static std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
+
+  LinkOptions m_link;
+  double m_poll_s;
+  std::mutex m_mutex;
+  std::condition_variable m_wake;
+  std::deque<ConsoleAction> m_queue;
+  std::string m_status;
+  std::map<std::string, std::string> m_registers;
+  bool m_stop = false;
+  std::thread m_thread;
+};
+
+/// The stream recording to a CSV file, in mcg-serial stream's format.
+struct Recording {
+  std::ofstream file;
+  std::optional<table::Writer> writer;
+};
+
+}  // namespace
+
+int run_console(const LinkOptions& link, const ConsoleOptions& options) {
+  if (::isatty(STDIN_FILENO) != 1 || ::isatty(STDOUT_FILENO) != 1) {
+    fail("console: stdin and stdout must be a terminal (use 'stream' to capture data)");
+  }
+  constexpr int k_window_samples = 4;  // the board's 16 ms rpm window
+  constexpr double k_sample_s = MCG_STREAM_PERIOD_MS * 1e-3;
+  const Rig rig = load_rig(options.rig);
+  model::Model model;
+  if (!options.rig.configs.empty()) model = model::model_from_ini(config::Ini::load_all(options.rig.configs));
+  auto c = connect(link, Hold::Serve);
+  Session& s = *c->session;
+  const InterruptGuard guard;
+  s.write(require_register("stream"), 1);
+
+  ConsoleState state(options.span_s);
+  StreamAssembler assembler(k_window_samples);
+  std::optional<model::Plant> plant;
+  Recording rec;
+  std::size_t recorded = 0;
+  auto stop_recording = [&] {
+    if (!rec.writer) return;
+    rec.writer->finish();
+    rec.writer.reset();
+    rec.file.close();
+    state.status = fmt::format("recorded {} rows to {}", recorded, state.recording_path);
+    state.recording = false;
+  };
+  const auto start = std::chrono::steady_clock::now();
+  auto last_block = start;
+  auto next_draw = start;
+  std::string ended_by;
+  {
+    Worker worker(link, options.poll_s);
+    Screen screen;
+    try {
+      for (;;) {
+        // The stream first: every block that has arrived, then the keys, then the screen.
+        while (auto f = s.receive(0.01)) {
+          if (f->cmd != MCG_MSG_STREAM) continue;
+          const double gap =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - last_block).count();
+          last_block = std::chrono::steady_clock::now();
+          if (!assembler.push(f->payload, gap)) continue;
+          for (const StreamRow& r : assembler.rows()) {
+            model::Drive drive;
+            drive.v_V = std::isfinite(r.duty) ? r.duty * rig.supply_V : 0.0;
+            drive.clutch = std::isfinite(r.clutch) ? static_cast<int>(r.clutch) : 2;
+            drive.r_load_ohm = r.load == 1.0 ? rig.r_load_ohm : model::k_open_circuit;
+            if (!plant) plant.emplace(model, model::SimOptions{}, drive.clutch);
+            plant->step(k_sample_s, drive);
+            state.add(
+                {r.t_s, r.rpm, plant->state().omega_rad_s * 30.0 / std::numbers::pi, r.rpm_cmd, r.duty});
+            if (rec.writer) {
+              write_stream_row(*rec.writer, r, rig);
+              ++recorded;
+            }
+          }
+          if (rec.writer) rec.writer->finish();
+          state.recorded_rows = recorded;
+          state.lost_samples = assembler.lost_samples();
+          if (std::chrono::steady_clock::now() >= next_draw) break;
+        }
+        for (int ch = getch(); ch != ERR; ch = getch()) {
+          const ConsoleAction a = state.key(ch);
+          if (a.kind == ConsoleAction::Kind::quit) {
+            ended_by = "quit";
+            break;
+          }
+          if (a.kind == ConsoleAction::Kind::record_csv) {
+            if (rec.writer) {
+              stop_recording();
+            } else if (a.value.empty()) {
+              state.status = "record: give a file";
+            } else {
+              rec.file.open(a.value);
+              if (!rec.file) {
+                state.status = fmt::format("record: cannot open {}", a.value);
+              } else {
+                rec.writer.emplace(rec.file);
+                // The registers as they are now: the recording states what the board ran.
+                write_stream_header(*rec.writer, *c, link, k_window_samples, rig, board_config(*c));
+                recorded = 0;
+                state.recording = true;
+                state.recording_path = a.value;
+                state.status = fmt::format("recording to {}", a.value);
+              }
+            }
+          } else if (a.kind != ConsoleAction::Kind::none) {
+            state.status = "...";
+            worker.post(a);
+          }
+        }
+        if (!ended_by.empty() || InterruptGuard::interrupted()) break;
+        const auto now = std::chrono::steady_clock::now();
+        if (std::chrono::duration<double>(now - last_block).count() > 2.0) {
+          state.status = fmt::format("{}: no stream data for {:.0f} s", link.port,
+                                     std::chrono::duration<double>(now - last_block).count());
+        }
+        if (options.seconds > 0.0 && std::chrono::duration<double>(now - start).count() >= options.seconds)
+          break;
+        if (now >= next_draw) {
+          worker.collect(state);
+          screen.draw(render_console(state, COLS, LINES));
+          next_draw = now + std::chrono::milliseconds(100);
+        }
+      }
+    } catch (const PortVanished&) {
+      ended_by = "vanished";
+    }
+  }
+  stop_recording();
+  if (ended_by == "vanished") {
+    fail("{}: the port vanished{}", link.port,
+         state.recording_path.empty()
+             ? ""
+             : fmt::format(" ({} rows recorded to {})", recorded, state.recording_path));
+  }
+  try {
+    s.write(require_register("stream"), 0);
+  } catch (const Error&) {
+    // Leaving: a board that does not confirm the stop changes nothing here.
+  }
+  return 0;
+}
+
+}  // namespace mcg::link

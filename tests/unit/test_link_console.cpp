@@ -1,0 +1,85 @@
+// The console's state, keys and screen, without a board or a terminal.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "link/console.hpp"
+
+namespace mcg::link {
+namespace {
+
+ConsoleAction type(ConsoleState& s, const std::string& keys) {
+  ConsoleAction last;
+  for (char c : keys) last = s.key(c == '\n' ? k_key_enter : c);
+  return last;
+}
+
+TEST(LinkConsole, AKeyWithAValueOpensAPromptAndEnterGivesTheAction) {
+  ConsoleState s;
+  EXPECT_EQ(s.key('r').kind, ConsoleAction::Kind::none);
+  EXPECT_TRUE(s.prompting());
+  EXPECT_EQ(s.prompt_line(), "rpm_cmd = ");
+  // While typing, the command keys are text.
+  const ConsoleAction a = type(s, "5q0\n");
+  EXPECT_EQ(a.kind, ConsoleAction::Kind::set);
+  EXPECT_EQ(a.name, "rpm_cmd");
+  EXPECT_EQ(a.value, "5q0");
+  EXPECT_FALSE(s.prompting());
+}
+
+TEST(LinkConsole, SetAnyNamesTheRegisterFirstAndEscapeCancels) {
+  ConsoleState s;
+  const ConsoleAction a = type(s, "sb0 1.25\n");
+  EXPECT_EQ(a.kind, ConsoleAction::Kind::set);
+  EXPECT_EQ(a.name, "b0");
+  EXPECT_EQ(a.value, "1.25");
+  type(s, "d12");
+  s.key(k_key_backspace);
+  EXPECT_EQ(s.prompt_line(), "duty (%) = 1");
+  EXPECT_EQ(s.key(k_key_escape).kind, ConsoleAction::Kind::none);
+  EXPECT_FALSE(s.prompting());
+  EXPECT_EQ(s.status, "cancelled");
+}
+
+TEST(LinkConsole, ToggleAndQuitKeysActAtOnceAndWStopsARecording) {
+  ConsoleState s;
+  EXPECT_EQ(s.key('c').kind, ConsoleAction::Kind::toggle_clutch);
+  EXPECT_EQ(s.key('l').kind, ConsoleAction::Kind::toggle_load);
+  EXPECT_EQ(s.key('q').kind, ConsoleAction::Kind::quit);
+  EXPECT_EQ(type(s, "wrun.csv\n").value, "run.csv");
+  s.recording = true;
+  const ConsoleAction stop = s.key('w');
+  EXPECT_EQ(stop.kind, ConsoleAction::Kind::record_csv);
+  EXPECT_TRUE(stop.value.empty());
+}
+
+TEST(LinkConsole, KeepsTheSpanAndTheResidualRms) {
+  ConsoleState s(1.0);
+  for (int n = 0; n <= 1000; ++n) s.add({n * 0.004, 500.0, 497.0, 500.0, 0.3});
+  EXPECT_EQ(s.samples().size(), 251U);  // 1 s of 4 ms samples, both ends
+  EXPECT_DOUBLE_EQ(s.residual_rms_rpm, 3.0);
+}
+
+TEST(LinkConsole, TheScreenDrawsMeasuredModelCommandAndStatus) {
+  ConsoleState s(1.0);
+  for (int n = 0; n <= 250; ++n) s.add({n * 0.004, 100.0 + n, 90.0 + n, 420.0, 0.5});
+  s.registers["mode"] = "pi";
+  s.status = "rpm_cmd = 420";
+  const auto lines = render_console(s, 100, 30);
+  ASSERT_EQ(lines.size(), 30U);
+  std::string all;
+  for (const auto& l : lines) {
+    EXPECT_LE(l.size(), 100U);
+    all += l + "\n";
+  }
+  EXPECT_NE(lines[0].find("rpm 350"), std::string::npos) << lines[0];
+  EXPECT_NE(all.find('*'), std::string::npos);
+  EXPECT_NE(all.find('o'), std::string::npos);
+  EXPECT_NE(all.find("---"), std::string::npos);
+  EXPECT_NE(all.find("board: mode pi"), std::string::npos);
+  EXPECT_EQ(lines.back(), "rpm_cmd = 420");
+  EXPECT_NE(render_console(s, 30, 8)[0].find("too small: 40x12 at least"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace mcg::link
