@@ -333,8 +333,9 @@ void Writer::set_digits(std::string_view name, int digits) {
 void Writer::row(std::span<const double> values) {
   MCG_DEMAND(values.size() == m_names.size());
   // Formatted straight into the buffer's tail: at most 25 characters a number ("%.17g" of a
-  // negative subnormal), a separator each. fmt's "{:.Ng}" writes what printf's "%.Ng" and
-  // std::to_chars(general, N) write, in half their time.
+  // negative subnormal), a separator each. std::to_chars(general, N) writes what printf's
+  // "%.Ng" writes (and fmt's "{:.Ng}"), by Ryu printf: about a third faster than fmt 9, whose
+  // fixed-precision path falls back to Dragon4's big integers.
   const std::size_t used = m_buffer.size();
   m_buffer.resize(used + values.size() * 26 + 1);
   char* p = m_buffer.data() + used;
@@ -347,10 +348,8 @@ void Writer::row(std::span<const double> values) {
       p = v > 0 ? std::copy_n("inf", 3, p) : std::copy_n("-inf", 4, p);
     } else if (v == 0) {
       *p++ = '0';
-    } else if (m_digits[c] == k_default_digits) {
-      p = fmt::format_to(p, FMT_COMPILE("{:.10g}"), v);
     } else {
-      p = fmt::format_to(p, FMT_COMPILE("{:.{}g}"), v, m_digits[c]);
+      p = std::to_chars(p, p + 25, v, std::chars_format::general, m_digits[c]).ptr;
     }
   }
   *p++ = '\n';
