@@ -8,11 +8,11 @@
 // in the step (cubic Hermite interpolation of the speed, secant on the torque), the step is
 // redone up to the event, the mode switches and integration continues.
 #include <algorithm>
-#include "common/demand.hpp"
 #include <cmath>
 #include <deque>
 #include <numbers>
 
+#include "common/demand.hpp"
 #include "model/effects/compiled.hpp"
 #include "model/model.hpp"
 
@@ -26,8 +26,9 @@ using Vec = std::array<double, k_states>;
 
 /// Brush drop smoothing current (reference definition): V_b tanh(i / 0.01 A).
 constexpr double k_brush_i_A = 0.01;
-/// Generator circuits faster than this (R + r_load)/L, 1/s, are solved as algebraic: the
-/// current follows the EMF within 50 us, far below the 16 ms mechanical time constant.
+/// Circuits faster than this R/L, 1/s (the generator's R + r_load, the motor's R + switches),
+/// are solved as algebraic: the current follows within 50 us, far below any mechanical time
+/// constant, and a step resolving it would be microseconds (with the brush drop's slope, less).
 constexpr double k_quasi_static_rate = 2e4;
 /// Events handled inside one integration step before the step is accepted as is.
 constexpr int k_max_events_per_step = 16;
@@ -40,12 +41,12 @@ int sign_of(double x) { return x > 0.0 ? 1 : (x < 0.0 ? -1 : 0); }
 
 class PlantImpl {
  public:
-  PlantImpl(const Model& model, const SimOptions& options, int initial_clutch)
-      : m_c(model), m_opt(options) {
+  PlantImpl(const Model& model, const SimOptions& options, int initial_clutch) : m_c(model), m_opt(options) {
     m_y.fill(0.0);
     m_y[DT_M] = m_c.dT0;
     m_y[DT_G] = m_c.dT0;
     m_clutch = initial_clutch;
+    m_motor_quasi = (m_c.p.motor.R_ohm + m_c.R_on2) / m_c.p.motor.L_H > k_quasi_static_rate;
     m_t_engage = -std::numeric_limits<double>::infinity();
     if (m_clutch == 2) {
       m_coupling = m_c.compliance ? Coupling::spring : Coupling::rigid;
@@ -90,7 +91,7 @@ class PlantImpl {
     s.omega_gen_rad_s = m_y[W_G];
     s.theta_rad = m_y[TH_M];
     s.theta_gen_rad = m_y[TH_G];
-    s.i_A = m_y[I_M];
+    s.i_A = motor_current(m_y);
     s.i_gen_A = gen_current(m_y);
     if (!gen_present()) {
       s.v_gen_V = 0.0;
@@ -101,7 +102,7 @@ class PlantImpl {
     }
     double d = 0.0;
     const double v_b = bridge(d);
-    s.v_applied_V = v_b - (m_c.R_on2 + std::abs(d) * m_c.R_s) * m_y[I_M];
+    s.v_applied_V = v_b - (m_c.R_on2 + std::abs(d) * m_c.R_s) * s.i_A;
     s.temp_rise_K = m_y[DT_M];
     s.clutch = m_clutch;
     s.stuck = m_stuck_m;
@@ -118,8 +119,8 @@ class PlantImpl {
   /// solved as algebraic; called whenever the clutch state or the load changes.
   void update_gen_mode() {
     m_gen_circuit = gen_present() && std::isfinite(m_r_load);
-    m_gen_quasi = m_gen_circuit &&
-                  (m_c.p.generator.R_ohm + m_r_load) / m_c.p.generator.L_H > k_quasi_static_rate;
+    m_gen_quasi =
+        m_gen_circuit && (m_c.p.generator.R_ohm + m_r_load) / m_c.p.generator.L_H > k_quasi_static_rate;
   }
   bool rigid() const { return m_coupling == Coupling::rigid; }
 
@@ -137,16 +138,10 @@ class PlantImpl {
     return m_c.thermal ? R * (1.0 + m_c.alpha * y[DT_G]) : R;
   }
 
-  /// The generator current: the state, or the algebraic solution of
-  /// Ke w_g = (R + r_load) i + V_b tanh(i / 0.01 A) for a fast circuit.
-  double gen_current(const Vec& y) const {
-    if (!gen_circuit()) return 0.0;
-    if (!gen_quasi_static()) return y[I_G];
-    const double emf = m_c.p.generator.Ke_V_s_rad * y[W_G];
-    const double R = gen_resistance(y) + m_r_load;
+  /// The current of a circuit fast enough to be algebraic: R i + V_b tanh(i / 0.01 A) = emf.
+  /// g(i) rises monotonically: safeguarded Newton in the bracket [-|emf|/R, |emf|/R].
+  double algebraic_current(double emf, double R) const {
     if (m_c.V_b <= 0.0) return emf / R;
-    // g(i) = R i + V_b tanh(i/0.01) - emf rises monotonically: safeguarded Newton in the
-    // bracket [-|emf|/R, |emf|/R].
     double lo = -std::abs(emf) / R;
     double hi = std::abs(emf) / R;
     double i = emf / (R + m_c.V_b / k_brush_i_A);
@@ -167,6 +162,31 @@ class PlantImpl {
     return i;
   }
 
+  /// The generator current: the state, or the algebraic solution of
+  /// Ke w_g = (R + r_load) i + V_b tanh(i / 0.01 A) for a fast circuit.
+  double gen_current(const Vec& y) const {
+    if (!gen_circuit()) return 0.0;
+    if (!gen_quasi_static()) return y[I_G];
+    return algebraic_current(m_c.p.generator.Ke_V_s_rad * y[W_G], gen_resistance(y) + m_r_load);
+  }
+
+  /// The motor circuit's resistance at duty d: winding (heated), switches, source share.
+  double motor_resistance(const Vec& y, double d) const {
+    const Machine& mm = m_c.p.motor;
+    return (m_c.thermal ? mm.R_ohm * (1.0 + m_c.alpha * y[DT_M]) : mm.R_ohm) + m_c.R_on2 +
+           std::abs(d) * m_c.R_s;
+  }
+
+  /// The motor current: the state, or for a motor whose electrical time constant is far
+  /// below the steps (a low-inductance gearmotor: L/R under 50 us) the algebraic solution of
+  /// v_b - Ke w = R i + V_b tanh(i / 0.01 A), so that no step has to resolve it.
+  double motor_current(const Vec& y) const {
+    if (!m_motor_quasi) return y[I_M];
+    double d = 0.0;
+    const double v_b = bridge(d);
+    return algebraic_current(v_b - m_c.p.motor.Ke_V_s_rad * y[W_M], motor_resistance(y, d));
+  }
+
   /// Capacity of the clutch plates at time t (clutch_engage_lag).
   double capacity(double t) const {
     const double age = t - m_t_engage;
@@ -181,7 +201,7 @@ class PlantImpl {
     drive_torques(y, t, m_coupling, Tm, Tg);
   }
   void drive_torques(const Vec& y, double t, Coupling coupling, double& Tm, double& Tg) const {
-    Tm = m_c.p.motor.Kt_Nm_A * y[I_M];
+    Tm = m_c.p.motor.Kt_Nm_A * motor_current(y);
     if (!m_c.motor_torque.empty()) Tm += m_c.extra_motor_torque(y[TH_M], y[W_M]);
     Tg = -m_c.p.generator.Kt_Nm_A * gen_current(y);
     switch (coupling) {
@@ -211,11 +231,15 @@ class PlantImpl {
     const double v_b = bridge(d);
     const Machine& mm = m_c.p.motor;
     const Machine& mg = m_c.p.generator;
-    const double Rm = (m_c.thermal ? mm.R_ohm * (1.0 + m_c.alpha * y[DT_M]) : mm.R_ohm) + m_c.R_on2 +
-                      std::abs(d) * m_c.R_s;
-    double vm = v_b - Rm * y[I_M] - mm.Ke_V_s_rad * y[W_M];
-    if (m_c.V_b > 0.0) vm -= m_c.V_b * std::tanh(y[I_M] / k_brush_i_A);
-    dy[I_M] = vm / mm.L_H;
+    const double Rm = motor_resistance(y, d);
+    const double i_m = motor_current(y);
+    if (m_motor_quasi) {
+      dy[I_M] = 0.0;
+    } else {
+      double vm = v_b - Rm * i_m - mm.Ke_V_s_rad * y[W_M];
+      if (m_c.V_b > 0.0) vm -= m_c.V_b * std::tanh(i_m / k_brush_i_A);
+      dy[I_M] = vm / mm.L_H;
+    }
     const double i_g = gen_current(y);
     dy[I_G] = 0.0;
     if (gen_circuit() && !gen_quasi_static()) {
@@ -231,8 +255,8 @@ class PlantImpl {
       dy[W_M] = a;
       dy[W_G] = a;
     } else {
-      dy[W_M] = m_stuck_m ? 0.0
-                          : (Tm - m_dir_m * m_c.kinetic(motor_friction(), m_dir_m * y[W_M])) / mm.J_kg_m2;
+      dy[W_M] =
+          m_stuck_m ? 0.0 : (Tm - m_dir_m * m_c.kinetic(motor_friction(), m_dir_m * y[W_M])) / mm.J_kg_m2;
       dy[W_G] = (m_stuck_g || !gen_present())
                     ? 0.0
                     : (Tg - m_dir_g * m_c.kinetic(m_c.gen, m_dir_g * y[W_G])) / mg.J_kg_m2;
@@ -240,7 +264,7 @@ class PlantImpl {
     dy[TH_M] = y[W_M];
     dy[TH_G] = y[W_G];
     if (m_c.thermal) {
-      dy[DT_M] = (y[I_M] * y[I_M] * (Rm - m_c.R_on2 - std::abs(d) * m_c.R_s) - y[DT_M] / m_c.R_th) / m_c.C_th;
+      dy[DT_M] = (i_m * i_m * (Rm - m_c.R_on2 - std::abs(d) * m_c.R_s) - y[DT_M] / m_c.R_th) / m_c.C_th;
       dy[DT_G] = (i_g * i_g * gen_resistance(y) - y[DT_G] / m_c.R_th) / m_c.C_th;
     } else {
       dy[DT_M] = 0.0;
@@ -267,8 +291,7 @@ class PlantImpl {
   double step_limit() const {
     double h = m_opt.max_step_s;
     const Machine& mm = m_c.p.motor;
-    const double R_m = mm.R_ohm + m_c.R_on2 + m_c.R_s;
-    h = std::min(h, 0.5 * mm.L_H / R_m);
+    if (!m_motor_quasi) h = std::min(h, 0.5 * mm.L_H / (mm.R_ohm + m_c.R_on2 + m_c.R_s));
     if (gen_circuit() && !gen_quasi_static()) {
       h = std::min(h, 0.5 * m_c.p.generator.L_H / (m_c.p.generator.R_ohm + m_r_load));
     }
@@ -282,7 +305,7 @@ class PlantImpl {
 
   void integrate(double len) {
     const double h_lim = step_limit();
-    if (m_c.V_b <= 0.0) {
+    if (m_c.V_b <= 0.0 || (m_motor_quasi && !(gen_circuit() && !gen_quasi_static()))) {
       const auto n = static_cast<long>(std::ceil(len / h_lim - 1e-9));
       const double h = len / static_cast<double>(std::max(1L, n));
       double t = m_t;
@@ -317,7 +340,7 @@ class PlantImpl {
       return 0.5 * L / (R + m_c.V_b / k_brush_i_A / (c * c));
     };
     const Machine& mm = m_c.p.motor;
-    double h = limit(m_y[I_M], k[I_M], mm.R_ohm + m_c.R_on2, mm.L_H);
+    double h = m_motor_quasi ? h_max : limit(m_y[I_M], k[I_M], mm.R_ohm + m_c.R_on2, mm.L_H);
     if (gen_circuit() && !gen_quasi_static()) {
       const Machine& mg = m_c.p.generator;
       h = std::min(h, limit(m_y[I_G], k[I_G], mg.R_ohm + m_r_load, mg.L_H));
@@ -353,9 +376,7 @@ class PlantImpl {
     return std::clamp((bound - T0) / (T1 - T0), 0.0, 1.0);
   }
 
-  double motor_breakaway() const {
-    return m_c.breakaway(rigid() ? m_c.rigid : motor_friction());
-  }
+  double motor_breakaway() const { return m_c.breakaway(rigid() ? m_c.rigid : motor_friction()); }
   double gen_breakaway() const { return m_c.breakaway(m_c.gen); }
 
   void substep(double t0, double h_total) {
@@ -406,8 +427,8 @@ class PlantImpl {
       if (two_bodies) {
         if (!m_stuck_g) {
           if (m_dir_g * y1[W_G] <= 0.0) {
-            const double s = hermite_root(m_dir_g * m_y[W_G], m_dir_g * k1[W_G] * remaining, m_dir_g * y1[W_G],
-                                          m_dir_g * end_derivative()[W_G] * remaining);
+            const double s = hermite_root(m_dir_g * m_y[W_G], m_dir_g * k1[W_G] * remaining,
+                                          m_dir_g * y1[W_G], m_dir_g * end_derivative()[W_G] * remaining);
             if (s < best) {
               best = s;
               kind = EventKind::gen_zero;
@@ -424,9 +445,9 @@ class PlantImpl {
           const double r1 = m_slip_dir * (y1[W_M] - y1[W_G]);
           if (r1 <= 0.0) {
             const Vec& ke = end_derivative();
-            const double s = hermite_root(m_slip_dir * (m_y[W_M] - m_y[W_G]),
-                                          m_slip_dir * (k1[W_M] - k1[W_G]) * remaining, r1,
-                                          m_slip_dir * (ke[W_M] - ke[W_G]) * remaining);
+            const double s =
+                hermite_root(m_slip_dir * (m_y[W_M] - m_y[W_G]), m_slip_dir * (k1[W_M] - k1[W_G]) * remaining,
+                             r1, m_slip_dir * (ke[W_M] - ke[W_G]) * remaining);
             if (s < best) {
               best = s;
               kind = EventKind::slip_zero;
@@ -456,6 +477,7 @@ class PlantImpl {
     if (rigid() && m_stuck_m) m_y[W_G] = 0.0;
     if (!rigid() && (m_stuck_g || !gen_present())) m_y[W_G] = 0.0;
     if (!gen_circuit()) m_y[I_G] = 0.0;
+    if (m_motor_quasi) m_y[I_M] = motor_current(m_y);
     (void)t;
   }
 
@@ -637,6 +659,7 @@ class PlantImpl {
   double m_r_load = k_open_circuit;
   bool m_gen_circuit = false;
   bool m_gen_quasi = false;
+  bool m_motor_quasi = false;  ///< the motor current solved as algebraic (see motor_current)
   double m_v = 0.0;
   std::deque<std::pair<double, double>> m_queue;
 };
