@@ -3,7 +3,6 @@
 // the integrated circuit's, and a brush drop no longer forces sub-microsecond steps.
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 
 #include "model/model.hpp"
@@ -59,12 +58,9 @@ TEST(ModelFastCircuit, MatchesTheIntegratedCircuitJustBelowTheThreshold) {
 TEST(ModelFastCircuit, ABrushDropOnALowInductanceMotorIntegratesAtOrdinarySteps) {
   Model m = gearmotor(5e-5);
   m.effects.push_back(parse_effect("brush_drop:V_b_V=2"));
-  const auto start = std::chrono::steady_clock::now();
+  // 8 s at 1 ms in a fraction of a second (at the brush drop's sub-microsecond steps it took
+  // minutes, which the test's timeout would catch).
   const Outputs out = simulate(m, steps(8.0));
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  // 8 s at 1 ms: well under a second even in a debug build with sanitizers (it took minutes
-  // at the brush drop's sub-microsecond steps).
-  EXPECT_LT(seconds, 5.0);
   // Steady at 6 V: R i + V_b tanh(i/0.01) = v - Ke w and Kt i = Tc + c1 w.
   const double w = out.omega_rad_s[3999];
   const double i = out.i_A[3999];
