@@ -68,5 +68,20 @@ TEST(ModelFastCircuit, ABrushDropOnALowInductanceMotorIntegratesAtOrdinarySteps)
   EXPECT_NEAR(0.0062 * i, 0.0004 + 4e-7 * w, 1e-9);
 }
 
+TEST(ModelFastCircuit, AStrongBrushDropOnACircuitJustSlowerThanTheThresholdStaysOrdinary) {
+  // 4.2 ohm / 0.25 mH is integrated, but a 3 V drop adds 300 ohm near zero current
+  // (L / R_eff = 0.8 us): those steps take the current as algebraic. Reversals cross zero
+  // current every half period; the steady state holds its closed form.
+  Model m = gearmotor(2.5e-4);
+  m.effects.push_back(parse_effect("brush_drop:V_b_V=3"));
+  const Outputs out = simulate(m, steps(8.0));
+  const double w = out.omega_rad_s[3999];
+  const double i = out.i_A[3999];
+  EXPECT_NEAR(4.2 * i + 3.0 * std::tanh(i / 0.01), 6.0 - 0.0062 * w, 1e-6);
+  EXPECT_NEAR(0.0062 * i, 0.0004 + 4e-7 * w, 1e-9);
+  // At -3 V the whole drive is brush drop: the shaft runs down and sticks.
+  EXPECT_EQ(out.omega_rad_s.back(), 0.0);
+}
+
 }  // namespace
 }  // namespace mcg::model

@@ -30,6 +30,9 @@ constexpr double k_brush_i_A = 0.01;
 /// are solved as algebraic: the current follows within 50 us, far below any mechanical time
 /// constant, and a step resolving it would be microseconds (with the brush drop's slope, less).
 constexpr double k_quasi_static_rate = 2e4;
+/// Shortest step the motor circuit is integrated at; a circuit the brush drop's slope makes
+/// faster than this (L / R_eff under 4 us) is solved as algebraic for that step.
+constexpr double k_min_circuit_step_s = 2e-6;
 /// Events handled inside one integration step before the step is accepted as is.
 constexpr int k_max_events_per_step = 16;
 
@@ -317,13 +320,23 @@ class PlantImpl {
     }
     // The brush drop's slope V_b/0.01 A adds up to 70 ohm per volt of drop near zero current:
     // a stiff mode only while |i| is small, so the step follows the state.
+    // Where that slope makes the motor circuit faster than k_min_circuit_step_s can follow
+    // (a low-inductance motor with a strong drop, near zero current), the current is
+    // algebraic for the step: it follows the EMF within microseconds anyway.
+    const bool algebraic = m_motor_quasi;
     double t = m_t;
     double remaining = len;
     while (remaining > 1e-15) {
-      const double h_state = std::min(h_lim, brush_step_limit(h_lim));
+      double h_state = std::min(h_lim, brush_step_limit(h_lim));
+      if (!algebraic && h_state < k_min_circuit_step_s) {
+        m_motor_quasi = true;
+        m_y[I_M] = motor_current(m_y);
+        h_state = std::min(h_lim, brush_step_limit(h_lim));
+      }
       const double n = std::max(1.0, std::ceil(remaining / h_state - 1e-9));
       const double h = remaining / n;
       substep(t, h);
+      m_motor_quasi = algebraic;
       t += h;
       remaining -= h;
     }
