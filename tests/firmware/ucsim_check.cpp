@@ -174,8 +174,7 @@ class Sim {
 
   // One console command; returns its output without colour codes. The console echoes the command
   // and ends each answer with a NUL (its prompt); answers to earlier commands are skipped.
-  std::string console(const std::string& cmd)
-  {
+  std::string console(const std::string& cmd) {
     const std::string line = cmd + "\n";
     std::string out;
     // A busy simulator can answer late: every command used here may be sent again.
@@ -240,14 +239,19 @@ class Sim {
     return out;
   }
 
+  // Sends a request and waits for its answer, resending twice after 7 s of silence, as the
+  // host's Session does: a frame s51 took in before the firmware listened (the simulator is
+  // slower to start on a loaded machine) is lost like one on a real line.
   std::optional<Frame> request(std::uint8_t cmd, const Bytes& payload = {}) {
-    send_bytes(fwtest::encode(cmd, payload));
     const std::uint8_t want = static_cast<std::uint8_t>(cmd | MCG_REPLY_BIT);
-    for (const Frame& f : receive(20000, want)) {
-      if (f.cmd == want) {
-        return f;
+    for (int attempt = 0; attempt < 3; ++attempt) {
+      send_bytes(fwtest::encode(cmd, payload));
+      for (const Frame& f : receive(7000, want)) {
+        if (f.cmd == want) {
+          return f;
+        }
+        m_other.push_back(f);
       }
-      m_other.push_back(f);
     }
     return std::nullopt;
   }
