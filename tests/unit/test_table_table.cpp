@@ -6,7 +6,14 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <array>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <random>
+
+#include <fmt/format.h>
 #include <fstream>
 #include <sstream>
 
@@ -134,6 +141,46 @@ TEST(TableWrite, DigitsPerColumn) {
   w.row({0.1 + 0.2, 1234.5678});
   w.finish();
   EXPECT_EQ(out.str(), "t,rpm\n0.3,1235\n");
+}
+
+// Every number is written as printf's "%.Ng" (std::to_chars general with N digits), whichever
+// path formats it: values from each decade, random bit patterns, and values a hair from a
+// rounding midpoint at 10 digits (where a scaled double could round the wrong way).
+TEST(TableWrite, NumbersAreExactlyPrintfG) {
+  std::mt19937_64 rng(15);
+  std::uniform_real_distribution<double> decade(-8.0, 18.0);
+  std::vector<double> values{1.0, -1.0, 0.5, 9.9999999995, 9.9999999994999, 99999.999995, 1e-4, 9.99999999995e-5,
+                             0.00010000000005, 1e10, 9999999999.5, 9999999999.4999, 123456789012345.0, 1e15,
+                             0.1 + 0.2, 1e-300, 5e-324, -1.7976931348623157e308};
+  for (int n = 0; n < 60000; ++n) {
+    values.push_back(std::pow(10.0, decade(rng)) * ((rng() & 1U) != 0U ? -1.0 : 1.0));
+    const std::uint64_t bits = rng();
+    double any = 0.0;
+    std::memcpy(&any, &bits, sizeof any);
+    if (std::isfinite(any) && any != 0.0) values.push_back(any);
+    // a 10-digit midpoint times a power of ten, and its neighbours
+    const double mid = (static_cast<double>(rng() % 10000000000ULL) + 0.5) * std::pow(10.0, static_cast<double>(rng() % 20) - 14.0);
+    values.push_back(mid);
+    values.push_back(std::nextafter(mid, 0.0));
+    values.push_back(std::nextafter(mid, 1e300));
+  }
+  for (int digits = 1; digits <= 17; ++digits) {
+    std::ostringstream out;
+    Writer w(out);
+    w.header({"x"});
+    w.set_digits(std::size_t{0}, digits);
+    for (double v : values) w.row({v});
+    w.finish();
+    std::istringstream in(out.str());
+    std::string line;
+    std::getline(in, line);
+    for (double v : values) {
+      std::getline(in, line);
+      std::array<char, 40> want{};
+      char* end = std::to_chars(want.data(), want.data() + want.size(), v, std::chars_format::general, digits).ptr;
+      ASSERT_EQ(line, std::string(want.data(), end)) << "digits " << digits << ", value " << fmt::format("{}", v);
+    }
+  }
 }
 
 TEST(TableWrite, FullDeviceIsAnError) {

@@ -8,6 +8,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include "common/demand.hpp"
 #include <cerrno>
 #include <charconv>
@@ -25,6 +27,73 @@ constexpr std::size_t k_first_block = 4096;
 constexpr std::size_t k_read_block = 1 << 20;
 constexpr std::size_t k_write_block = 1 << 18;
 constexpr int k_default_digits = 10;
+
+/// Exact powers of ten (every one up to 1e22 is a double).
+constexpr std::array<double, 16> k_pow10{1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7,
+                                         1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15};
+
+constexpr std::string_view k_digit_pairs =
+    "00010203040506070809101112131415161718192021222324252627282930313233343536373839404142434445464748495051525354555657585960616263646566676869707172737475767778798081828384858687888990919293949596979899";
+
+/// Writes v (finite, not zero) as printf's "%.{digits}g" (general, trailing zeros dropped), the
+/// same characters as std::to_chars(general, digits). Values printed in fixed notation with at
+/// most 15 digits take a fast path: v scaled by an exact power of ten to a `digits`-digit integer,
+/// rounded, and printed. The scaling rounds once, and rounding is monotone, so the scaled value
+/// lies on the same side of each half as the exact one, or on the half itself (below 2^52 every
+/// half is a double): that tie, and everything else, goes to Ryu printf (std::to_chars). Twice as
+/// fast on a simulator's columns.
+char* format_general(char* p, double v, int digits) {
+  const double a = std::fabs(v);
+  if (digits <= 15 && a >= 1e-4 && a < 1e15) {
+    // x = floor(log10(a)), maybe one off at a power of ten: the range checks below catch that.
+    int x = 0;
+    if (a >= 1.0) {
+      while (x < 14 && a >= k_pow10[static_cast<std::size_t>(x + 1)]) ++x;
+    } else {
+      x = -1;
+      while (x > -4 && a * k_pow10[static_cast<std::size_t>(-x)] < 1.0) --x;
+    }
+    const int k = digits - 1 - x;
+    const double s = k >= 0 ? a * k_pow10[static_cast<std::size_t>(k)] : a / k_pow10[static_cast<std::size_t>(-k)];
+    const double whole = std::floor(s);
+    const double frac = s - whole;
+    if (frac != 0.5) {
+      auto n = static_cast<std::uint64_t>(whole) + (frac > 0.5 ? 1U : 0U);
+      const auto top = static_cast<std::uint64_t>(k_pow10[static_cast<std::size_t>(digits)]);
+      if (n == top) {  // 9.99...95 rounded up to the next power of ten
+        n /= 10;
+        ++x;
+      }
+      if (n >= top / 10 && n < top && x < digits && x >= -4) {
+        std::array<char, 16> dig{};
+        int nd = digits;
+        int j = digits;
+        for (; j >= 2; j -= 2) {  // two digits a division
+          const auto pair = static_cast<std::size_t>(n % 100);
+          n /= 100;
+          std::copy_n(k_digit_pairs.data() + 2 * pair, 2, dig.data() + j - 2);
+        }
+        if (j == 1) dig[0] = static_cast<char>('0' + n);
+        while (nd > 1 && dig[static_cast<std::size_t>(nd - 1)] == '0') --nd;
+        if (v < 0) *p++ = '-';
+        if (x < 0) {
+          *p++ = '0';
+          *p++ = '.';
+          p = std::fill_n(p, -x - 1, '0');
+          return std::copy_n(dig.data(), nd, p);
+        }
+        if (nd <= x + 1) {
+          p = std::copy_n(dig.data(), nd, p);
+          return std::fill_n(p, x + 1 - nd, '0');
+        }
+        p = std::copy_n(dig.data(), x + 1, p);
+        *p++ = '.';
+        return std::copy_n(dig.data() + x + 1, nd - x - 1, p);
+      }
+    }
+  }
+  return std::to_chars(p, p + 25, v, std::chars_format::general, digits).ptr;
+}
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
@@ -333,9 +402,7 @@ void Writer::set_digits(std::string_view name, int digits) {
 void Writer::row(std::span<const double> values) {
   MCG_DEMAND(values.size() == m_names.size());
   // Formatted straight into the buffer's tail: at most 25 characters a number ("%.17g" of a
-  // negative subnormal), a separator each. std::to_chars(general, N) writes what printf's
-  // "%.Ng" writes (and fmt's "{:.Ng}"), by Ryu printf: about a third faster than fmt 9, whose
-  // fixed-precision path falls back to Dragon4's big integers.
+  // negative subnormal), a separator each, as printf's "%.Ng" (format_general).
   const std::size_t used = m_buffer.size();
   m_buffer.resize(used + values.size() * 26 + 1);
   char* p = m_buffer.data() + used;
@@ -349,7 +416,7 @@ void Writer::row(std::span<const double> values) {
     } else if (v == 0) {
       *p++ = '0';
     } else {
-      p = std::to_chars(p, p + 25, v, std::chars_format::general, m_digits[c]).ptr;
+      p = format_general(p, v, m_digits[c]);
     }
   }
   *p++ = '\n';
