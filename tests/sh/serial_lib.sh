@@ -90,6 +90,25 @@ wait_rows() {
 # rows FILE: data rows of a CSV (lines after the header, metadata excluded).
 rows() { grep -v '^#' "$1" | tail -n +2 | grep -c .; }
 
+# pane: the screen of the tmux session $session (the console suites).
+pane() { tmux -L "$session" capture-pane -p -t "$session"; }
+
+# shows TEXT: waits up to 10 s for TEXT on the screen of $session.
+shows() {
+  local i
+  for i in $(seq 100); do
+    pane | grep -qF -- "$1" && return 0
+    sleep 0.1
+  done
+  echo "  the screen never showed '$1':"
+  pane | sed 's/^/  | /' | grep -v '^  | *$' | tail -8
+  return 1
+}
+
+# title_rpm, title_model: the measured and the model's speed in the console's title line.
+title_rpm() { pane | head -1 | sed -n 's/.* rpm \([0-9-]*\) .*/\1/p'; }
+title_model() { pane | head -1 | sed -n 's/.* model \([0-9-]*\) .*/\1/p'; }
+
 finish() {
   echo "$(basename "$0"): $((checks - failures)) of $checks checks passed"
   [ "$failures" = 0 ]

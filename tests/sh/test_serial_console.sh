@@ -17,21 +17,6 @@ cd "$work" || exit 1
 start_board ./ttyRIG
 tmux -L "$session" new-session -d -s "$session" -x 140 -y 40 \
   "mcg-serial -p ./ttyRIG console --seconds 120 2> console.err; echo console-exit=\$?; sleep 60"
-pane() { tmux -L "$session" capture-pane -p -t "$session"; }
-# shows TEXT: waits up to 10 s for TEXT on the screen.
-shows() {
-  local i
-  for i in $(seq 100); do
-    pane | grep -qF -- "$1" && return 0
-    sleep 0.1
-  done
-  echo "  the screen never showed '$1':"
-  pane | sed 's/^/  | /' | grep -v '^  | *$' | tail -8
-  return 1
-}
-# title_rpm: the measured speed in the title line.
-title_rpm() { pane | head -1 | sed -n 's/.* rpm \([0-9-]*\) .*/\1/p'; }
-title_model() { pane | head -1 | sed -n 's/.* model \([0-9-]*\) .*/\1/p'; }
 
 check "the console draws the stream and the registers" shows "board: mode open"
 tmux -L "$session" send-keys -t "$session" d

@@ -1,6 +1,8 @@
 // The console's state, keys and screen, without a board or a terminal.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <string>
 
 #include "link/console.hpp"
@@ -58,6 +60,20 @@ TEST(LinkConsole, KeepsTheSpanAndTheResidualRms) {
   for (int n = 0; n <= 1000; ++n) s.add({n * 0.004, 500.0, 497.0, 500.0, 0.3});
   EXPECT_EQ(s.samples().size(), 251U);  // 1 s of 4 ms samples, both ends
   EXPECT_DOUBLE_EQ(s.residual_rms_rpm, 3.0);
+}
+
+// The RMS covers the span only: residuals that left the span (10 rpm) no longer count, samples
+// without a measured speed (NaN while the estimator fills) never do.
+TEST(LinkConsole, TheResidualRmsForgetsWhatLeftTheSpan) {
+  ConsoleState s(1.0);
+  for (int n = 0; n < 500; ++n) s.add({n * 0.004, 510.0, 500.0, 500.0, 0.3});
+  EXPECT_DOUBLE_EQ(s.residual_rms_rpm, 10.0);
+  for (int n = 500; n < 1000; ++n) {
+    const double rpm = n % 2 == 0 ? std::nan("") : 502.0;
+    s.add({n * 0.004, rpm, 500.0, 500.0, 0.3});
+  }
+  EXPECT_NEAR(s.residual_rms_rpm, 2.0, 1e-9);
+  EXPECT_EQ(s.samples().size(), 251U);
 }
 
 TEST(LinkConsole, TheScreenDrawsMeasuredModelCommandAndStatus) {

@@ -32,18 +32,23 @@ namespace mcg::link {
 ConsoleState::ConsoleState(double span_s) : m_span_s(span_s) {}
 
 void ConsoleState::add(const ConsoleSample& s) {
-  m_samples.push_back(s);
-  while (m_samples.front().t_s < s.t_s - m_span_s) m_samples.pop_front();
-  double sq = 0.0;
-  std::size_t n = 0;
-  for (const auto& x : m_samples) {
+  // The residual's sums follow the samples in and out: constant work a sample, however long
+  // the span, so the stream never waits for the screen's arithmetic.
+  const auto tally = [this](const ConsoleSample& x, double sign) {
     const double r = x.rpm - x.rpm_model;
-    if (std::isfinite(r)) {
-      sq += r * r;
-      ++n;
-    }
+    if (!std::isfinite(r)) return;
+    m_residual_sq += sign * r * r;
+    m_residual_n = sign > 0 ? m_residual_n + 1 : m_residual_n - 1;
+  };
+  m_samples.push_back(s);
+  tally(s, 1.0);
+  while (m_samples.front().t_s < s.t_s - m_span_s) {
+    tally(m_samples.front(), -1.0);
+    m_samples.pop_front();
   }
-  residual_rms_rpm = n > 0 ? std::sqrt(sq / static_cast<double>(n)) : 0.0;
+  if (m_residual_n == 0) m_residual_sq = 0.0;  // no rounding left over from samples gone
+  residual_rms_rpm =
+      m_residual_n > 0 ? std::sqrt(std::max(m_residual_sq, 0.0) / static_cast<double>(m_residual_n)) : 0.0;
 }
 
 ConsoleAction ConsoleState::key(int key) {
@@ -194,7 +199,7 @@ std::vector<std::string> render_console(const ConsoleState& state, int width, in
     hi += 10.0;
   }
   grid[1] = fit(
-      fmt::format("{:>{}}speed, rpm: * measured  o model  - command (last {:.0f} s)", "", left, 10.0), width);
+      fmt::format("{:>{}}speed, rpm: * measured  o model  - command (last {:g} s)", "", left, state.span_s()), width);
   chart(grid, speed_top, speed_rows, left, width, samples, lo, hi,
         {{[](const ConsoleSample& s) { return s.rpm_cmd; }, '-'},
          {[](const ConsoleSample& s) { return s.rpm_model; }, 'o'},

@@ -43,6 +43,7 @@ class ConsoleState {
   /// Adds a sample; samples older than span_s before the newest leave.
   void add(const ConsoleSample& s);
   const std::deque<ConsoleSample>& samples() const { return m_samples; }
+  double span_s() const { return m_span_s; }
 
   /// A key: edits the prompt when one is open, else maps the key to an action (a key that
   /// needs a value opens a prompt and returns none until Enter).
@@ -54,7 +55,7 @@ class ConsoleState {
   std::string recording_path;
   std::size_t recorded_rows = 0;
   std::size_t lost_samples = 0;
-  double residual_rms_rpm = 0.0;  ///< RMS of rpm - rpm_model over the span
+  double residual_rms_rpm = 0.0;  ///< RMS of rpm - rpm_model over the span (finite ones)
 
   bool prompting() const { return !m_prompt.empty(); }
   std::string prompt_line() const { return m_prompt + m_typed; }
@@ -62,6 +63,8 @@ class ConsoleState {
  private:
   std::deque<ConsoleSample> m_samples;
   double m_span_s;
+  double m_residual_sq = 0.0;  ///< sum of (rpm - rpm_model)^2 over the span's finite residuals
+  std::size_t m_residual_n = 0;
   std::string m_prompt;  ///< "rpm_cmd = " while a value is typed
   std::string m_target;  ///< what the prompt sets
   ConsoleAction::Kind m_prompt_kind = ConsoleAction::Kind::none;
