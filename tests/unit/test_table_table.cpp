@@ -111,6 +111,62 @@ TEST(TableRead, StreamingReaderAcrossBlockBoundaries) {
   EXPECT_EQ(n, 200000);
 }
 
+// A large table (over 4 MiB a core) is parsed in parts, one a core: the rows come out in order,
+// the same as the streaming Reader's, CRLF and a last line without a newline included, and
+// an error names the first bad line of the whole input, whichever part holds it.
+std::string big_table(std::size_t rows) {
+  std::string text = "# source: test\n# sample_period: 0.001\nt,n,m\n";
+  for (std::size_t k = 0; k < rows; ++k) {
+    text += fmt::format("{},{},{}{}", 0.001 * static_cast<double>(k), k, -static_cast<double>(k) / 3.0,
+                        k % 7 == 0 ? "\r\n" : "\n");
+  }
+  text.pop_back();  // the last line without its newline
+  return text;
+}
+
+TEST(TableRead, LargeTableInPartsMatchesTheStreamingReader) {
+  const std::size_t n = 600000;  // about 18 MB
+  const std::string text = big_table(n);
+  const Table t = parse(text);
+  ASSERT_EQ(t.rows(), n);
+  EXPECT_EQ(t.first_line, 4U);
+  std::istringstream in(text);
+  Reader r(in, "in.csv");
+  for (std::size_t k = 0; k < n; ++k) {
+    ASSERT_TRUE(r.next());
+    ASSERT_EQ(t.columns[1][k], static_cast<double>(k));
+    ASSERT_EQ(t.columns[0][k], r[0]);
+    ASSERT_EQ(t.columns[2][k], r[2]);
+  }
+  EXPECT_FALSE(r.next());
+}
+
+// A line longer than a part (5 MiB of blanks before a value) is read whole.
+TEST(TableRead, LineLongerThanAPart) {
+  const std::string text = "t,v\n0,1\n" + std::string(5U << 20, ' ') + "1,2\n2,3\n";
+  const Table t = parse(text);
+  EXPECT_THAT(t.columns[0], ElementsAre(0.0, 1.0, 2.0));
+  EXPECT_THAT(t.columns[1], ElementsAre(1.0, 2.0, 3.0));
+}
+
+TEST(TableRead, LargeTableNamesTheFirstBadLine) {
+  std::string text = big_table(600000);
+  // Line 500003 holds row 499999, in the input's last part; line 12 holds row 8, in its first.
+  const auto line_start = [&](std::size_t line) {
+    std::size_t pos = 0;
+    for (std::size_t l = 1; l < line; ++l) pos = text.find('\n', pos) + 1;
+    return pos;
+  };
+  std::string late = text;
+  late.replace(line_start(500003), 1, "x");
+  EXPECT_EQ(error_of(late), "in.csv:500003: column 't': invalid number 'x99.999'");
+  std::string both = late;
+  both.insert(line_start(12), "1,");
+  EXPECT_EQ(error_of(both), "in.csv:12: more fields than the 3 columns of the header");
+  std::string tail = text + "\n# late metadata";
+  EXPECT_EQ(error_of(tail), "in.csv:600004: metadata line after the header");
+}
+
 TEST(TableWrite, RoundTripKeepsMetadataAndValues) {
   const Table t = parse("# seed: 42\nt,v,r_load\n0,1.25,inf\n0.001,-2,nan\n");
   std::ostringstream out;

@@ -2,6 +2,7 @@
 #include "table/table.hpp"
 
 #include "common/error.hpp"
+#include "common/parallel.hpp"
 #include "common/tool.hpp"
 
 #include <fmt/compile.h>
@@ -157,6 +158,78 @@ bool parse_number(std::string_view text, double& value) {
   return false;
 }
 
+namespace {
+
+/// Parses data line `line` (its '\r' removed) into `row` (one value a column); false with the
+/// message for "source:line: " in `error` when it is no row of this header.
+bool parse_line(std::string_view line, const std::vector<std::string>& columns, double* row, std::string& error) {
+  const std::string_view t = trim(line);
+  if (!t.empty() && t.front() == '#') {
+    error = "metadata line after the header";
+    return false;
+  }
+  if (t.empty() && columns.size() > 1) {
+    error = fmt::format("empty line, the header has {} columns", columns.size());
+    return false;
+  }
+  std::size_t column = 0;
+  std::size_t start = 0;
+  while (true) {
+    const auto comma = line.find(',', start);
+    const std::string_view field = line.substr(start, comma == std::string_view::npos ? line.npos : comma - start);
+    if (column >= columns.size()) {
+      error = fmt::format("more fields than the {} columns of the header", columns.size());
+      return false;
+    }
+    if (!parse_number(field, row[column])) {
+      error = fmt::format("column {}: invalid number {}", quote(columns[column]), quote(trim(field)));
+      return false;
+    }
+    ++column;
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  if (column != columns.size()) {
+    error = fmt::format("{} field{}, the header has {} columns", column, column == 1 ? "" : "s", columns.size());
+    return false;
+  }
+  return true;
+}
+
+/// A part of a table's text (whole lines) and its rows, parsed on a core of its own.
+struct Part {
+  std::string text;
+  std::vector<std::vector<double>> columns;  ///< its rows, column-major
+  std::size_t lines = 0;
+  std::size_t bad_line = 0;  ///< 1-based within the part; 0: every line parsed
+  std::string error;
+};
+
+/// Parses `part.text` into `part.columns`; stops at its first bad line.
+void parse_part(Part& part, const std::vector<std::string>& names) {
+  const std::string_view text = part.text;
+  part.lines = static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')) +
+               (!text.empty() && text.back() != '\n' ? 1 : 0);
+  part.columns.resize(names.size());
+  for (auto& c : part.columns) c.resize(part.lines);
+  part.bad_line = 0;
+  std::vector<double> row(names.size());
+  std::string_view rest = text;
+  for (std::size_t k = 0; k < part.lines; ++k) {
+    const auto nl = rest.find('\n');
+    std::string_view line = rest.substr(0, nl);
+    rest.remove_prefix(nl == std::string_view::npos ? rest.size() : nl + 1);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (!parse_line(line, names, row.data(), part.error)) {
+      part.bad_line = k + 1;
+      return;
+    }
+    for (std::size_t c = 0; c < row.size(); ++c) part.columns[c][k] = row[c];
+  }
+}
+
+}  // namespace
+
 Reader::Reader(std::istream& in, std::string source) : m_in(in), m_source(std::move(source)) {
   std::string_view line;
   while (true) {
@@ -238,37 +311,39 @@ bool Reader::read_line(std::string_view& line) {
   }
 }
 
-void Reader::parse_row(std::string_view line) {
-  std::size_t column = 0;
-  std::size_t start = 0;
-  while (true) {
-    const auto comma = line.find(',', start);
-    const std::string_view field = line.substr(start, comma == std::string_view::npos ? line.npos : comma - start);
-    if (column >= m_columns.size()) {
-      fail("{}:{}: more fields than the {} columns of the header", m_source, m_line, m_columns.size());
+bool Reader::take_lines(std::string& out, std::size_t bytes) {
+  out.assign(m_buffer, m_pos, m_end - m_pos);
+  m_pos = m_end = 0;
+  std::size_t checked = 0;  // out[0, checked) holds no newline
+  while (!m_eof) {
+    if (out.size() >= bytes) {
+      if (std::memchr(out.data() + checked, '\n', out.size() - checked) != nullptr) break;
+      checked = out.size();  // one line longer than `bytes`: read on to its end
     }
-    if (!parse_number(field, m_row[column])) {
-      fail("{}:{}: column {}: invalid number {}", m_source, m_line, quote(m_columns[column]), quote(trim(field)));
+    const std::size_t used = out.size();
+    out.resize(std::max(bytes, used + k_read_block));
+    const auto got = m_in.rdbuf()->sgetn(out.data() + used, static_cast<std::streamsize>(out.size() - used));
+    out.resize(used + static_cast<std::size_t>(std::max<std::streamsize>(got, 0)));
+    if (got <= 0) {
+      if (m_in.bad()) fail("{}: read error: {}", m_source, std::strerror(errno));
+      m_eof = true;
     }
-    ++column;
-    if (comma == std::string_view::npos) break;
-    start = comma + 1;
   }
-  if (column != m_columns.size()) {
-    fail("{}:{}: {} field{}, the header has {} columns", m_source, m_line, column, column == 1 ? "" : "s",
-         m_columns.size());
+  if (!m_eof) {
+    // The unfinished last line waits in the buffer for the next call.
+    const std::size_t keep = out.rfind('\n') + 1;
+    m_buffer.assign(out, keep);
+    m_end = m_buffer.size();
+    out.resize(keep);
   }
+  return !out.empty();
 }
 
 bool Reader::next() {
   std::string_view line;
   if (!read_line(line)) return false;
-  const std::string_view t = trim(line);
-  if (!t.empty() && t.front() == '#') fail("{}:{}: metadata line after the header", m_source, m_line);
-  if (t.empty() && m_columns.size() > 1) {
-    fail("{}:{}: empty line, the header has {} columns", m_source, m_line, m_columns.size());
-  }
-  parse_row(line);
+  std::string error;
+  if (!parse_line(line, m_columns, m_row.data(), error)) fail("{}:{}: {}", m_source, m_line, error);
   return true;
 }
 
@@ -317,14 +392,22 @@ Table read(std::istream& in, std::string source) {
   table.names = reader.columns();
   table.columns.resize(table.names.size());
   table.first_line = reader.line() + 1;
-  bool first = true;
-  while (reader.next()) {
-    if (first) {
-      table.first_line = reader.line();
-      first = false;
+  // Parts of 4 MiB of whole lines, one a core, parsed side by side and appended in order; the
+  // first bad line of the input is the one reported, as the Reader reports it. The parts'
+  // buffers are reused, so the memory is the table's and a part a core.
+  constexpr std::size_t k_part_bytes = std::size_t{4} << 20;
+  std::vector<Part> parts(parallel::worker_count(0, 64));
+  for (bool more = true; more;) {
+    std::size_t filled = 0;
+    while (filled < parts.size() && (more = reader.take_lines(parts[filled].text, k_part_bytes))) ++filled;
+    parallel::for_each(filled, 0, [&](std::size_t k) { parse_part(parts[k], table.names); });
+    for (std::size_t k = 0; k < filled; ++k) {
+      const Part& p = parts[k];
+      if (p.bad_line != 0) fail("{}:{}: {}", table.source, table.line_of(table.rows()) + p.bad_line - 1, p.error);
+      for (std::size_t c = 0; c < table.columns.size(); ++c) {
+        table.columns[c].insert(table.columns[c].end(), p.columns[c].begin(), p.columns[c].end());
+      }
     }
-    const auto& row = reader.row();
-    for (std::size_t c = 0; c < row.size(); ++c) table.columns[c].push_back(row[c]);
   }
   return table;
 }

@@ -57,10 +57,12 @@ class Reader {
   double operator[](std::size_t column) const { return m_row[column]; }
   /// 1-based line number of the current row (or of the header before the first next()).
   std::size_t line() const { return m_line; }
+  /// The input not read yet as whole lines, at least `bytes` of them unless the input ends
+  /// first, into `out` (its storage reused); false at the end. read() parses them on every core.
+  bool take_lines(std::string& out, std::size_t bytes);
 
  private:
   bool read_line(std::string_view& line);
-  void parse_row(std::string_view line);
 
   std::istream& m_in;
   std::string m_source;
@@ -95,7 +97,8 @@ struct Table {
   std::size_t line_of(std::size_t row) const { return first_line + row; }
 };
 
-/// Reads a whole table. Throws on an input with no header line.
+/// Reads a whole table. Throws on an input with no header line. A large input is parsed on
+/// every core, with the same errors (the first bad line of the input) as the Reader's.
 Table read(std::istream& in, std::string source);
 /// Reads the file at `path` ("-" = stdin).
 Table read_path(const std::string& path);
