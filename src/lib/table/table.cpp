@@ -29,9 +29,10 @@ constexpr std::size_t k_read_block = 1 << 20;
 constexpr std::size_t k_write_block = 1 << 18;
 constexpr int k_default_digits = 10;
 
-/// Exact powers of ten (every one up to 1e22 is a double).
-constexpr std::array<double, 16> k_pow10{1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7,
-                                         1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15};
+/// Exact powers of ten (every one up to 1e22 is a double); format_general scales by up to 1e18
+/// (15 digits of a value from 1e-4).
+constexpr std::array<double, 23> k_pow10{1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+                                         1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
 
 constexpr std::string_view k_digit_pairs =
     "00010203040506070809101112131415161718192021222324252627282930313233343536373839404142434445464748495051525354555657585960616263646566676869707172737475767778798081828384858687888990919293949596979899";
