@@ -49,6 +49,18 @@ sleep 1
 check "mcg-serial stream | mcg-sim --compare --open-loop: a row per sample, the gap beside the speed"   'S stream --seconds 1 | mcg-sim --compare --open-loop > live.csv 2> live.err && [ "$(rows live.csv | wc -l)" = 251 ] &&
    col live.csv rpm_residual | tail -1 | grep -qE "^-?[0-9]"'
 check "the board's regime is reported on stderr" 'grep -q "^mcg-sim: rpm residual, clutch 2, load closed, forward: " live.err'
+# Unedited: the capture says the board ran open loop (board_config mode=open), so its rpm_cmd
+# column (the register's power-on 420) drives nothing; the rig was already turning, so the
+# model starts at the first measured speed, and with the board's effect the gap is the
+# estimator's quantisation (1.8 rpm a count), not the 1000 rpm of a start from rest.
+check "mcg-serial stream | mcg-sim --compare, no options: open loop, as the board ran" \
+  'S stream --seconds 1 | mcg-sim --compare --effect supply_sag:R_s_ohm=2.5 > unedited.csv 2> unedited.err &&
+   ! grep -q "^# controller:" unedited.csv && grep -q "^# timing: v, clutch, r_load of row n act" unedited.csv'
+check "the model starts as the capture found the rig" \
+  'grep -q "^# initial_state: the motor at [0-9.]* rpm (rpm_measured at t = 0.016), t = 0$" unedited.csv'
+rms_live=$(sed -n 's/^mcg-sim: rpm residual, clutch 2, load closed, forward: \([0-9.e+-]*\) rpm RMS.*/\1/p' unedited.err)
+check "and the residual is the quantisation's: under 2 rpm RMS over the second (got ${rms_live:-nothing})" \
+  'awk -v r="${rms_live:-999}" "BEGIN { exit !(r < 2) }"'
 kill "$board" 2> /dev/null
 wait "$board" 2> /dev/null
 echo "sim compare: $passed passed, $failed failed"

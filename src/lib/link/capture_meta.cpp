@@ -3,8 +3,14 @@
 
 #include <fmt/format.h>
 
+#include <sstream>
+
+#include "common/error.hpp"
+#include "common/quote.hpp"
 #include "config/ini.hpp"       // Ini, format_number
 #include "link/connection.hpp"  // Connection
+#include "link/registers.hpp"
+#include "mcg_protocol.h"       // MCG_REG_*
 #include "model/model.hpp"      // model_from_ini
 #include "table/table.hpp"      // Writer
 
@@ -28,6 +34,50 @@ std::vector<std::pair<std::string, std::string>> board_config(Connection& c) {
     out.emplace_back(name, format_value(reg, c.session->read(reg), frac));
   }
   return out;
+}
+
+std::optional<CapturedBoard> captured_board(const table::Metadata& meta, std::string_view where) {
+  const std::optional<std::string> text = meta.get("board_config");
+  if (!text) return std::nullopt;
+  CapturedBoard board;
+  board.text = *text;
+  std::vector<std::pair<const RegisterInfo*, std::string>> pairs;
+  std::istringstream words(*text);
+  for (std::string word; words >> word;) {
+    const auto eq = word.find('=');
+    const RegisterInfo* reg = eq == std::string::npos ? nullptr : find_register(std::string_view(word).substr(0, eq));
+    if (reg == nullptr) fail("{}: board_config: {} is not NAME=value of a register", where, quote(word));
+    pairs.emplace_back(reg, word.substr(eq + 1));
+  }
+  const std::string at = fmt::format("{}: board_config", where);
+  const auto value_of = [&](const RegisterInfo& reg, const std::string& value, int frac) {
+    const double v = parse_value(reg, value, at);
+    try {
+      return to_raw(reg, v, frac);
+    } catch (const Error& e) {
+      fail("{}: {}", at, e.what());
+    }
+  };
+  // The gains are in units of 2^-coef_frac: coef_frac first.
+  int frac = require_register("coef_frac").raw_default;
+  bool has_mode = false;
+  for (const auto& [reg, value] : pairs) {
+    if (reg->name == "coef_frac") frac = value_of(*reg, value, 0);
+  }
+  for (const auto& [reg, value] : pairs) {
+    const std::int16_t raw = value_of(*reg, value, reg->unit == Unit::Gain ? frac : 0);
+    if (reg->id == MCG_REG_MODE) {
+      board.mode = raw;
+      board.mode_name = value;
+      has_mode = true;
+    } else if (reg->id == MCG_REG_COEF_FRAC || reg->id == MCG_REG_KP || reg->id == MCG_REG_B0 ||
+               reg->id == MCG_REG_B1 || reg->id == MCG_REG_B2 || reg->id == MCG_REG_DUTY_BIAS ||
+               reg->id == MCG_REG_DUTY_MIN || reg->id == MCG_REG_DUTY_MAX) {
+      board.registers.emplace_back(reg->id, raw);
+    }
+  }
+  if (!has_mode) fail("{}: board_config: no mode (the capture does not say what the board ran)", where);
+  return board;
 }
 
 void write_rig_meta(table::Writer& w, const Rig& rig, const std::vector<std::pair<std::string, std::string>>& config) {

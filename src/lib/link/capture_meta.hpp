@@ -2,7 +2,10 @@
 // board's configuration, so that the model reads the file unedited (mcg-csv(5)).
 #pragma once
 
+#include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -10,6 +13,7 @@
 
 namespace mcg::table {
 class Writer;
+class Metadata;
 }
 
 namespace mcg::link {
@@ -42,6 +46,21 @@ Rig load_rig(const RigOptions& options);
 /// The registers that decide what the board does with its inputs, as NAME=value pairs in
 /// engineering units (mode, rpm_cmd, clutch, load, the controller's coefficients and limits).
 std::vector<std::pair<std::string, std::string>> board_config(Connection& c);
+
+/// What a capture's `# board_config` says the board ran: its mode, and the raw values of the
+/// registers that shape its controller's output (coef_frac, kp, b0..b2, duty_bias, duty_min,
+/// duty_max) as the firmware core takes them.
+struct CapturedBoard {
+  std::int16_t mode = 0;  ///< MCG_MODE_*
+  std::string mode_name;  ///< "open", "p", "pi", "pid"
+  std::vector<std::pair<std::uint8_t, std::int16_t>> registers;  ///< register id, raw value
+  std::string text;       ///< the board_config line as the capture states it
+};
+
+/// Reads `# board_config` (written by write_rig_meta); nullopt when the metadata has none.
+/// Throws mcg::Error "<where>: board_config: ..." for a pair that is not NAME=value of a
+/// register, or a value outside it.
+std::optional<CapturedBoard> captured_board(const table::Metadata& meta, std::string_view where);
 
 /// `# supply_V`, `# r_load_relay_ohm` and `# board_config` metadata lines.
 void write_rig_meta(table::Writer& w, const Rig& rig,

@@ -253,6 +253,10 @@ class Plant {
   Plant(Plant&&) noexcept;
   Plant& operator=(Plant&&) noexcept;
 
+  /// Before the first step: the motor shaft turning at omega_rad_s (the generator's with it
+  /// when the clutch is engaged), the currents at zero, as a capture that starts mid-run found
+  /// the rig.
+  void start_at(double omega_rad_s);
   /// Advances by dt_s > 0 with `drive` held over [t, t + dt_s). A clutch change takes effect
   /// at the start of the step.
   void step(double dt_s, const Drive& drive);

@@ -87,6 +87,19 @@ class PlantImpl {
     }
   }
 
+  void start_at(double w) {
+    MCG_DEMAND(m_t == 0.0 && std::isfinite(w));
+    m_y[W_M] = w;
+    m_stuck_m = (w == 0.0);
+    m_dir_m = sign_of(w);
+    if (m_clutch == 2) {
+      m_y[W_G] = w;
+      m_stuck_g = (w == 0.0);
+      m_dir_g = sign_of(w);
+    }
+    if (gen_quasi_static()) m_y[I_G] = gen_current(m_y);
+  }
+
   State state() const {
     State s;
     s.t_s = m_t;
@@ -691,6 +704,7 @@ Plant& Plant::operator=(Plant&& other) noexcept {
   return *this;
 }
 void Plant::step(double dt_s, const Drive& drive) { m_impl->step(dt_s, drive); }
+void Plant::start_at(double omega_rad_s) { m_impl->start_at(omega_rad_s); }
 State Plant::state() const { return m_impl->state(); }
 double Plant::time_s() const { return m_impl->time(); }
 

@@ -43,16 +43,9 @@ namespace {
 /// The board's encoder input: the pulses between two ticks, without direction.
 class BoardController final : public LoopController {
  public:
-  explicit BoardController(const boardunits::BoardFixedPoint& q)
-      : m_mode(static_cast<std::int16_t>(q.mode == "p" ? MCG_MODE_P : q.mode == "pi" ? MCG_MODE_PI : MCG_MODE_PID)) {
-    m_core.write(MCG_REG_COEF_FRAC, static_cast<std::int16_t>(q.coef_frac));
-    if (q.mode == "p") {
-      m_core.write(MCG_REG_KP, static_cast<std::int16_t>(q.regs.at(0)));
-    } else {
-      m_core.write(MCG_REG_B0, static_cast<std::int16_t>(q.regs.at(0)));
-      m_core.write(MCG_REG_B1, static_cast<std::int16_t>(q.regs.at(1)));
-      m_core.write(MCG_REG_B2, static_cast<std::int16_t>(q.regs.at(2)));
-    }
+  BoardController(std::int16_t mode, const std::vector<std::pair<std::uint8_t, std::int16_t>>& registers)
+      : m_mode(mode) {
+    for (const auto& [id, raw] : registers) m_core.write(id, raw);
   }
 
   double tick(double theta_rad, double rpm_cmd) override {
@@ -129,8 +122,23 @@ bool board_takes_command(double rpm_cmd) {
   return rpm_cmd == 0.0 || (rpm_cmd == std::floor(rpm_cmd) && rpm_cmd >= r.lo && rpm_cmd <= r.hi);
 }
 
-std::unique_ptr<LoopController> board_loop_controller(const boardunits::BoardFixedPoint& registers) {
-  return std::make_unique<BoardController>(registers);
+std::unique_ptr<LoopController> board_loop_controller(const boardunits::BoardFixedPoint& q) {
+  std::vector<std::pair<std::uint8_t, std::int16_t>> registers{{MCG_REG_COEF_FRAC, static_cast<std::int16_t>(q.coef_frac)}};
+  if (q.mode == "p") {
+    registers.emplace_back(MCG_REG_KP, static_cast<std::int16_t>(q.regs.at(0)));
+  } else {
+    registers.emplace_back(MCG_REG_B0, static_cast<std::int16_t>(q.regs.at(0)));
+    registers.emplace_back(MCG_REG_B1, static_cast<std::int16_t>(q.regs.at(1)));
+    registers.emplace_back(MCG_REG_B2, static_cast<std::int16_t>(q.regs.at(2)));
+  }
+  const auto mode = static_cast<std::int16_t>(q.mode == "p" ? MCG_MODE_P : q.mode == "pi" ? MCG_MODE_PI : MCG_MODE_PID);
+  return std::make_unique<BoardController>(mode, registers);
+}
+
+std::unique_ptr<LoopController> board_loop_controller(std::int16_t mode,
+                                                      const std::vector<std::pair<std::uint8_t, std::int16_t>>& registers) {
+  MCG_DEMAND(mode != MCG_MODE_OPEN);
+  return std::make_unique<BoardController>(mode, registers);
 }
 
 std::unique_ptr<LoopController> equation_loop_controller(const Controller& controller) {

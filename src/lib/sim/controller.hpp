@@ -2,9 +2,11 @@
 // equation in double for designs the board cannot run.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "boardunits/controller.hpp"  // Controller, the [controller] section
@@ -49,6 +51,10 @@ class LoopController {
 /// `mcg-serial set` would; a command of 0 sets mode open at duty 0 (the board at rest).
 /// Its duty is the core's, in 1/1000. Uses the process's one firmware core while it lives.
 std::unique_ptr<LoopController> board_loop_controller(const boardunits::BoardFixedPoint& registers);
+/// The same core with raw registers (id, value) written at power-on, as a capture's
+/// board_config states them, run in `mode` (MCG_MODE_P, _PI or _PID) while a command is in force.
+std::unique_ptr<LoopController> board_loop_controller(std::int16_t mode,
+                                                      const std::vector<std::pair<std::uint8_t, std::int16_t>>& registers);
 
 /// The difference equation in double (ControllerState) on the signed encoder counts of each
 /// sample: rpm = (count(t) - count(t - dt_s)) / 2048 / dt_s * 60. Runs any [controller] (lead,

@@ -18,8 +18,9 @@
 #include "common/error.hpp"
 #include "common/fd_input.hpp"
 #include "config/ini.hpp"
+#include "link/capture_meta.hpp"
 #include "mcg/version.hpp"
-#include "mcg_protocol.h"  // MCG_FW_VERSION_*
+#include "mcg_protocol.h"  // MCG_FW_VERSION_*, MCG_MODE_OPEN
 #include "model/model.hpp"
 #include "sim/controller.hpp"
 #include "measurement/measurement.hpp"
@@ -118,6 +119,14 @@ std::string board_text(const boardunits::BoardFixedPoint& q, const Controller& c
       design_text(c, configured));
 }
 
+/// The `controller` metadata of --loop board on a capture's own registers.
+std::string captured_text(const link::CapturedBoard& board) {
+  return fmt::format(
+      "board: the firmware core {}.{}.{} (host build), mode {}, the registers of the capture's board_config ({}); "
+      "error from the encoder pulses of each 1 ms tick (2048 counts/rev, no direction)",
+      MCG_FW_VERSION_MAJOR, MCG_FW_VERSION_MINOR, MCG_FW_VERSION_PATCH, board.mode_name, board.text);
+}
+
 /// The `controller` metadata of --loop equation.
 std::string equation_text(const Controller& c, bool configured) {
   return fmt::format("equation: the difference equation in double, {}, round_output = {}, duty_resolution = {}; "
@@ -162,7 +171,13 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   if (!reader.next()) fail("{}: no data rows", source);
 
   // The columns are resolved at the first row, so that an input without rows says so first.
-  const bool closed = reader.find("rpm_cmd").has_value() && !opt.open_loop;
+  // A board's capture states what the board ran when it started (board_config). Without a
+  // [controller] of the user's, that decides: in mode open the rpm_cmd column drives nothing
+  // (the measured duty does), in a closed-loop mode the board's own registers run the loop.
+  const std::optional<link::CapturedBoard> captured = link::captured_board(reader.metadata(), source);
+  const bool board_open = captured && captured->mode == MCG_MODE_OPEN && !configured;
+  const bool closed = reader.find("rpm_cmd").has_value() && !opt.open_loop && !board_open;
+  const bool captured_loop = closed && on_board && captured && !configured;
   const std::size_t t_col = reader.require("t");
   std::optional<std::size_t> drive_col;
   bool drive_is_duty = false;
@@ -278,10 +293,27 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
     meta.set("v_gen_measurement", fmt::format("noise sigma {} V", config::format_number(opt.noise_v_gen_V)));
   }
   if (noisy) meta.set("seed", std::to_string(opt.seed));
-  if (closed) meta.set("controller", on_board ? board_text(*registers, controller, configured.has_value())
-                                              : equation_text(controller, configured.has_value()));
-  writer.metadata(meta);
-  writer.header(names);
+  if (closed) {
+    meta.set("controller", captured_loop ? captured_text(*captured)
+                           : on_board    ? board_text(*registers, controller, configured.has_value())
+                                         : equation_text(controller, configured.has_value()));
+  }
+  // Replaying a capture in open loop, the model starts as the capture found the rig: at its
+  // first measured speed (the estimator's first window, a few rows in). Until that row the
+  // rows wait, with the metadata, which states the start (at most k_start_rows rows).
+  const bool start_measured = opt.compare && rpm_measured_col.has_value() && !closed;
+  constexpr std::size_t k_start_rows = 256;
+  double omega0_rad_s = 0.0;
+  const auto begin_output = [&](double rpm0, double t_rpm0) {
+    if (rpm0 != 0.0) {
+      omega0_rad_s = rpm0 * std::numbers::pi / 30.0;
+      meta.set("initial_state", fmt::format("the motor at {} rpm (rpm_measured at t = {}), t = {}",
+                                            config::format_number(rpm0), config::format_number(t_rpm0),
+                                            config::format_number(t_first)));
+    }
+    writer.metadata(meta);
+    writer.header(names);
+  };
 
   model::SimOptions sim_opt;
   sim_opt.max_step_s = opt.max_step_s;
@@ -297,27 +329,12 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   std::vector<double> row(names.size());
   double t_prev = 0.0;
   bool first = true;
-  do {
-    // The checks of one row, in the order a whole-table check reports them.
-    const double t = reader[t_col];
-    require_finite_value(t, reader, "t");
-    if (!first && !(t > t_prev)) {
-      fail("{}:{}: column 't': {} does not increase (previous row: {})", source, reader.line(),
-           fmt::format("{:.10g}", t), fmt::format("{:.10g}", t_prev));
-    }
-    const double drive_value = reader[*drive_col];
-    require_finite_value(drive_value, reader, reader.columns()[*drive_col]);
-    const double clutch = clutch_col ? reader[*clutch_col] : static_cast<double>(opt.clutch);
-    if (clutch_col) require_finite_value(clutch, reader, "clutch");
-    const double r_load = r_load_col ? reader[*r_load_col] : opt.r_load_ohm;
-    if (!(clutch == 0.0 || clutch == 1.0 || clutch == 2.0)) {
-      fail("{}:{}: column 'clutch': {} is not a clutch state (0, 1 or 2)", source, reader.line(),
-           config::format_number(clutch));
-    }
-    if (std::isnan(r_load) || r_load < 0.0) {
-      fail("{}:{}: column 'r_load': {} is not a load (>= 0 ohm, inf = open circuit)", source, reader.line(),
-           config::format_number(r_load));
-    }
+  // One input row into the model and out: the state at t_n, then the row's inputs.
+  const auto emit = [&](const std::vector<double>& in_row) {
+    const double t = in_row[t_col];
+    const double drive_value = in_row[*drive_col];
+    const double clutch = clutch_col ? in_row[*clutch_col] : static_cast<double>(opt.clutch);
+    const double r_load = r_load_col ? in_row[*r_load_col] : opt.r_load_ohm;
     const int clutch_state = static_cast<int>(clutch);
 
     // Row n's output is the state at t_n, just before row n's inputs (and a clutch or relay
@@ -325,20 +342,21 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
     model::State s;
     double duty = 0.0;
     if (closed) {
-      if (on_board && !board_takes_command(drive_value)) {
-        fail("{}:{}: column 'rpm_cmd': {} is not a command the board takes (0 = off, or a whole rpm in "
-             "120..720; --loop equation takes any)",
-             source, reader.line(), config::format_number(drive_value));
-      }
       if (!loop) {
-        loop.emplace(model, on_board ? board_loop_controller(*registers) : equation_loop_controller(controller),
+        loop.emplace(model,
+                     captured_loop ? board_loop_controller(captured->mode, captured->registers)
+                     : on_board    ? board_loop_controller(*registers)
+                                   : equation_loop_controller(controller),
                      sim_opt, clutch_state);
       }
       loop->row(t, drive_value, clutch_state, r_load);
       s = loop->state();
       duty = loop->duty();
     } else {
-      if (!plant) plant.emplace(model, sim_opt, clutch_state);
+      if (!plant) {
+        plant.emplace(model, sim_opt, clutch_state);
+        plant->start_at(omega0_rad_s);
+      }
       if (!first) plant->step(t - t_prev, drive);
       s = plant->state();
       drive = model::Drive{drive_is_duty ? drive_value * supply : drive_value, clutch_state, r_load};
@@ -351,7 +369,7 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
     if (opt.noise_v_gen_V > 0.0) v_gen += opt.noise_v_gen_V * unit(rng);
     if (opt.adc) i_meas = adc.quantise(i_meas);
 
-    const double rpm_measured = rpm_measured_col ? reader[*rpm_measured_col] : rpm;
+    const double rpm_measured = rpm_measured_col ? in_row[*rpm_measured_col] : rpm;
     const bool load_closed = std::isfinite(r_load);
     double rpm_residual = 0.0;
     double rpm_residual_rms = 0.0;
@@ -362,12 +380,12 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
       rpm_residual_rms = rpm_regimes.add(clutch_state, load_closed, rpm_measured, rpm_residual);
     }
     if (i_measured_col) {
-      i_residual = reader[*i_measured_col] - i_meas;
+      i_residual = in_row[*i_measured_col] - i_meas;
       i_residual_rms = i_regimes.add(clutch_state, load_closed, rpm_measured, i_residual);
     }
     for (std::size_t c = 0; c < plan.size(); ++c) {
       switch (plan[c].what) {
-        case Out::Input: row[c] = reader[plan[c].input]; break;
+        case Out::Input: row[c] = in_row[plan[c].input]; break;
         case Out::Clutch: row[c] = clutch; break;
         case Out::RLoad: row[c] = r_load; break;
         case Out::Duty: row[c] = duty; break;
@@ -388,7 +406,58 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
     writer.row(row);
     t_prev = t;
     first = false;
+  };
+
+  std::vector<std::vector<double>> waiting;  // rows before the model's start (start_measured)
+  bool started = !start_measured;
+  if (started) begin_output(0.0, t_first);
+  double t_checked = 0.0;
+  bool first_checked = true;
+  do {
+    // The checks of one row, in the order a whole-table check reports them.
+    const double t = reader[t_col];
+    require_finite_value(t, reader, "t");
+    if (!first_checked && !(t > t_checked)) {
+      fail("{}:{}: column 't': {} does not increase (previous row: {})", source, reader.line(),
+           fmt::format("{:.10g}", t), fmt::format("{:.10g}", t_checked));
+    }
+    const double drive_value = reader[*drive_col];
+    require_finite_value(drive_value, reader, reader.columns()[*drive_col]);
+    const double clutch = clutch_col ? reader[*clutch_col] : static_cast<double>(opt.clutch);
+    if (clutch_col) require_finite_value(clutch, reader, "clutch");
+    const double r_load = r_load_col ? reader[*r_load_col] : opt.r_load_ohm;
+    if (!(clutch == 0.0 || clutch == 1.0 || clutch == 2.0)) {
+      fail("{}:{}: column 'clutch': {} is not a clutch state (0, 1 or 2)", source, reader.line(),
+           config::format_number(clutch));
+    }
+    if (std::isnan(r_load) || r_load < 0.0) {
+      fail("{}:{}: column 'r_load': {} is not a load (>= 0 ohm, inf = open circuit)", source, reader.line(),
+           config::format_number(r_load));
+    }
+    if (closed && on_board && !board_takes_command(drive_value)) {
+      fail("{}:{}: column 'rpm_cmd': {} is not a command the board takes (0 = off, or a whole rpm in "
+           "120..720; --loop equation takes any)",
+           source, reader.line(), config::format_number(drive_value));
+    }
+    t_checked = t;
+    first_checked = false;
+    if (started) {
+      emit(reader.row());
+      continue;
+    }
+    waiting.push_back(reader.row());
+    const double rpm0 = reader[*rpm_measured_col];
+    if (std::isfinite(rpm0) || waiting.size() >= k_start_rows) {
+      begin_output(std::isfinite(rpm0) ? rpm0 : 0.0, t);
+      for (const auto& w : waiting) emit(w);
+      waiting.clear();
+      started = true;
+    }
   } while (reader.next());
+  if (!started) {
+    begin_output(0.0, t_first);
+    for (const auto& w : waiting) emit(w);
+  }
   writer.finish();
   if (rpm_measured_col) rpm_regimes.report(report, "rpm", "rpm");
   if (i_measured_col) i_regimes.report(report, "i", "A");
