@@ -17,9 +17,18 @@ keys() { tmux -L "$session" send-keys -t "$session" "$@"; }
 
 mcg-design pi --pm 50 --zero 500 --plant '16.557/((s/65+1)*(s/950+1))' --loop --dt 0.001 > pi.ini
 start_board ./ttyRIG
+mcg-serial -p ./ttyRIG set duty 40
+sleep 1
 tmux -L "$session" new-session -d -s "$session" -x 140 -y 40 \
   "mcg-serial -p ./ttyRIG console --seconds 120 2> console.err; echo console-exit=\$?; sleep 60"
 check "the console runs" shows "board: mode open"
+# The rig was turning when the console started: the model starts at the first measured speed,
+# so no spin-up from rest enters the residual (3.5 rpm RMS over the first seconds when it did;
+# the count quantisation alone is under 1).
+sleep 2
+residual=$(pane | head -1 | sed -n 's/.* residual RMS \([0-9.]*\) rpm.*/\1/p')
+check "the model starts as the console found the rig (residual RMS ${residual:-?} rpm)" \
+  awk -v r="${residual:-999}" 'BEGIN { exit !(r < 2) }'
 
 keys o p i . i n i Enter
 check "o loads the design INI" shows "loaded pi.ini"

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <fstream>
+#include <limits>
 #include <mutex>
 #include <numbers>
 #include <optional>
@@ -456,10 +457,17 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
             drive.v_V = std::isfinite(r.duty) ? r.duty * rig.supply_V : 0.0;
             drive.clutch = std::isfinite(r.clutch) ? static_cast<int>(r.clutch) : 2;
             drive.r_load_ohm = r.load == 1.0 ? rig.r_load_ohm : model::k_open_circuit;
-            if (!plant) plant.emplace(model, model::SimOptions{}, drive.clutch);
-            plant->step(k_sample_s, drive);
-            state.add(
-                {r.t_s, r.rpm, plant->state().omega_rad_s * 30.0 / std::numbers::pi, r.rpm_cmd, r.duty});
+            // The model starts as the console found the rig: at the first measured speed.
+            if (!plant && std::isfinite(r.rpm)) {
+              plant.emplace(model, model::SimOptions{}, drive.clutch);
+              plant->start_at(r.rpm * std::numbers::pi / 30.0);
+            }
+            double rpm_model = std::numeric_limits<double>::quiet_NaN();
+            if (plant) {
+              plant->step(k_sample_s, drive);
+              rpm_model = plant->state().omega_rad_s * 30.0 / std::numbers::pi;
+            }
+            state.add({r.t_s, r.rpm, rpm_model, r.rpm_cmd, r.duty});
             if (rec.writer) {
               write_stream_row(*rec.writer, r, rig);
               ++recorded;
