@@ -61,6 +61,19 @@ check "the model starts as the capture found the rig" \
 rms_live=$(sed -n 's/^mcg-sim: rpm residual, clutch 2, load closed, forward: \([0-9.e+-]*\) rpm RMS.*/\1/p' unedited.err)
 check "and the residual is the quantisation's: under 2 rpm RMS over the second (got ${rms_live:-nothing})" \
   'awk -v r="${rms_live:-999}" "BEGIN { exit !(r < 2) }"'
+# A closed loop found running: the board's designed PI holding 500 rpm. The capture's
+# registers run the model's loop (no --config), from the measured speed and duty.
+mcg-design pi --pm 50 --zero 500 --plant '16.557/((s/65+1)*(s/950+1))' --loop --dt 0.001 > pi.ini
+check "the board holds 500 rpm under a designed PI" 'S load pi.ini > /dev/null && S set rpm_cmd 500'
+sleep 2
+check "mcg-serial stream | mcg-sim --compare runs the capture's own registers" \
+  'S stream --seconds 1 | mcg-sim --compare --effect supply_sag:R_s_ohm=2.5 > loop.csv 2> loop.err &&
+   grep -q "^# controller: board: the firmware core .*, mode pi, the registers of the capture.s board_config (mode=pi " loop.csv'
+check "from the loop as the capture found it" \
+  'grep -q "^# initial_state: the motor at [0-9.]* rpm (rpm_measured at t = 0.016), the controller.s output at duty 0.[0-9]* (the capture.s first), t = 0$" loop.csv'
+rms_loop=$(sed -n 's/^mcg-sim: rpm residual, clutch 2, load closed, forward: \([0-9.e+-]*\) rpm RMS.*/\1/p' loop.err)
+check "board and model loops agree within 2 rpm RMS (got ${rms_loop:-nothing})" \
+  'awk -v r="${rms_loop:-999}" "BEGIN { exit !(r < 2) }"'
 kill "$board" 2> /dev/null
 wait "$board" 2> /dev/null
 echo "sim compare: $passed passed, $failed failed"

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <numbers>
 
 #include "board/core.hpp"  // FirmwareCore
 #include "common/error.hpp"
@@ -38,7 +39,18 @@ double ControllerState::step(double error_rpm) {
   return std::clamp(duty, -1.0, 1.0);
 }
 
+void ControllerState::preset(double duty) {
+  std::fill(m_e.begin(), m_e.end(), 0.0);
+  std::fill(m_y.begin(), m_y.end(), duty * m_c.duty_full_scale);
+}
+
 namespace {
+
+/// The encoder count a tick before the first one of a shaft turning at omega_rad_s whose angle
+/// is 0 at the first tick.
+double count_a_tick_before(double omega_rad_s, double dt_s) {
+  return encoder_count(-omega_rad_s * dt_s, boardunits::k_board_counts_per_rev);
+}
 
 /// The board's encoder input: the pulses between two ticks, without direction.
 class BoardController final : public LoopController {
@@ -73,6 +85,19 @@ class BoardController final : public LoopController {
 
   double dt_s() const override { return boardunits::k_tick_s; }
 
+  void start_at(double omega_rad_s, double duty) override {
+    // The duty set in open mode, then three ticks at the speed's pulses (the PID's history):
+    // the first tick with a command switches the mode, bumpless from that duty.
+    const double per_tick = std::fabs(omega_rad_s) * dt_s() * boardunits::k_board_counts_per_rev / (2.0 * std::numbers::pi);
+    const auto pulses = static_cast<std::uint16_t>(std::lround(std::fmin(per_tick, std::numeric_limits<std::uint16_t>::max())));
+    const long raw = std::clamp(std::lround(duty * boardunits::k_board_duty_full), static_cast<long>(m_core.read(MCG_REG_DUTY_MIN)),
+                                static_cast<long>(m_core.read(MCG_REG_DUTY_MAX)));
+    m_core.write(MCG_REG_DUTY, static_cast<std::int16_t>(raw));
+    for (int k = 0; k < 3; ++k) m_core.tick(pulses);
+    m_started = true;
+    m_count = count_a_tick_before(omega_rad_s, dt_s());
+  }
+
  private:
   board::FirmwareCore m_core;
   std::int16_t m_mode;          ///< the controller's mode register while a command is in force
@@ -98,6 +123,12 @@ class EquationController final : public LoopController {
   }
 
   double dt_s() const override { return m_dt_s; }
+
+  void start_at(double omega_rad_s, double duty) override {
+    m_state.preset(duty);
+    m_started = true;
+    m_count = count_a_tick_before(omega_rad_s, m_dt_s);
+  }
 
  private:
   ControllerState m_state;
@@ -152,6 +183,12 @@ ClosedLoop::ClosedLoop(const model::Model& model, std::unique_ptr<LoopController
       m_dt_s(m_ctl->dt_s()),
       m_tol_s(1e-9 * m_dt_s),
       m_supply_V(model.params.supply_V) {}
+
+void ClosedLoop::start_at(double omega_rad_s, double duty) {
+  MCG_DEMAND(!m_started);
+  m_plant.start_at(omega_rad_s);
+  m_ctl->start_at(omega_rad_s, duty);
+}
 
 void ClosedLoop::tick(double t_s, double rpm_cmd) {
   (void)t_s;

@@ -26,6 +26,9 @@ class ControllerState {
   explicit ControllerState(const Controller& controller);
   /// Takes the speed error in rpm, returns the duty (-1..1) to hold until the next tick.
   double step(double error_rpm);
+  /// Before the first step: every past output at `duty` (-1..1), every past error 0, as a
+  /// loop that has settled there (bumpless for the incremental forms).
+  void preset(double duty);
 
  private:
   Controller m_c;
@@ -42,6 +45,9 @@ class LoopController {
   /// applied from now until the next tick.
   virtual double tick(double theta_rad, double rpm_cmd) = 0;
   virtual double dt_s() const = 0;
+  /// Before the first tick: the shaft turning at omega_rad_s (its angle 0 at the first tick),
+  /// the controller's output at `duty` (-1..1), as a loop found running.
+  virtual void start_at(double omega_rad_s, double duty) = 0;
 };
 
 /// The board's own controller: the firmware's C core (host board layer, as the emulated board
@@ -78,6 +84,9 @@ class ClosedLoop {
   /// with row n-1's command), then ticks at t_s if one is due there with `rpm_cmd`.
   /// t_s must increase from row to row (MCG_DEMAND; the caller checks its input).
   void row(double t_s, double rpm_cmd, int clutch, double r_load_ohm);
+  /// Before the first row: the shaft turning at omega_rad_s and the controller at `duty`, as
+  /// a capture that starts mid-run found the loop (Plant::start_at, LoopController::start_at).
+  void start_at(double omega_rad_s, double duty);
   /// The plant at the last row's time, before that row's inputs act.
   model::State state() const { return m_plant.state(); }
   /// The duty in effect from the last row's time on (the controller's last output).

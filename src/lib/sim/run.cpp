@@ -298,18 +298,25 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
                            : on_board    ? board_text(*registers, controller, configured.has_value())
                                          : equation_text(controller, configured.has_value()));
   }
-  // Replaying a capture in open loop, the model starts as the capture found the rig: at its
-  // first measured speed (the estimator's first window, a few rows in). Until that row the
-  // rows wait, with the metadata, which states the start (at most k_start_rows rows).
-  const bool start_measured = opt.compare && rpm_measured_col.has_value() && !closed;
+  // Replaying a capture, the model starts as the capture found the rig: at its first measured
+  // speed (the estimator's first window, a few rows in), and in a closed loop with the
+  // controller's output at the capture's first duty. Until that row the rows wait, with the
+  // metadata, which states the start (at most k_start_rows rows).
+  const std::optional<std::size_t> duty_measured_col = closed ? reader.find("duty") : std::nullopt;
+  const bool start_measured = opt.compare && rpm_measured_col.has_value() && (!closed || duty_measured_col);
   constexpr std::size_t k_start_rows = 256;
   double omega0_rad_s = 0.0;
+  double duty0 = 0.0;
   const auto begin_output = [&](double rpm0, double t_rpm0) {
     if (rpm0 != 0.0) {
       omega0_rad_s = rpm0 * std::numbers::pi / 30.0;
-      meta.set("initial_state", fmt::format("the motor at {} rpm (rpm_measured at t = {}), t = {}",
-                                            config::format_number(rpm0), config::format_number(t_rpm0),
-                                            config::format_number(t_first)));
+      meta.set("initial_state",
+               fmt::format("the motor at {} rpm (rpm_measured at t = {}){}, t = {}", config::format_number(rpm0),
+                           config::format_number(t_rpm0),
+                           closed ? fmt::format(", the controller's output at duty {} (the capture's first)",
+                                                config::format_number(duty0))
+                                  : "",
+                           config::format_number(t_first)));
     }
     writer.metadata(meta);
     writer.header(names);
@@ -348,6 +355,7 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
                      : on_board    ? board_loop_controller(*registers)
                                    : equation_loop_controller(controller),
                      sim_opt, clutch_state);
+        if (omega0_rad_s != 0.0) loop->start_at(omega0_rad_s, duty0);
       }
       loop->row(t, drive_value, clutch_state, r_load);
       s = loop->state();
@@ -446,6 +454,10 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
       continue;
     }
     waiting.push_back(reader.row());
+    if (waiting.size() == 1 && duty_measured_col) {
+      duty0 = reader[*duty_measured_col];
+      if (!std::isfinite(duty0)) duty0 = 0.0;
+    }
     const double rpm0 = reader[*rpm_measured_col];
     if (std::isfinite(rpm0) || waiting.size() >= k_start_rows) {
       begin_output(std::isfinite(rpm0) ? rpm0 : 0.0, t);
