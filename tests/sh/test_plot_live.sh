@@ -56,6 +56,16 @@ else
   fail "png: only $versions versions in $looks looks"
 fi
 [[ -e "$work/live.png.part" ]] && fail "png: the temporary file was left behind"
+# A shaft at rest for the first 1.5 s: frames of one value, drawn without a gnuplot warning.
+mcg-sweep step --level 6 --at 1.5 --duration 2 | mcg-sim >"$work/rest.csv"
+bash "$work/paced.sh" "$work/rest.csv" |
+  mcg-plot-gnuplot --live -y rpm --y2 i --window 1 --interval 0.2 -o "$work/rest.png" 2>"$work/rest.err" ||
+  fail "png at rest: exit $?"
+if [[ -s "$work/rest.err" ]]; then
+  fail "png at rest: stderr: $(head -1 "$work/rest.err")"
+else
+  echo "ok   png at rest: frames of one value drawn without a warning"
+fi
 
 # (b) Text redrawn in place in a terminal.
 tmux -L "$session" new-session -d -s "$session" -x 110 -y 36 \

@@ -77,6 +77,21 @@ TEST(PlotScript, SeriesToPngExactly) {
             "unset output\n");
 }
 
+// An axis with one value (a live window of a shaft at rest, a constant current) gets the range
+// gnuplot would widen it to, so gnuplot does not warn; an axis with any spread is autoscaled.
+TEST(PlotScript, AFlatAxisGetsItsRangeSet) {
+  Spec spec;
+  spec.y = {"rpm"};
+  spec.y2 = {"i"};
+  spec.output = {Output::Kind::dumb, "", "", 80, 24};
+  const auto flat = build_script(spec, {input("t,rpm,i\n0,0,0.5\n0.004,nan,0.5\n0.008,0,0.5\n")});
+  EXPECT_NE(flat.find("set yrange [-1:1]\n"), std::string::npos) << flat;
+  EXPECT_NE(flat.find("set y2range [0.495:0.505]\n"), std::string::npos) << flat;
+  const auto spread = build_script(spec, {input("t,rpm,i\n0,0,0.5\n0.004,2,0.5\n")});
+  EXPECT_EQ(spread.find("set yrange"), std::string::npos) << spread;
+  EXPECT_NE(spread.find("set y2range [0.495:0.505]\n"), std::string::npos) << spread;
+}
+
 TEST(PlotScript, DumbStepsWithDefaultColumnsAndMissingValues) {
   Spec spec;
   spec.steps = true;

@@ -2,6 +2,7 @@
 #include "plot/script.hpp"
 
 #include "common/error.hpp"
+#include "config/ini.hpp"  // format_number
 
 #include <fmt/format.h>
 
@@ -10,6 +11,8 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <optional>
+#include <string_view>
 #include <utility>
 
 namespace mcg::plot {
@@ -282,6 +285,31 @@ std::optional<std::string> title_of(const Spec& spec, const std::vector<Input>& 
   return std::nullopt;
 }
 
+namespace {
+
+/// "set yrange [...]" for an axis whose columns hold one value only (a live window of a shaft at
+/// rest): the range gnuplot would widen it to (+-1 % of the value, +-1 at 0), set here so that
+/// it does not warn on every frame. Empty for an axis with any spread.
+std::string flat_range(std::string_view axis, const std::vector<std::string>& columns, const std::vector<Input>& inputs) {
+  std::optional<double> value;
+  for (const Input& in : inputs) {
+    for (const std::string& name : columns) {
+      const auto c = in.table.find(name);
+      if (!c) continue;
+      for (double v : in.table.columns[*c]) {
+        if (!std::isfinite(v)) continue;
+        if (value && v != *value) return {};
+        value = v;
+      }
+    }
+  }
+  if (!value) return {};
+  const double half = *value == 0.0 ? 1.0 : 0.01 * std::abs(*value);
+  return fmt::format("set {} [{}:{}]\n", axis, config::format_number(*value - half), config::format_number(*value + half));
+}
+
+}  // namespace
+
 std::string build_script(const Spec& spec, const std::vector<Input>& inputs) {
   if (inputs.empty()) fail("no input table");
   const Selection s = select(spec, inputs.front().table);
@@ -332,6 +360,8 @@ std::string build_script(const Spec& spec, const std::vector<Input>& inputs) {
     }
     if (spec.logx) out += "set logscale x\n";
     if (spec.logy) out += fmt::format("set logscale y{}\n", s.y2.empty() ? "" : "y2");
+    out += flat_range("yrange", s.y, inputs);
+    out += flat_range("y2range", s.y2, inputs);
     std::string plot = "plot ";
     bool first = true;
     const std::vector<std::string> all = joined_names(s.y, s.y2);
