@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # mcg-plot-gnuplot --live as a person watches it: a simulated run paced to about real time
 # drawn as it arrives, (a) into a PNG rewritten while the stream runs (every look at it a
-# whole PNG, showing the newest window), (b) as text redrawn in place in a tmux pane, (c) in
-# an x11 window under Xvfb, screenshotted. Args: TOOL_DIR SOURCE_DIR; exit 125 = skipped.
+# whole PNG, showing the newest window; a shaft at rest drawn without a gnuplot warning),
+# (b) as text redrawn in place in a tmux pane, (c) in an x11 window under Xvfb, screenshotted.
+# Args: TOOL_DIR SOURCE_DIR; exit 125 = skipped.
 set -u
 tools=$1
 export PATH="$tools:$PATH" LC_ALL=C
