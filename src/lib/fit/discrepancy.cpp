@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "fit/gap_parts.hpp"
+#include "fit/nls.hpp"  // covariance_statistics
 #include "model/effects/compiled.hpp"
 
 namespace mcg::fit {
@@ -166,6 +167,25 @@ Eigen::MatrixXd matrix_of(const std::vector<std::vector<double>>& rows,
   return A;
 }
 
+/// The least-squares solution of A x = y, its residual sum of squares and the standard errors
+/// of x (covariance_statistics: infinite for a column the data do not determine).
+struct Solved {
+  Eigen::VectorXd x;
+  Eigen::VectorXd se;
+  double rss = 0.0;
+};
+
+Solved solve(const Eigen::MatrixXd& A, const Eigen::VectorXd& y) {
+  Solved s;
+  s.x = A.colPivHouseholderQr().solve(y);
+  const Eigen::VectorXd residual = A * s.x - y;
+  s.rss = residual.squaredNorm();
+  Eigen::MatrixXd correlation;
+  double sigma = 0.0;
+  covariance_statistics(A, residual, s.se, correlation, sigma);
+  return s;
+}
+
 std::string signed_number(double v) { return fmt::format("{}{:.4g}", v < 0.0 ? "- " : "+ ", std::abs(v)); }
 
 }  // namespace
@@ -255,20 +275,15 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
       std::vector<std::size_t> trial = active;
       trial.push_back(k);
       if (library[k].order != 0.0) trial.push_back(k + 1);
-      const Eigen::MatrixXd A = matrix_of(phi, trial);
-      Eigen::VectorXd xi = A.colPivHouseholderQr().solve(Y);
-      const double r = (Y - A * xi).squaredNorm();
-      if (rss - r < k_discrepancy_threshold * rss0) continue;
-      const double sigma2 = r / static_cast<double>(std::max<Eigen::Index>(1, A.rows() - A.cols()));
-      const Eigen::MatrixXd cov =
-          sigma2 * (A.transpose() * A).completeOrthogonalDecomposition().pseudoInverse();
+      Solved fit = solve(matrix_of(phi, trial), Y);
+      if (rss - fit.rss < k_discrepancy_threshold * rss0) continue;
       bool clear = true;
-      for (Eigen::Index j = static_cast<Eigen::Index>(active.size()); j < A.cols(); ++j) {
-        clear = clear && std::abs(xi[j]) >= 3.0 * std::sqrt(std::max(0.0, cov(j, j)));
+      for (Eigen::Index j = static_cast<Eigen::Index>(active.size()); j < fit.x.size(); ++j) {
+        clear = clear && std::abs(fit.x[j]) >= 3.0 * fit.se[j];
       }
       if (!clear) continue;
-      options.emplace_back(r, std::move(trial));
-      solutions.push_back(std::move(xi));
+      options.emplace_back(fit.rss, std::move(trial));
+      solutions.push_back(std::move(fit.x));
     }
     std::vector<std::size_t> order(options.size());
     for (std::size_t q = 0; q < order.size(); ++q) order[q] = q;
@@ -292,12 +307,9 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
   }
   // Final coefficients in physical units with their standard errors.
   const Eigen::MatrixXd A = matrix_of(phi, active);
-  const Eigen::VectorXd coef = A.colPivHouseholderQr().solve(Y);
-  const Eigen::VectorXd res = Y - A * coef;
-  const double sigma2 =
-      res.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, A.rows() - A.cols()));
-  const Eigen::MatrixXd cov = sigma2 * (A.transpose() * A).completeOrthogonalDecomposition().pseudoInverse();
-  out.train_explained_pct = 100.0 * (1.0 - res.squaredNorm() / Y.squaredNorm());
+  const Solved final_fit = solve(A, Y);
+  const Eigen::VectorXd& coef = final_fit.x;
+  out.train_explained_pct = 100.0 * (1.0 - final_fit.rss / Y.squaredNorm());
   if (!yv.empty()) {
     out.validation_explained_pct =
         100.0 * (1.0 - (Yv - matrix_of(phiv, active) * coef).squaredNorm() / Yv.squaredNorm());
@@ -312,7 +324,7 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
     DiscrepancyTerm t;
     t.basis = cand.text;
     t.coefficient = coef[J];
-    t.std_error = std::sqrt(std::max(0.0, cov(J, J)));
+    t.std_error = final_fit.se[J];
     t.unit = cand.unit;
     if (cand.order != 0.0) {
       if (cand.k[1] != 0.0) continue;  // the cos column joins its sin column below
