@@ -217,9 +217,15 @@ class PlantImpl {
     drive_torques(y, t, m_coupling, Tm, Tg);
   }
   void drive_torques(const Vec& y, double t, Coupling coupling, double& Tm, double& Tg) const {
-    Tm = m_c.p.motor.Kt_Nm_A * motor_current(y);
+    drive_torques(y, t, coupling, motor_current(y), gen_current(y), Tm, Tg);
+  }
+  /// The same with the currents i_m, i_g at y already known (deriv has them; an algebraic
+  /// circuit's current is a Newton solve).
+  void drive_torques(const Vec& y, double t, Coupling coupling, double i_m, double i_g, double& Tm,
+                     double& Tg) const {
+    Tm = m_c.p.motor.Kt_Nm_A * i_m;
     if (!m_c.motor_torque.empty()) Tm += m_c.extra_motor_torque(y[TH_M], y[W_M]);
-    Tg = -m_c.p.generator.Kt_Nm_A * gen_current(y);
+    Tg = -m_c.p.generator.Kt_Nm_A * i_g;
     switch (coupling) {
       case Coupling::none:
         break;
@@ -264,7 +270,7 @@ class PlantImpl {
       dy[I_G] = vg / mg.L_H;
     }
     double Tm = 0.0, Tg = 0.0;
-    drive_torques(y, t, Tm, Tg);
+    drive_torques(y, t, m_coupling, i_m, i_g, Tm, Tg);
     if (rigid()) {
       const double a =
           m_stuck_m ? 0.0 : (Tm - m_dir_m * m_c.kinetic(m_c.rigid, m_dir_m * y[W_M])) / m_c.J_total;
