@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <sstream>
 
 #include "common/error.hpp"
@@ -25,10 +26,22 @@ Rig load_rig(const RigOptions& options) {
   return rig;
 }
 
+namespace {
+
+/// The registers a capture's board_config states: the mode, those a capture's rows also carry,
+/// and those that shape the controller's output.
+constexpr std::array<const char*, 12> k_config_registers{"mode",      "rpm_cmd",   "clutch",   "load",
+                                                         "coef_frac", "kp",        "b0",       "b1",
+                                                         "b2",        "duty_bias", "duty_min", "duty_max"};
+
+/// The registers whose value each row of a capture carries (its rpm_cmd, clutch, r_load).
+bool carried_by_rows(std::string_view name) { return name == "rpm_cmd" || name == "clutch" || name == "load"; }
+
+}  // namespace
+
 std::vector<std::pair<std::string, std::string>> board_config(Connection& c) {
   std::vector<std::pair<std::string, std::string>> out;
-  for (const char* name : {"mode", "rpm_cmd", "clutch", "load", "coef_frac", "kp", "b0", "b1", "b2", "duty_bias",
-                           "duty_min", "duty_max"}) {
+  for (const char* name : k_config_registers) {
     const RegisterInfo& reg = require_register(name);
     const int frac = reg.unit == Unit::Gain ? c.frac_bits() : 0;
     out.emplace_back(name, format_value(reg, c.session->read(reg), frac));
@@ -70,9 +83,7 @@ std::optional<CapturedBoard> captured_board(const table::Metadata& meta, std::st
       board.mode = raw;
       board.mode_name = value;
       has_mode = true;
-    } else if (reg->id == MCG_REG_COEF_FRAC || reg->id == MCG_REG_KP || reg->id == MCG_REG_B0 ||
-               reg->id == MCG_REG_B1 || reg->id == MCG_REG_B2 || reg->id == MCG_REG_DUTY_BIAS ||
-               reg->id == MCG_REG_DUTY_MIN || reg->id == MCG_REG_DUTY_MAX) {
+    } else if (!carried_by_rows(reg->name)) {
       board.registers.emplace_back(reg->id, raw);
     }
   }

@@ -47,9 +47,9 @@ Rig load_rig(const RigOptions& options);
 /// engineering units (mode, rpm_cmd, clutch, load, the controller's coefficients and limits).
 std::vector<std::pair<std::string, std::string>> board_config(Connection& c);
 
-/// What a capture's `# board_config` says the board ran: its mode, and the raw values of the
-/// registers that shape its controller's output (coef_frac, kp, b0..b2, duty_bias, duty_min,
-/// duty_max) as the firmware core takes them.
+/// What a capture's `# board_config` says the board ran: its mode, and the raw values of its
+/// other registers but those each row carries (rpm_cmd, clutch, load), as the firmware core
+/// takes them: those that shape the controller's output (coef_frac, kp, b0..b2, duty limits).
 struct CapturedBoard {
   std::int16_t mode = 0;  ///< MCG_MODE_*
   std::string mode_name;  ///< "open", "p", "pi", "pid"
