@@ -55,17 +55,22 @@ TEST(ModelFastCircuit, MatchesTheIntegratedCircuitJustBelowTheThreshold) {
   EXPECT_LT(worst, 0.005 * 18000.0);
 }
 
+/// The gearmotor steady at 6 V with a brush drop V_b (the last row of the first half of
+/// steps()): R i + V_b tanh(i/0.01) = v - Ke w (within `tol_V`) and Kt i = Tc + c1 w.
+void expect_steady_at_6V(const Outputs& out, double V_b, double tol_V) {
+  const double w = out.omega_rad_s[3999];
+  const double i = out.i_A[3999];
+  EXPECT_NEAR(4.2 * i + V_b * std::tanh(i / 0.01), 6.0 - 0.0062 * w, tol_V);
+  EXPECT_NEAR(0.0062 * i, 0.0004 + 4e-7 * w, 1e-9);
+}
+
 TEST(ModelFastCircuit, ABrushDropOnALowInductanceMotorIntegratesAtOrdinarySteps) {
   Model m = gearmotor(5e-5);
   m.effects.push_back(parse_effect("brush_drop:V_b_V=2"));
   // 8 s at 1 ms in a fraction of a second (at the brush drop's sub-microsecond steps it took
   // minutes, which the test's timeout would catch).
   const Outputs out = simulate(m, steps(8.0));
-  // Steady at 6 V: R i + V_b tanh(i/0.01) = v - Ke w and Kt i = Tc + c1 w.
-  const double w = out.omega_rad_s[3999];
-  const double i = out.i_A[3999];
-  EXPECT_NEAR(4.2 * i + 2.0 * std::tanh(i / 0.01), 6.0 - 0.0062 * w, 1e-9);
-  EXPECT_NEAR(0.0062 * i, 0.0004 + 4e-7 * w, 1e-9);
+  expect_steady_at_6V(out, 2.0, 1e-9);
 }
 
 TEST(ModelFastCircuit, AStrongBrushDropOnACircuitJustSlowerThanTheThresholdStaysOrdinary) {
@@ -75,10 +80,7 @@ TEST(ModelFastCircuit, AStrongBrushDropOnACircuitJustSlowerThanTheThresholdStays
   Model m = gearmotor(2.5e-4);
   m.effects.push_back(parse_effect("brush_drop:V_b_V=3"));
   const Outputs out = simulate(m, steps(8.0));
-  const double w = out.omega_rad_s[3999];
-  const double i = out.i_A[3999];
-  EXPECT_NEAR(4.2 * i + 3.0 * std::tanh(i / 0.01), 6.0 - 0.0062 * w, 1e-6);
-  EXPECT_NEAR(0.0062 * i, 0.0004 + 4e-7 * w, 1e-9);
+  expect_steady_at_6V(out, 3.0, 1e-6);
   // At -3 V the whole drive is brush drop: the shaft runs down and sticks.
   EXPECT_EQ(out.omega_rad_s.back(), 0.0);
 }

@@ -241,6 +241,27 @@ std::string curve(std::size_t block, std::size_t column, std::size_t color, bool
                      y2 ? " axes x1y2" : "", style, color, dashes(block), title);
 }
 
+/// "set yrange [...]" for an axis whose columns hold one value only (a live window of a shaft at
+/// rest): the range gnuplot would widen it to (+-1 % of the value, +-1 at 0), set here so that
+/// it does not warn on every frame. Empty for an axis with any spread.
+std::string flat_range(std::string_view axis, const std::vector<std::string>& columns, const std::vector<Input>& inputs) {
+  std::optional<double> value;
+  for (const Input& in : inputs) {
+    for (const std::string& name : columns) {
+      const auto c = in.table.find(name);
+      if (!c) continue;
+      for (double v : in.table.columns[*c]) {
+        if (!std::isfinite(v)) continue;
+        if (value && v != *value) return {};
+        value = v;
+      }
+    }
+  }
+  if (!value) return {};
+  const double half = *value == 0.0 ? 1.0 : 0.01 * std::abs(*value);
+  return fmt::format("set {} [{}:{}]\n", axis, config::format_number(*value - half), config::format_number(*value + half));
+}
+
 }  // namespace
 
 std::string quote(std::string_view text) {
@@ -284,31 +305,6 @@ std::optional<std::string> title_of(const Spec& spec, const std::vector<Input>& 
   if (auto excitation = inputs.front().table.meta.get("excitation")) return excitation;
   return std::nullopt;
 }
-
-namespace {
-
-/// "set yrange [...]" for an axis whose columns hold one value only (a live window of a shaft at
-/// rest): the range gnuplot would widen it to (+-1 % of the value, +-1 at 0), set here so that
-/// it does not warn on every frame. Empty for an axis with any spread.
-std::string flat_range(std::string_view axis, const std::vector<std::string>& columns, const std::vector<Input>& inputs) {
-  std::optional<double> value;
-  for (const Input& in : inputs) {
-    for (const std::string& name : columns) {
-      const auto c = in.table.find(name);
-      if (!c) continue;
-      for (double v : in.table.columns[*c]) {
-        if (!std::isfinite(v)) continue;
-        if (value && v != *value) return {};
-        value = v;
-      }
-    }
-  }
-  if (!value) return {};
-  const double half = *value == 0.0 ? 1.0 : 0.01 * std::abs(*value);
-  return fmt::format("set {} [{}:{}]\n", axis, config::format_number(*value - half), config::format_number(*value + half));
-}
-
-}  // namespace
 
 std::string build_script(const Spec& spec, const std::vector<Input>& inputs) {
   if (inputs.empty()) fail("no input table");

@@ -5,7 +5,6 @@
 #include "common/parallel.hpp"
 #include "common/tool.hpp"
 
-#include <fmt/compile.h>
 #include <fmt/format.h>
 
 #include <algorithm>

@@ -58,7 +58,8 @@ class Reader {
   /// 1-based line number of the current row (or of the header before the first next()).
   std::size_t line() const { return m_line; }
   /// The input not read yet as whole lines, at least `bytes` of them unless the input ends
-  /// first, into `out` (its storage reused); false at the end. read() parses them on every core.
+  /// first, into `out` (its storage reused); false at the end. read() parses them on every core
+  /// and counts their lines itself: line() does not move.
   bool take_lines(std::string& out, std::size_t bytes);
 
  private:
