@@ -6,9 +6,13 @@
  * reading overhead is measured with an empty interval and subtracted. For P, PI and PID, 256
  * updates with varying encoder counts; min, max and sum of cycles go to external RAM at
  * BENCH_XADDR and the run ends at bench_done(); a fourth set repeats the PID at F = 11, the
- * general output shift (bench/bench-cycles.sh reads them). Every duty
- * computed goes to BENCH_OUT_XADDR, where the ucsim test compares them with the C core on the
- * host: the assembly parts of the 8051 build must give the same numbers. */
+ * general output shift. A fifth set swaps controllers as mcg-serial load does: a PI runs, a PID is
+ * staged one register per update (BENCH_STAGE_AT..), and committed right before update
+ * BENCH_COMMIT_AT, timed with it. The sixth times a commit and the update after it, 256 times,
+ * alternating between two PID sets (F = 8 and F = 11, other limits): the main loop's worst pass
+ * when a commit arrives (bench/bench-cycles.sh reads the figures). Every duty computed goes to
+ * BENCH_OUT_XADDR, where the ucsim test compares them with the C core on the host: the assembly
+ * parts of the 8051 build must give the same numbers, and the swap must act on one update. */
 #include <8051.h>   /* TMOD, TH0, TL0, TH1, TL1, TR0, TR1 */
 #include <stdint.h> /* uint8_t, uint16_t, uint32_t */
 
@@ -18,10 +22,12 @@
 
 #define BENCH_XADDR 0x9F00u
 #define BENCH_RUNS 256u
-#define BENCH_OUT_XADDR 0xA000u /* 4 x 256 duties, i16 */
-#define BENCH_SETS 4u           /* P, PI, PID at F = 8; PID at F = 11 */
+#define BENCH_OUT_XADDR 0xA000u /* 6 x 256 duties, i16 */
+#define BENCH_SETS 6u           /* P, PI, PID at F = 8; PID at F = 11; a swap; commits */
+#define BENCH_STAGE_AT 100u     /* swap set: the PID's registers are staged before updates 100..104 */
+#define BENCH_COMMIT_AT 128u    /* and committed right before update 128 */
 
-/* Per set (P, PI, PID, PID at F = 11): min, max (u16), sum (u32); then the empty-interval overhead. */
+/* Per set: min, max (u16), sum (u32); then the empty-interval overhead. */
 typedef struct {
   uint16_t min, max;
   uint32_t sum;
@@ -55,6 +61,27 @@ static void update(void) {
 
 void bench_done(void) {}
 
+/* Stages (untimed) what update i of set m needs: the swap set's PID, one register per update, and
+ * the commit set's alternating PIDs. Returns 1 if a commit is to be timed with the update. */
+static uint8_t stage(uint8_t m, uint16_t i) {
+  if (m == 4u) {
+    if (i >= BENCH_STAGE_AT && i < BENCH_STAGE_AT + 5u) {
+      static MCG_CODE uint8_t regs[5] = {MCG_REG_MODE, MCG_REG_B0, MCG_REG_B1, MCG_REG_B2, MCG_REG_DUTY_MAX};
+      static MCG_CODE int16_t values[5] = {MCG_MODE_PID, 7000, -12000, 5200, 900};
+      regs_write(regs[i - BENCH_STAGE_AT], values[i - BENCH_STAGE_AT]);
+    }
+    return (uint8_t)(i == BENCH_COMMIT_AT);
+  }
+  if (m == 5u) {
+    regs_write(MCG_REG_COEF_FRAC, (i & 1u) ? 11 : 8);
+    regs_write(MCG_REG_B0, (i & 1u) ? 30000 : 9000);
+    regs_write(MCG_REG_B2, (i & 1u) ? 20000 : 6100);
+    regs_write(MCG_REG_DUTY_MIN, (i & 1u) ? -500 : 0);
+    return 1;
+  }
+  return 0;
+}
+
 void main(void) {
   uint8_t m;
   uint16_t i;
@@ -77,22 +104,31 @@ void main(void) {
   for (m = 0; m < BENCH_SETS; ++m) {
     if (m == 3) {
       regs_write(MCG_REG_COEF_FRAC, 11); /* the general output shift */
-    } else {
+    } else if (m == 4) {
+      regs_write(MCG_REG_COEF_FRAC, 8);
+      regs_write(MCG_REG_MODE, MCG_MODE_PI);
+    } else if (m < 3) {
       regs_write(MCG_REG_MODE, (int16_t)(MCG_MODE_P + m));
     }
+    regs_write(MCG_REG_COMMIT, 1);
     s_fig[m].min = 0xFFFFu;
     s_fig[m].max = 0;
     s_fig[m].sum = 0;
     for (i = 0; i < BENCH_RUNS; ++i) {
       uint16_t t0;
-      uint16_t dt;
+      uint16_t dt = 0;
       /* The encoder moved by 6..30 pulses since the last tick: errors of both signs. */
       uint16_t next = (uint16_t)(((uint16_t)s_last_hi << 8 | s_last_lo) + 6u + (i * 7u) % 25u);
+      if (stage(m, i)) {
+        t0 = cycles_now();
+        regs_write(MCG_REG_COMMIT, 1);
+        dt = (uint16_t)(cycles_now() - t0 - s_overhead);
+      }
       TH0 = (uint8_t)(next >> 8);
       TL0 = (uint8_t)(next & 0xFFu);
       t0 = cycles_now();
       update();
-      dt = (uint16_t)(cycles_now() - t0 - s_overhead);
+      dt = (uint16_t)(dt + cycles_now() - t0 - s_overhead);
       if (dt < s_fig[m].min) {
         s_fig[m].min = dt;
       }

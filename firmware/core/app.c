@@ -191,11 +191,13 @@ void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA* payload, uint8_t len) {
       if (len != (cmd == MCG_CMD_READ ? sizeof(McgReadRequest) : sizeof(McgWriteRequest))) {
         break;
       }
-      st = MCG_ST_OK;
+      /* A write answers what the register now holds: a staged one, its shadow value. */
       if (cmd == MCG_CMD_WRITE) {
         st = regs_write(payload[0], (int16_t)(payload[1] | ((uint16_t)payload[2] << 8)));
-      }
-      if (st == MCG_ST_OK) {
+        if (st == MCG_ST_OK) {
+          st = regs_read_staged(payload[0], &value);
+        }
+      } else {
         st = regs_read(payload[0], &value);
       }
       if (st != MCG_ST_OK) {

@@ -24,6 +24,7 @@
 #include "core.h"
 #include "hal.h" /* hal_pwm_write */
 
+CtlSet MCG_XDATA g_ctl_shadow;
 int16_t MCG_XDATA g_kp, g_b0, g_b1, g_b2;
 uint8_t MCG_XDATA g_coef_frac;
 int16_t MCG_XDATA g_duty_min, g_duty_max, g_duty_bias;
@@ -37,6 +38,12 @@ static uint8_t MCG_XDATA s_window_pos;
 static int16_t s_r_q8;               /* command r[n], Q8 pulses per tick */
 static int16_t MCG_XDATA s_r1, s_r2; /* r[n-1], r[n-2]: the commands of the last two ticks */
 static int32_t MCG_XDATA s_u_bias;   /* P-mode bias in Q(F+8) */
+/* What the shadow set derives, kept current as it is written, so that a commit only copies: */
+static int16_t MCG_XDATA s_next_scale;                   /* 2^F */
+static int32_t MCG_XDATA s_next_u_min, s_next_u_max;     /* limits in Q(F+8) */
+static int32_t MCG_XDATA s_next_u_bias;                  /* bias in Q(F+8) */
+static int32_t MCG_XDATA s_next_r;                       /* R once the command is settled */
+static uint16_t MCG_XDATA s_next_bp[3];                  /* operands of arith_pid_sum */
 uint8_t g_ctl_p_hi;
 int32_t MCG_IDATA g_ctl_r[3];
 uint8_t g_ctl_r_k;
@@ -45,11 +52,22 @@ int32_t g_ctl_u_min, g_ctl_u_max;
 uint8_t g_ctl_shift;
 uint8_t g_ctl_settle;
 
-/* x * 2^shift without shifting a negative value (undefined in C). */
-static int32_t scale_up(int16_t x) { return (int32_t)x * ((int32_t)1 << g_ctl_shift); }
+/* x * 2^(F+8) = (x * scale) * 2^8 with scale = 2^F <= 2^12: one 16 x 16 product and a byte shift,
+ * not SDCC's 32 x 32 multiply (about 700 cycles on the 8051). The shift is on the unsigned value:
+ * shifting a negative one is undefined in C. */
+static int16_t MCG_XDATA s_scale; /* 2^F of the active set */
+static int32_t scale_up(int16_t x) {
+  return (int32_t)((uint32_t)arith_mul16(x, s_scale) << MCG_ERR_FRAC_BITS);
+}
+/* The same in the shadow set's format. */
+static int32_t scale_next(int16_t x) {
+  return (int32_t)((uint32_t)arith_mul16(x, s_next_scale) << MCG_ERR_FRAC_BITS);
+}
+static void next_r(void);
 
 static void rescale(void) {
   g_ctl_shift = (uint8_t)(g_coef_frac + MCG_ERR_FRAC_BITS);
+  s_scale = (int16_t)(1 << g_coef_frac);
   g_ctl_u_min = scale_up(g_duty_min);
   g_ctl_u_max = scale_up(g_duty_max);
   s_u_bias = scale_up(g_duty_bias);
@@ -98,6 +116,7 @@ void control_init(void) {
   g_ctl_p_hi = 85;
   rescale();
   control_refresh();
+  control_discard();
 }
 
 void control_set_rpm_cmd(int16_t rpm) {
@@ -108,70 +127,183 @@ void control_set_rpm_cmd(int16_t rpm) {
   g_ctl_p_hi = hi > 85 ? 85u : (uint8_t)hi;
   g_ctl_settle = 2; /* the tick shifts the command history until it holds the new one twice */
   control_refresh();
-}
-
-/* The coefficients of the active mode, as R and the operands of arith_pid_sum use them. */
-static void active_coefs(int16_t* c0, int16_t* c1, int16_t* c2) {
-  *c0 = 0;
-  *c1 = 0;
-  *c2 = 0;
-  if (g_mode == MCG_MODE_P) {
-    *c0 = g_kp;
-  } else if (g_mode == MCG_MODE_PI || g_mode == MCG_MODE_PID) {
-    *c0 = g_b0;
-    *c1 = g_b1;
-    *c2 = g_mode == MCG_MODE_PID ? g_b2 : 0;
+  if (control_pending()) {
+    next_r();
+  } else {
+    s_next_r = g_ctl_r[2];
   }
 }
 
-void control_refresh(void) {
-  MCG_SLOW int16_t c0;
-  MCG_SLOW int16_t c1;
-  MCG_SLOW int16_t c2;
-  MCG_SLOW int32_t now0;
-  active_coefs(&c0, &c1, &c2);
-  g_pid.bp[0] = (uint16_t)((uint16_t)c0 ^ 0x8000u);
-  g_pid.bp[1] = (uint16_t)((uint16_t)c1 ^ 0x8000u);
-  g_pid.bp[2] = (uint16_t)((uint16_t)c2 ^ 0x8000u);
-  now0 = arith_mul16(c0, s_r_q8);
-  g_ctl_r[0] = now0 + arith_mul16(c1, s_r1) + arith_mul16(c2, s_r2);
-  g_ctl_r[1] = now0 + arith_mul16(c1, s_r_q8) + arith_mul16(c2, s_r1);
-  g_ctl_r[2] = now0 + arith_mul16(c1, s_r_q8) + arith_mul16(c2, s_r_q8);
+/* R for the next three ticks from the active mode's coefficients c_i and the command history:
+ *   R[k] = sum_i c_i r[n+k-i],  r[m] = the command for m >= n, s_r1, s_r2 before.
+ * Once the history holds the command (g_ctl_settle == 0: s_r1 = s_r2 = r), all three are equal: three
+ * products instead of seven, which keeps a commit within a tick on the 8051. */
+static int16_t MCG_XDATA s_c0, s_c1, s_c2; /* the active mode's coefficients (0 where it has none) */
+
+/* s_c0..2 and their offset-binary operands of arith_pid_sum. */
+static void active_bp(void) {
+  s_c0 = 0;
+  s_c1 = 0;
+  s_c2 = 0;
   if (g_mode == MCG_MODE_P) {
-    g_ctl_r[0] += s_u_bias;
-    g_ctl_r[1] += s_u_bias;
-    g_ctl_r[2] += s_u_bias;
+    s_c0 = g_kp;
+  } else if (g_mode != MCG_MODE_OPEN) {
+    s_c0 = g_b0;
+    s_c1 = g_b1;
+    if (g_mode == MCG_MODE_PID) {
+      s_c2 = g_b2;
+    }
+  }
+  g_pid.bp[0] = (uint16_t)((uint16_t)s_c0 ^ 0x8000u);
+  g_pid.bp[1] = (uint16_t)((uint16_t)s_c1 ^ 0x8000u);
+  g_pid.bp[2] = (uint16_t)((uint16_t)s_c2 ^ 0x8000u);
+}
+
+void control_refresh(void) {
+  MCG_SLOW int32_t now;
+  active_bp();
+  now = arith_mul16(s_c0, s_r_q8);
+  if (g_mode == MCG_MODE_P) {
+    now += s_u_bias;
+  }
+  g_ctl_r[2] = now + arith_mul16(s_c1, s_r_q8) + arith_mul16(s_c2, s_r_q8);
+  if (g_ctl_settle == 0) {
+    g_ctl_r[0] = g_ctl_r[2];
+    g_ctl_r[1] = g_ctl_r[2];
+  } else {
+    g_ctl_r[1] = now + arith_mul16(s_c1, s_r_q8) + arith_mul16(s_c2, s_r1);
+    g_ctl_r[0] = now + arith_mul16(s_c1, s_r1) + arith_mul16(s_c2, s_r2);
   }
   g_ctl_r_k = 0;
 }
 
-void control_set_mode(uint8_t mode) {
-  (void)mode;
-  g_ctl_u = scale_up(g_duty_out); /* bumpless: the integrator starts from the present output */
-  control_refresh();
-}
-
-void control_set_coef_frac(uint8_t frac_bits) {
-  g_coef_frac = frac_bits;
-  rescale();
-  control_refresh();
-}
-
-void control_set_limits(int16_t duty_min, int16_t duty_max) {
-  g_duty_min = duty_min;
-  g_duty_max = duty_max;
-  rescale();
-  if (g_ctl_u > g_ctl_u_max) {
-    g_ctl_u = g_ctl_u_max;
-  } else if (g_ctl_u < g_ctl_u_min) {
-    g_ctl_u = g_ctl_u_min;
+/* The shadow set's settled R = sum_i c_i r (+ the bias in P mode), and its operands bp. */
+static void next_r(void) {
+  s_next_bp[0] = 0x8000u;
+  s_next_bp[1] = 0x8000u;
+  s_next_bp[2] = 0x8000u;
+  s_next_r = 0;
+  if (g_ctl_shadow.mode == MCG_MODE_P) {
+    s_next_bp[0] = (uint16_t)((uint16_t)g_ctl_shadow.kp ^ 0x8000u);
+    s_next_r = arith_mul16(g_ctl_shadow.kp, s_r_q8) + s_next_u_bias;
+  } else if (g_ctl_shadow.mode != MCG_MODE_OPEN) {
+    s_next_bp[0] = (uint16_t)((uint16_t)g_ctl_shadow.b0 ^ 0x8000u);
+    s_next_bp[1] = (uint16_t)((uint16_t)g_ctl_shadow.b1 ^ 0x8000u);
+    s_next_r = arith_mul16(g_ctl_shadow.b0, s_r_q8) + arith_mul16(g_ctl_shadow.b1, s_r_q8);
+    if (g_ctl_shadow.mode == MCG_MODE_PID) {
+      s_next_bp[2] = (uint16_t)((uint16_t)g_ctl_shadow.b2 ^ 0x8000u);
+      s_next_r += arith_mul16(g_ctl_shadow.b2, s_r_q8);
+    }
   }
 }
 
-void control_set_bias(int16_t duty_bias) {
-  g_duty_bias = duty_bias;
-  s_u_bias = scale_up(duty_bias);
-  control_refresh();
+void control_staged(void) {
+  s_next_scale = (int16_t)(1 << g_ctl_shadow.coef_frac);
+  s_next_u_min = scale_next(g_ctl_shadow.duty_min);
+  s_next_u_max = scale_next(g_ctl_shadow.duty_max);
+  s_next_u_bias = scale_next(g_ctl_shadow.duty_bias);
+  next_r();
+}
+
+/* The gains the mode uses, all zero: a closed-loop mode would hold its output where it is, or at the
+ * bias, whatever the speed (the 3221 rpm runaway of a PI entered with gains never written). */
+static uint8_t gains_missing(void) {
+  if (g_ctl_shadow.mode == MCG_MODE_P) {
+    return g_ctl_shadow.kp == 0;
+  }
+  if (g_ctl_shadow.mode == MCG_MODE_OPEN) {
+    return 0;
+  }
+  return g_ctl_shadow.b0 == 0 && g_ctl_shadow.b1 == 0 && (g_ctl_shadow.mode == MCG_MODE_PI || g_ctl_shadow.b2 == 0);
+}
+
+void control_discard(void) {
+  g_ctl_shadow.mode = g_mode;
+  g_ctl_shadow.kp = g_kp;
+  g_ctl_shadow.b0 = g_b0;
+  g_ctl_shadow.b1 = g_b1;
+  g_ctl_shadow.b2 = g_b2;
+  g_ctl_shadow.coef_frac = g_coef_frac;
+  g_ctl_shadow.duty_bias = g_duty_bias;
+  g_ctl_shadow.duty_min = g_duty_min;
+  g_ctl_shadow.duty_max = g_duty_max;
+  s_next_scale = s_scale;
+  s_next_u_min = g_ctl_u_min;
+  s_next_u_max = g_ctl_u_max;
+  s_next_u_bias = s_u_bias;
+  s_next_r = g_ctl_r[2];
+  s_next_bp[0] = g_pid.bp[0];
+  s_next_bp[1] = g_pid.bp[1];
+  s_next_bp[2] = g_pid.bp[2];
+}
+
+uint8_t control_pending(void) {
+  return (uint8_t)(g_ctl_shadow.mode != g_mode || g_ctl_shadow.kp != g_kp || g_ctl_shadow.b0 != g_b0 ||
+                   g_ctl_shadow.b1 != g_b1 || g_ctl_shadow.b2 != g_b2 || g_ctl_shadow.coef_frac != g_coef_frac ||
+                   g_ctl_shadow.duty_bias != g_duty_bias || g_ctl_shadow.duty_min != g_duty_min ||
+                   g_ctl_shadow.duty_max != g_duty_max);
+}
+
+/* Runs between two ticks (the main loop runs the updates and the dispatch one after the other), so the
+ * next update is the first with the new set and no update sees part of it. */
+uint8_t control_commit(void) {
+  int16_t out;
+  if (gains_missing()) {
+    control_discard();
+    return MCG_ST_NO_GAINS;
+  }
+  if (g_ctl_shadow.duty_min > g_ctl_shadow.duty_max) {
+    control_discard();
+    return MCG_ST_LIMITS;
+  }
+  if (g_ctl_shadow.mode == MCG_MODE_OPEN && g_mode != MCG_MODE_OPEN) {
+    g_duty_set = g_duty_out; /* open loop keeps the duty the controller left */
+  }
+  g_mode = g_ctl_shadow.mode;
+  g_kp = g_ctl_shadow.kp;
+  g_b0 = g_ctl_shadow.b0;
+  g_b1 = g_ctl_shadow.b1;
+  g_b2 = g_ctl_shadow.b2;
+  g_coef_frac = g_ctl_shadow.coef_frac;
+  g_duty_bias = g_ctl_shadow.duty_bias;
+  g_duty_min = g_ctl_shadow.duty_min;
+  g_duty_max = g_ctl_shadow.duty_max;
+  /* Bumpless: U[n-1] is the present output within the new limits, in the new format; the error
+   * history (pulses, command) carries on, so PI and PID continue from the duty now driving the motor,
+   * and open loop keeps it. */
+  out = g_duty_out;
+  if (out < g_duty_min) {
+    out = g_duty_min;
+  } else if (out > g_duty_max) {
+    out = g_duty_max;
+  }
+  if (g_mode == MCG_MODE_OPEN) {
+    if (g_duty_set < g_duty_min) {
+      g_duty_set = g_duty_min;
+    } else if (g_duty_set > g_duty_max) {
+      g_duty_set = g_duty_max;
+    }
+  }
+  /* What the set derives was computed as it was written: copied here, the commit and the next
+   * update fit in one tick on the 8051. */
+  g_ctl_shift = (uint8_t)(g_coef_frac + MCG_ERR_FRAC_BITS);
+  s_scale = s_next_scale;
+  g_ctl_u_min = s_next_u_min;
+  g_ctl_u_max = s_next_u_max;
+  s_u_bias = s_next_u_bias;
+  g_ctl_u = scale_up(out);
+  if (g_ctl_settle == 0) {
+    g_pid.bp[0] = s_next_bp[0];
+    g_pid.bp[1] = s_next_bp[1];
+    g_pid.bp[2] = s_next_bp[2];
+    g_ctl_r[2] = s_next_r;
+    g_ctl_r[1] = g_ctl_r[2];
+    g_ctl_r[0] = g_ctl_r[2];
+    g_ctl_r_k = 0;
+  } else {
+    control_refresh(); /* the command history is still moving: R for each of the next ticks */
+  }
+  return MCG_ST_OK;
 }
 
 /* Pulses of the last MCG_SPEED_WINDOW_MS ticks, for rpm (display, register, not the controller). */

@@ -43,9 +43,14 @@ extern uint16_t MCG_XDATA g_tx_drops;  /* frames not sent for lack of room */
 /* regs.c: the register map ------------------------------------------------------------------- */
 /* MCG_ST_OK and the value in *value, or MCG_ST_BAD_REG. */
 uint8_t regs_read(uint8_t reg, int16_t* value) MCG_REENTRANT;
-/* Range-checked write with its side effects (mode switch, log interval, outputs, ...);
- * MCG_ST_OK or the reason it was refused, the register then unchanged. */
+/* Range-checked write with its side effects (log interval, outputs, commit, ...); an MCG_RS register
+ * is written into the shadow set. MCG_ST_OK or the reason it was refused, the register then unchanged. */
 uint8_t regs_write(uint8_t reg, int16_t value);
+/* As regs_read, but an MCG_RS register shows its shadow value (what a write left there). */
+uint8_t regs_read_staged(uint8_t reg, int16_t* value);
+/* A write as one atomic change, as the keypad makes it: an MCG_RS register is written into a fresh
+ * copy of the active set and committed; any other is written. MCG_ST_OK or the refusal. */
+uint8_t regs_apply(uint8_t reg, int16_t value);
 /* 1 if the register exists and is writable. */
 uint8_t regs_writable(uint8_t reg);
 void regs_init(void);
@@ -76,12 +81,27 @@ extern int32_t g_ctl_u;                  /* U, Q(F+8) duty */
 extern int32_t g_ctl_u_min, g_ctl_u_max; /* limits of U */
 extern uint8_t g_ctl_shift;              /* F + 8 */
 extern uint8_t g_ctl_settle;             /* ticks until the command history is settled */
-/* Controller configuration; each setter keeps the output continuous (bumpless). */
-void control_set_mode(uint8_t mode);
+/* The controller's set: what the MCG_RS registers hold. The active set (g_mode, g_kp, ..., below) is
+ * what the update runs; writes go to the shadow set, which the update never reads. */
+typedef struct {
+  int16_t kp, b0, b1, b2; /* Q(F) */
+  int16_t duty_bias, duty_min, duty_max;
+  uint8_t mode, coef_frac;
+} CtlSet;
+extern CtlSet MCG_XDATA g_ctl_shadow;
+/* Makes the shadow set active at once (between two updates), bumpless: PI and PID continue from the
+ * present duty, open loop keeps it. MCG_ST_OK; or MCG_ST_NO_GAINS (a closed-loop mode whose gains are
+ * all zero), MCG_ST_LIMITS (duty_min above duty_max), the active set then unchanged. Either way the
+ * shadow set equals the active one afterwards. */
+uint8_t control_commit(void);
+/* The shadow set becomes a copy of the active one. */
+void control_discard(void);
+/* After a write into the shadow set: recomputes what it derives (limits, bias, R in its format), so
+ * that a commit only copies. */
+void control_staged(void);
+/* 1 if the shadow set differs from the active one. */
+uint8_t control_pending(void);
 void control_set_rpm_cmd(int16_t rpm);
-void control_set_coef_frac(uint8_t frac_bits);
-void control_set_limits(int16_t duty_min, int16_t duty_max);
-void control_set_bias(int16_t duty_bias);
 /* Recomputes what depends on the command, the coefficients or the mode (after a change of any). */
 void control_refresh(void);
 /* Speed over the last MCG_SPEED_WINDOW_MS: rpm = counts * 1875 / 1024, rounded. */

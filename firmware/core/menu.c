@@ -9,7 +9,8 @@
  * Menu          line 1 the parameter, line 2 its value: A next, B previous, D edit, C back
  * Edit          digits, F decimal point (gains), E sign, C delete (on empty: cancel), D store.
  *               Gains are typed in decimal (e.g. 2.5) and stored as round(value * 2^F); every
- *               value goes through regs_write, so the keypad obeys the same ranges as the link.
+ *               value goes through regs_apply, so the keypad obeys the same ranges as the link,
+ *               and a controller register changes as one commit (refused: "refused" and the code).
  * The report's board could not take Kp from the keypad; here Kp is an item like any other. */
 #include "core.h"
 #include "hal.h" /* hal_key_read, hal_lcd_write */
@@ -243,7 +244,7 @@ static void entry_key(uint8_t key) {
   if (key == KEY_D) {
     s_status = parse_entry(kind, &v);
     if (s_status == MCG_ST_OK) {
-      s_status = regs_write(s_items[s_item].reg, v);
+      s_status = regs_apply(s_items[s_item].reg, v);
     }
     s_screen = SCREEN_BROWSE;
     return;
@@ -333,7 +334,7 @@ static void main_key(uint8_t key, uint8_t repeat) {
       logger_start();
       break;
     case 0:
-      regs_write(MCG_REG_MODE, MCG_MODE_OPEN);
+      regs_apply(MCG_REG_MODE, MCG_MODE_OPEN);
       regs_write(MCG_REG_DUTY, g_duty_min > 0 ? g_duty_min : (g_duty_max < 0 ? g_duty_max : 0));
       break;
     case 1:

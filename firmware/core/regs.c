@@ -24,16 +24,17 @@ static MCG_CODE int16_t k_default[] = {MCG_REGISTERS(REG_DEFAULT)};
 typedef char regs_one_row_per_id[sizeof k_access == MCG_REG_COUNT - 1u ? 1 : -1];
 
 /* Power-on values: each writable register gets its table default through regs_write, in id order,
- * with the write's side effects (outputs, controller). */
+ * with the write's side effects (outputs); the controller's set (open loop) is then committed. */
 void regs_init(void) {
   MCG_SLOW uint8_t reg;
   g_mode = MCG_MODE_OPEN;
   g_duty_set = 0;
   for (reg = MCG_REG_MODE; reg < MCG_REG_COUNT; ++reg) {
-    if (k_access[reg - 1u] == MCG_RW) {
+    if (k_access[reg - 1u] != MCG_RO && reg != MCG_REG_COMMIT) {
       regs_write(reg, k_default[reg - 1u]);
     }
   }
+  control_commit();
 }
 
 static uint8_t flags(void) {
@@ -134,6 +135,9 @@ uint8_t regs_read(uint8_t reg, int16_t* value) MCG_REENTRANT {
     case MCG_REG_STREAM_SEQ:
       v = g_stream_seq;
       break;
+    case MCG_REG_COMMIT:
+      v = control_pending();
+      break;
     default:
       return MCG_ST_BAD_REG;
   }
@@ -141,25 +145,51 @@ uint8_t regs_read(uint8_t reg, int16_t* value) MCG_REENTRANT {
   return MCG_ST_OK;
 }
 
+uint8_t regs_read_staged(uint8_t reg, int16_t* value) {
+  switch (reg) {
+    case MCG_REG_MODE:
+      *value = g_ctl_shadow.mode;
+      return MCG_ST_OK;
+    case MCG_REG_DUTY_BIAS:
+      *value = g_ctl_shadow.duty_bias;
+      return MCG_ST_OK;
+    case MCG_REG_KP:
+      *value = g_ctl_shadow.kp;
+      return MCG_ST_OK;
+    case MCG_REG_B0:
+      *value = g_ctl_shadow.b0;
+      return MCG_ST_OK;
+    case MCG_REG_B1:
+      *value = g_ctl_shadow.b1;
+      return MCG_ST_OK;
+    case MCG_REG_B2:
+      *value = g_ctl_shadow.b2;
+      return MCG_ST_OK;
+    case MCG_REG_COEF_FRAC:
+      *value = g_ctl_shadow.coef_frac;
+      return MCG_ST_OK;
+    case MCG_REG_DUTY_MIN:
+      *value = g_ctl_shadow.duty_min;
+      return MCG_ST_OK;
+    case MCG_REG_DUTY_MAX:
+      *value = g_ctl_shadow.duty_max;
+      return MCG_ST_OK;
+    default:
+      return regs_read(reg, value);
+  }
+}
+
 uint8_t regs_writable(uint8_t reg) {
-  return reg >= MCG_REG_MODE && reg < MCG_REG_COUNT && k_access[reg - 1u] == MCG_RW;
+  return reg >= MCG_REG_MODE && reg < MCG_REG_COUNT && k_access[reg - 1u] != MCG_RO;
 }
 
 static uint8_t in_range(int16_t v, int16_t lo, int16_t hi) { return v >= lo && v <= hi; }
 
-/* Keeps the open-loop duty inside new limits. */
-static void set_limits(int16_t lo, int16_t hi) {
-  control_set_limits(lo, hi);
-  if (g_duty_set < lo) {
-    g_duty_set = lo;
-  } else if (g_duty_set > hi) {
-    g_duty_set = hi;
-  }
-}
-
 uint8_t regs_write(uint8_t reg, int16_t v) {
-  MCG_SLOW int16_t dummy;
-  if (regs_read(reg, &dummy) != MCG_ST_OK) {
+  if (reg == MCG_REG_COMMIT && v == 1) { /* first: the commit's pass and the next update share a tick */
+    return control_commit();
+  }
+  if (reg < MCG_REG_MODE || reg >= MCG_REG_COUNT) { /* the table has a row for every id between */
     return MCG_ST_BAD_REG;
   }
   if (!regs_writable(reg)) {
@@ -170,11 +200,7 @@ uint8_t regs_write(uint8_t reg, int16_t v) {
   }
   switch (reg) {
     case MCG_REG_MODE:
-      if (v == MCG_MODE_OPEN) {
-        g_duty_set = g_duty_out;
-      }
-      g_mode = (uint8_t)v;
-      control_set_mode(g_mode);
+      g_ctl_shadow.mode = (uint8_t)v;
       break;
     case MCG_REG_RPM_CMD:
       g_rpm_cmd = v;
@@ -182,7 +208,7 @@ uint8_t regs_write(uint8_t reg, int16_t v) {
       break;
     case MCG_REG_DUTY:
       if (g_mode != MCG_MODE_OPEN) {
-        return MCG_ST_BUSY;
+        return MCG_ST_OWNED;
       }
       if (!in_range(v, g_duty_min, g_duty_max)) {
         return MCG_ST_RANGE;
@@ -193,38 +219,28 @@ uint8_t regs_write(uint8_t reg, int16_t v) {
       g_duty_step = v;
       break;
     case MCG_REG_DUTY_BIAS:
-      control_set_bias(v);
+      g_ctl_shadow.duty_bias = v;
       break;
     case MCG_REG_KP:
-      g_kp = v;
-      control_refresh();
+      g_ctl_shadow.kp = v;
       break;
     case MCG_REG_B0:
-      g_b0 = v;
-      control_refresh();
+      g_ctl_shadow.b0 = v;
       break;
     case MCG_REG_B1:
-      g_b1 = v;
-      control_refresh();
+      g_ctl_shadow.b1 = v;
       break;
     case MCG_REG_B2:
-      g_b2 = v;
-      control_refresh();
+      g_ctl_shadow.b2 = v;
       break;
     case MCG_REG_COEF_FRAC:
-      control_set_coef_frac((uint8_t)v);
+      g_ctl_shadow.coef_frac = (uint8_t)v;
       break;
-    case MCG_REG_DUTY_MIN:
-      if (v > g_duty_max) {
-        return MCG_ST_RANGE;
-      }
-      set_limits(v, g_duty_max);
+    case MCG_REG_DUTY_MIN: /* duty_min <= duty_max is checked by the commit, on the whole set */
+      g_ctl_shadow.duty_min = v;
       break;
     case MCG_REG_DUTY_MAX:
-      if (v < g_duty_min) {
-        return MCG_ST_RANGE;
-      }
-      set_limits(g_duty_min, v);
+      g_ctl_shadow.duty_max = v;
       break;
     case MCG_REG_SERVICE_MS:
       g_service_ms = (uint8_t)v;
@@ -247,9 +263,28 @@ uint8_t regs_write(uint8_t reg, int16_t v) {
     case MCG_REG_RX_ERRORS:
       g_rx_errors = 0;
       break;
-    default: /* MCG_REG_TX_DROPS, the last writable one */
+    case MCG_REG_TX_DROPS:
       g_tx_drops = 0;
       break;
+    default: /* MCG_REG_COMMIT, the last writable one: 0 discards (1 commits, above) */
+      control_discard();
+      break;
+  }
+  if (k_access[reg - 1u] == MCG_RS) {
+    control_staged();
   }
   return MCG_ST_OK;
+}
+
+uint8_t regs_apply(uint8_t reg, int16_t v) {
+  MCG_SLOW uint8_t st;
+  if (!regs_writable(reg) || k_access[reg - 1u] != MCG_RS) {
+    return regs_write(reg, v);
+  }
+  control_discard();
+  st = regs_write(reg, v);
+  if (st != MCG_ST_OK) {
+    return st;
+  }
+  return control_commit();
 }

@@ -19,13 +19,13 @@
 #define MCG_FIRMWARE_INCLUDE_MCG_PROTOCOL_H
 
 /* Protocol revision: bumped on any incompatible change of this header. */
-#define MCG_PROTOCOL_VERSION 2u
+#define MCG_PROTOCOL_VERSION 3u
 
 /* Firmware version reported by MCG_CMD_VERSION. */
 #include <stdint.h> /* uint8_t */
 
 #define MCG_FW_VERSION_MAJOR 0u
-#define MCG_FW_VERSION_MINOR 2u
+#define MCG_FW_VERSION_MINOR 3u
 #define MCG_FW_VERSION_PATCH 0u
 
 /* Board ids reported by MCG_CMD_VERSION. */
@@ -110,8 +110,11 @@ typedef struct {
 #define MCG_ST_BAD_REG 7u    /* unknown register */
 #define MCG_ST_READ_ONLY 8u  /* register cannot be written */
 #define MCG_ST_RANGE 9u      /* value outside the register's range; register unchanged */
-#define MCG_ST_BUSY 10u      /* not now: log recording, or sequence playing */
-#define MCG_ST_COUNT 11u
+#define MCG_ST_BUSY 10u      /* not now: log recording or dumping, or sequence playing */
+#define MCG_ST_OWNED 11u     /* duty written in a closed-loop mode: the controller owns it */
+#define MCG_ST_NO_GAINS 12u  /* commit of a closed-loop mode whose every gain is zero; nothing changed */
+#define MCG_ST_LIMITS 13u    /* commit of duty_min above duty_max; nothing changed */
+#define MCG_ST_COUNT 14u
 
 /* ---- Units and fixed-point formats ------------------------------------------------------------ */
 #define MCG_TICK_US 1000u            /* control sample period: 1 ms */
@@ -156,11 +159,16 @@ typedef struct {
 #define MCG_REG_RX_ERRORS 0x18u
 #define MCG_REG_TX_DROPS 0x19u
 #define MCG_REG_STREAM_SEQ 0x1Au
-#define MCG_REG_COUNT 0x1Bu /* ids 0x01..MCG_REG_COUNT-1 exist, in the order of MCG_REGISTERS */
+#define MCG_REG_COMMIT 0x1Bu
+#define MCG_REG_COUNT 0x1Cu /* ids 0x01..MCG_REG_COUNT-1 exist, in the order of MCG_REGISTERS */
 
 /* Access column. */
 #define MCG_RO 0u /* read only: a write is refused with MCG_ST_READ_ONLY */
 #define MCG_RW 1u /* every write is range-checked, from the link, the keypad and playback alike */
+/* Staged (range-checked as MCG_RW): the controller's set (mode, gains, format, bias, limits). A write
+ * goes to the shadow set, which the running loop never reads; writing 1 to MCG_REG_COMMIT checks the
+ * whole set and makes it active between two ticks, bumpless. Reads show the active set. */
+#define MCG_RS 2u
 
 /* Unit column: what the raw i16 counts (the host shows duty in %, gains as raw / 2^F). */
 #define MCG_UNIT_MODE 0u     /* MCG_MODE_* */
@@ -183,20 +191,20 @@ typedef struct {
  * firmware checks the dynamic parts the doc names (duty within duty_min..duty_max, duty_min <=
  * duty_max). Plain C89 tokens and literals: SDCC expands it into code-memory tables. */
 #define MCG_REGISTERS(X) \
-  X(MODE, "mode", MCG_RW, 0, MCG_MODE_COUNT - 1, MCG_MODE_OPEN, MCG_UNIT_MODE, "controller: open, p, pi, pid") \
+  X(MODE, "mode", MCG_RS, 0, MCG_MODE_COUNT - 1, MCG_MODE_OPEN, MCG_UNIT_MODE, "controller: open, p, pi, pid") \
   X(RPM_CMD, "rpm_cmd", MCG_RW, 120, 720, 420, MCG_UNIT_RPM, "speed command, rpm") \
   X(DUTY, "duty", MCG_RW, -MCG_DUTY_FULL, MCG_DUTY_FULL, 0, MCG_UNIT_PERMILLE, \
     "motor duty, % (read: the output; write: open loop only, within duty_min..duty_max)") \
   X(DUTY_STEP, "duty_step", MCG_RW, 1, MCG_DUTY_FULL, 10, MCG_UNIT_PERMILLE, "keypad up/down duty step, %") \
-  X(DUTY_BIAS, "duty_bias", MCG_RW, -MCG_DUTY_FULL, MCG_DUTY_FULL, 0, MCG_UNIT_PERMILLE, "P mode: u = bias + kp e, %") \
-  X(KP, "kp", MCG_RW, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, "P gain, 1/1000 duty per pulse/ms") \
-  X(B0, "b0", MCG_RW, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, \
+  X(DUTY_BIAS, "duty_bias", MCG_RS, -MCG_DUTY_FULL, MCG_DUTY_FULL, 0, MCG_UNIT_PERMILLE, "P mode: u = bias + kp e, %") \
+  X(KP, "kp", MCG_RS, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, "P gain, 1/1000 duty per pulse/ms") \
+  X(B0, "b0", MCG_RS, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, \
     "PI/PID: u[n] = u[n-1] + b0 e[n] + b1 e[n-1] + b2 e[n-2], 1/1000 duty per pulse/ms") \
-  X(B1, "b1", MCG_RW, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, "PI/PID coefficient of e[n-1]") \
-  X(B2, "b2", MCG_RW, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, "PID coefficient of e[n-2]") \
-  X(COEF_FRAC, "coef_frac", MCG_RW, 0, MCG_COEF_FRAC_BITS_MAX, 8, MCG_UNIT_BITS, "fractional bits F of kp, b0, b1, b2") \
-  X(DUTY_MIN, "duty_min", MCG_RW, -MCG_DUTY_FULL, MCG_DUTY_FULL, 0, MCG_UNIT_PERMILLE, "controller output floor, %") \
-  X(DUTY_MAX, "duty_max", MCG_RW, -MCG_DUTY_FULL, MCG_DUTY_FULL, MCG_DUTY_FULL, MCG_UNIT_PERMILLE, "controller output ceiling, %") \
+  X(B1, "b1", MCG_RS, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, "PI/PID coefficient of e[n-1]") \
+  X(B2, "b2", MCG_RS, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, "PID coefficient of e[n-2]") \
+  X(COEF_FRAC, "coef_frac", MCG_RS, 0, MCG_COEF_FRAC_BITS_MAX, 8, MCG_UNIT_BITS, "fractional bits F of kp, b0, b1, b2") \
+  X(DUTY_MIN, "duty_min", MCG_RS, -MCG_DUTY_FULL, MCG_DUTY_FULL, 0, MCG_UNIT_PERMILLE, "controller output floor, %") \
+  X(DUTY_MAX, "duty_max", MCG_RS, -MCG_DUTY_FULL, MCG_DUTY_FULL, MCG_DUTY_FULL, MCG_UNIT_PERMILLE, "controller output ceiling, %") \
   X(SERVICE_MS, "service_ms", MCG_RW, 5, 250, 40, MCG_UNIT_MS, "keypad and duty service period, ms") \
   X(LOG_INTERVAL, "log_interval", MCG_RW, 1, 255, 4, MCG_UNIT_MS, "RAM log point spacing, ms") \
   X(LOG_COUNT, "log_count", MCG_RO, 0, MCG_LOG_POINTS, 0, MCG_UNIT_COUNT, "RAM log points recorded") \
@@ -211,7 +219,9 @@ typedef struct {
   X(FLAGS, "flags", MCG_RO, 0, 15, 0, MCG_UNIT_FLAGS, "saturated, logging, log_full, seq") \
   X(RX_ERRORS, "rx_errors", MCG_RW, 0, 0, 0, MCG_UNIT_COUNT, "frames the board dropped; write 0 clears") \
   X(TX_DROPS, "tx_drops", MCG_RW, 0, 0, 0, MCG_UNIT_COUNT, "frames the board could not send; write 0 clears") \
-  X(STREAM_SEQ, "stream_seq", MCG_RO, 0, 255, 0, MCG_UNIT_COUNT, "sequence number of the next stream block")
+  X(STREAM_SEQ, "stream_seq", MCG_RO, 0, 255, 0, MCG_UNIT_COUNT, "sequence number of the next stream block") \
+  X(COMMIT, "commit", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, \
+    "write 1: the staged controller set becomes active at the next tick; 0: discards it; read: 1 if one is pending")
 
 #define MCG_MODE_OPEN 0u /* duty from MCG_REG_DUTY (keypad up/down) */
 #define MCG_MODE_P 1u    /* u = bias + Kp e */

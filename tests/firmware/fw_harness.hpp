@@ -57,6 +57,23 @@ class Board {
     return f ? f->payload.at(0) : 0xFF;
   }
 
+  // A write as mcg-serial set makes it: a register of the controller's set (MCG_RS) is staged and
+  // then committed. The status of the write, or else of the commit.
+  std::uint8_t set(std::uint8_t reg, int value) {
+    const std::uint8_t st = write(reg, value);
+    if (st != MCG_ST_OK || !staged(reg)) {
+      return st;
+    }
+    return write(MCG_REG_COMMIT, 1);
+  }
+
+  static bool staged(std::uint8_t reg) {
+#define FW_ACCESS(NAME, name, access, lo, hi, def, unit, doc) access,
+    static const unsigned access[] = {MCG_REGISTERS(FW_ACCESS)};
+#undef FW_ACCESS
+    return reg >= MCG_REG_MODE && reg < MCG_REG_COUNT && access[reg - 1u] == MCG_RS;
+  }
+
   int read(std::uint8_t reg) {
     const auto f = request(MCG_CMD_READ, {reg});
     if (!f || f->payload.at(0) != MCG_ST_OK) {

@@ -38,14 +38,14 @@ struct Coefs {
 };
 
 void configure(Board& b, const Coefs& c, int rpm_cmd) {
-  ASSERT_EQ(b.write(MCG_REG_COEF_FRAC, c.frac), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_KP, c.kp), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_B0, c.b0), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_B1, c.b1), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_B2, c.b2), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_DUTY_MIN, c.duty_min), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_DUTY_MAX, c.duty_max), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_DUTY_BIAS, c.bias), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_COEF_FRAC, c.frac), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_KP, c.kp), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_B0, c.b0), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_B1, c.b1), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_B2, c.b2), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_DUTY_MIN, c.duty_min), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_DUTY_MAX, c.duty_max), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_DUTY_BIAS, c.bias), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_RPM_CMD, rpm_cmd), MCG_ST_OK);
 }
 
@@ -59,7 +59,7 @@ double compare(std::uint8_t mode, const Coefs& c, int rpm_cmd, int duty0,
   Board b;
   configure(b, c, rpm_cmd);
   EXPECT_EQ(b.write(MCG_REG_DUTY, duty0), MCG_ST_OK);
-  EXPECT_EQ(b.write(MCG_REG_MODE, mode), MCG_ST_OK);
+  EXPECT_EQ(b.set(MCG_REG_MODE, mode), MCG_ST_OK);
 
   const double scale = std::ldexp(1.0, -c.frac);
   const double kp = c.kp * scale, b0 = c.b0 * scale, b1 = c.b1 * scale, b2 = c.b2 * scale;
@@ -197,7 +197,7 @@ TEST(FwControl, QuantisationErrorWithinItsBound) {
   c.b1 = static_cast<int>(std::lround(-6.987 * 256));
   configure(b, c, 420);
   ASSERT_EQ(b.write(MCG_REG_DUTY, 300), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
   const auto p = random_pulses(200, 12, 17, 5);
   const double r = q8_command(420);
   double u = 300, e1 = r, worst = 0, emax = 0;
@@ -243,7 +243,7 @@ TEST(FwControl, PiHoldsTheCommandAcrossTheRange) {
     c.b0 = 512;   // 2.0
     c.b1 = -486;  // -1.9: Ki T = 0.1
     configure(b, c, rpm);
-    ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
+    ASSERT_EQ(b.set(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
     Motor m;
     std::uint16_t p = 0;
     for (int n = 0; n < 3000; ++n) {
@@ -270,7 +270,7 @@ TEST(FwControl, AntiWindupLeavesTheLimitAtOnce) {
   c.b1 = -486;
   c.duty_max = 300;  // at most 12 counts/ms = 351 rpm: the 720 rpm command cannot be reached
   configure(b, c, 720);
-  ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
   Motor m;
   std::uint16_t p = 0;
   for (int n = 0; n < 2000; ++n) {
@@ -294,12 +294,12 @@ TEST(FwControl, ModeSwitchIsBumpless) {
   configure(b, c, 420);
   ASSERT_EQ(b.write(MCG_REG_DUTY, 480), MCG_ST_OK);
   b.run(5, 14);
-  ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
   host_board_tick(14);
   // One PI step from 480: b0 e + b1 e1 with e = e1 = 14.336 - 14 counts/ms is 0.013.
   EXPECT_EQ(host_board_duty(), 480);
   b.run(200, 10);
-  ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_OPEN), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_MODE, MCG_MODE_OPEN), MCG_ST_OK);
   const int held = host_board_duty();
   EXPECT_GT(held, 480);
   host_board_tick(14);

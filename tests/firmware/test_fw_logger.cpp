@@ -124,10 +124,10 @@ TEST(FwLogger, RegressionRecordingLeavesControlAlone) {
   auto run = [](bool record) {
     Board b;
     b.set_pulses(13);
-    EXPECT_EQ(b.write(MCG_REG_B0, 600), MCG_ST_OK);
-    EXPECT_EQ(b.write(MCG_REG_B1, -560), MCG_ST_OK);
+    EXPECT_EQ(b.set(MCG_REG_B0, 600), MCG_ST_OK);
+    EXPECT_EQ(b.set(MCG_REG_B1, -560), MCG_ST_OK);
     EXPECT_EQ(b.write(MCG_REG_DUTY, 350), MCG_ST_OK);
-    EXPECT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
+    EXPECT_EQ(b.set(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
     if (record) {
       EXPECT_EQ(b.request(MCG_CMD_LOG_START)->payload.at(0), MCG_ST_OK);
     } else {
@@ -229,7 +229,7 @@ TEST(FwStream, BlocksEverySixtyFourMillisecondsWithinTheBudget) {
 // Counts carry the direction of the drive; the outputs of each tick are those that acted during it.
 TEST(FwStream, SamplesCarrySignedCountsAndTheOutputs) {
   Board b;
-  ASSERT_EQ(b.write(MCG_REG_DUTY_MIN, -1000), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_DUTY_MIN, -1000), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_DUTY, -250), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_CLUTCH, MCG_CLUTCH_ENGAGED), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_LOAD, 1), MCG_ST_OK);
@@ -256,9 +256,9 @@ TEST(FwStream, SamplesCarrySignedCountsAndTheOutputs) {
 // Closed loop: each sample's duty is the rounded mean of the PWM over its 4 ticks.
 TEST(FwStream, DutyIsTheMeanOverTheSample) {
   Board b;
-  ASSERT_EQ(b.write(MCG_REG_COEF_FRAC, 8), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_KP, 64 * 256), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_P), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_COEF_FRAC, 8), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_KP, 64 * 256), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_MODE, MCG_MODE_P), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_STREAM, 1), MCG_ST_OK);
   std::vector<int> duty;
   Bytes all;
@@ -463,7 +463,7 @@ TEST(FwSequence, ChecksEntriesWhenStored) {
 // The log signs the direction-less pulses with the drive, as the stream does.
 TEST(FwLogger, PointsCarryTheDriveDirection) {
   Board b;
-  ASSERT_EQ(b.write(MCG_REG_DUTY_MIN, -1000), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_DUTY_MIN, -1000), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_DUTY, -300), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_LOG_INTERVAL, 4), MCG_ST_OK);
   b.set_pulses(5);

@@ -51,7 +51,7 @@ TEST(FwMenu, KpNegativeRoundedAndAtOtherFormats) {
   EXPECT_EQ(b.read(MCG_REG_KP), 316);
   EXPECT_EQ(lcd(1), "       1.234    ");
   // At F = 12 the same typing gives round(1.234 * 4096) = 5054.
-  ASSERT_EQ(b.write(MCG_REG_COEF_FRAC, 12), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_COEF_FRAC, 12), MCG_ST_OK);
   keys(b, {k_d, 1, k_f, 2, 3, 4, k_d});
   EXPECT_EQ(b.read(MCG_REG_KP), 5054);
   // 8.0 does not fit Q3.12: refused, Kp unchanged.
@@ -97,7 +97,7 @@ TEST(FwMenu, MainScreenLines) {
   EXPECT_EQ(lcd(0), "  410 rpm OL  C-");
   EXPECT_EQ(lcd(1), "open   d  37.5% ");
   ASSERT_EQ(b.write(MCG_REG_LOAD, 1), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_RPM_CMD, 555), MCG_ST_OK);
   b.run(500, 14);
   EXPECT_EQ(lcd(0), "  410 rpm PI  CL");
@@ -147,8 +147,8 @@ TEST(FwMenu, SingleKeyActions) {
   EXPECT_EQ(b.read(MCG_REG_STREAM), 1);
   keys(b, {k_f});
   EXPECT_EQ(b.read(MCG_REG_FLAGS) & static_cast<int>(MCG_FLAG_LOGGING), static_cast<int>(MCG_FLAG_LOGGING));
-  ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_P), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_DUTY_BIAS, 500), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_MODE, MCG_MODE_P), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_DUTY_BIAS, 500), MCG_ST_OK);
   b.run(5);
   EXPECT_GT(host_board_duty(), 0);
   keys(b, {0});  // stop: open loop, duty 0

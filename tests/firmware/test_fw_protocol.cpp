@@ -112,8 +112,16 @@ TEST(FwProtocol, EveryStatusCode) {
   EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_RPM, 0, 0}), MCG_ST_READ_ONLY);
   EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_RPM_CMD, 0x21, 0x03}), MCG_ST_RANGE);  // 801 rpm
   EXPECT_EQ(b.read(MCG_REG_RPM_CMD), 420) << "a refused write leaves the register unchanged";
-  EXPECT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
-  EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_DUTY, 100, 0}), MCG_ST_BUSY);  // duty is the controller's
+  EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_MODE, MCG_MODE_PI, 0}), MCG_ST_OK);  // staged, not checked
+  EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_COMMIT, 1, 0}), MCG_ST_NO_GAINS);    // gains never written
+  EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_DUTY_MIN, 0x2C, 0x01}), MCG_ST_OK);  // 300
+  EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_DUTY_MAX, 200, 0}), MCG_ST_OK);
+  EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_COMMIT, 1, 0}), MCG_ST_LIMITS);      // 300 > 200
+  EXPECT_EQ(b.set(MCG_REG_B0, 300), MCG_ST_OK);
+  EXPECT_EQ(b.set(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
+  EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_DUTY, 100, 0}), MCG_ST_OWNED);  // duty is the controller's
+  EXPECT_EQ(answer(MCG_CMD_LOG_START, {}), MCG_ST_OK);
+  EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_LOG_INTERVAL, 9, 0}), MCG_ST_BUSY);  // while recording
 
   std::set<std::uint8_t> all;
   for (std::uint8_t s = 0; s < MCG_ST_COUNT; ++s) {
@@ -149,11 +157,12 @@ TEST(FwProtocol, RangesOfEveryWritableRegister) {
 
 TEST(FwProtocol, DutyLimitsBoundEachOther) {
   Board b;
-  EXPECT_EQ(b.write(MCG_REG_DUTY_MAX, 600), MCG_ST_OK);
-  EXPECT_EQ(b.write(MCG_REG_DUTY_MIN, 601), MCG_ST_RANGE);
+  EXPECT_EQ(b.set(MCG_REG_DUTY_MAX, 600), MCG_ST_OK);
+  EXPECT_EQ(b.set(MCG_REG_DUTY_MIN, 601), MCG_ST_LIMITS);
+  EXPECT_EQ(b.read(MCG_REG_DUTY_MIN), 0);
   EXPECT_EQ(b.write(MCG_REG_DUTY, 700), MCG_ST_RANGE);
   EXPECT_EQ(b.write(MCG_REG_DUTY, 600), MCG_ST_OK);
-  EXPECT_EQ(b.write(MCG_REG_DUTY_MAX, 500), MCG_ST_OK);
+  EXPECT_EQ(b.set(MCG_REG_DUTY_MAX, 500), MCG_ST_OK);
   b.run(2);
   EXPECT_EQ(host_board_duty(), 500) << "the open-loop duty follows a lowered limit";
 }
@@ -177,7 +186,7 @@ TEST(FwProtocol, RegressionEighthBitEveryByteValue) {
         continue;
       }
       const int value = static_cast<std::int16_t>(static_cast<std::uint16_t>(hi << 8 | lo));
-      ASSERT_EQ(b.write(MCG_REG_KP, value), MCG_ST_OK) << value;
+      ASSERT_EQ(b.set(MCG_REG_KP, value), MCG_ST_OK) << value;
       ASSERT_EQ(b.read(MCG_REG_KP), value);
     }
   }

@@ -354,7 +354,14 @@ std::optional<int> read_reg(Sim& sim, std::uint8_t reg) {
   return fwtest::i16_at(f->payload, 2);
 }
 
-// Runs the benchmark image to its end and returns the duties it stored at 0xA000 (4 x 256, i16).
+// The benchmark image's sets (bench/bench_tick.c): P, PI, PID at F = 8, PID at F = 11, a swap from
+// a PI to a PID staged one register per update from update 100 and committed before update 128,
+// then 256 commits each followed by an update.
+constexpr int k_bench_sets = 6;
+constexpr unsigned k_stage_at = 100;
+constexpr unsigned k_commit_at = 128;
+
+// Runs the benchmark image to its end and returns the duties it stored at 0xA000 (6 x 256, i16).
 std::vector<int> bench_duties(const std::string& image, const std::string& dir) {
   const std::string map = image.substr(0, image.size() - 4) + ".map";
   std::FILE* m = std::fopen(map.c_str(), "r");
@@ -374,7 +381,7 @@ std::vector<int> bench_duties(const std::string& image, const std::string& dir) 
   }
   const std::string cfg = dir + "/bench-check.cfg";
   std::FILE* c = std::fopen(cfg.c_str(), "w");
-  std::fprintf(c, "file \"%s\"\nbreak 0x%s\nrun\ndx 0xa000 0xa7ff 16\nquit\n", image.c_str(), done.c_str());
+  std::fprintf(c, "file \"%s\"\nbreak 0x%s\nrun\ndx 0xa000 0xabff 16\nquit\n", image.c_str(), done.c_str());
   std::fclose(c);
   const std::string cmd = "timeout 120 s51 -t C517 -X 12M -C '" + cfg + "' < /dev/null 2>&1";
   std::FILE* p = popen(cmd.c_str(), "r");
@@ -408,8 +415,10 @@ std::vector<int> bench_duties(const std::string& image, const std::string& dir) 
   return duties;
 }
 
-// The same updates on the host: the C core with the benchmark's registers and pulses.
-std::vector<int> host_duties() {
+// The same updates on the host: the C core with the benchmark's registers, staging and pulses
+// (bench/bench_tick.c). With swap = false the fifth set stages nothing and commits nothing: the PI
+// the swap would have left alone.
+std::vector<int> host_duties(bool swap = true) {
   host_board_reset();
   regs_write(MCG_REG_RPM_CMD, 420);
   regs_write(MCG_REG_KP, 3000);
@@ -418,13 +427,31 @@ std::vector<int> host_duties() {
   regs_write(MCG_REG_B2, 6100);
   regs_write(MCG_REG_DUTY_BIAS, 300);
   std::vector<int> duties;
-  for (int m = 0; m < 4; ++m) {
+  for (int m = 0; m < k_bench_sets; ++m) {
     if (m == 3) {
       regs_write(MCG_REG_COEF_FRAC, 11);
-    } else {
+    } else if (m == 4) {
+      regs_write(MCG_REG_COEF_FRAC, 8);
+      regs_write(MCG_REG_MODE, MCG_MODE_PI);
+    } else if (m < 3) {
       regs_write(MCG_REG_MODE, static_cast<std::int16_t>(static_cast<int>(MCG_MODE_P) + m));
     }
+    regs_write(MCG_REG_COMMIT, 1);
     for (unsigned i = 0; i < 256; ++i) {
+      bool commit = false;
+      if (m == 4 && swap) {
+        static const std::uint8_t regs[5] = {MCG_REG_MODE, MCG_REG_B0, MCG_REG_B1, MCG_REG_B2, MCG_REG_DUTY_MAX};
+        static const std::int16_t values[5] = {MCG_MODE_PID, 7000, -12000, 5200, 900};
+        if (i >= k_stage_at && i < k_stage_at + 5) regs_write(regs[i - k_stage_at], values[i - k_stage_at]);
+        commit = i == k_commit_at;
+      } else if (m == 5) {
+        regs_write(MCG_REG_COEF_FRAC, (i & 1u) ? 11 : 8);
+        regs_write(MCG_REG_B0, (i & 1u) ? 30000 : 9000);
+        regs_write(MCG_REG_B2, (i & 1u) ? 20000 : 6100);
+        regs_write(MCG_REG_DUTY_MIN, (i & 1u) ? -500 : 0);
+        commit = true;
+      }
+      if (commit) regs_write(MCG_REG_COMMIT, 1);
       control_tick(static_cast<std::uint8_t>(6u + (i * 7u) % 25u));
       duties.push_back(g_duty_out);
     }
@@ -448,7 +475,7 @@ int main(int argc, char** argv) {
     const auto v = sim.request(MCG_CMD_VERSION);
     check(v && v->payload == Bytes{MCG_ST_OK, MCG_PROTOCOL_VERSION, MCG_FW_VERSION_MAJOR,
                                    MCG_FW_VERSION_MINOR, MCG_FW_VERSION_PATCH, MCG_BOARD_UCSIM},
-          "version: protocol 2, firmware 0.2.0, board ucsim");
+          "version: protocol 3, firmware 0.3.0, board ucsim");
 
     const auto w = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_RPM_CMD, 515));
     check(w && w->payload == Bytes{MCG_ST_OK, MCG_REG_RPM_CMD, 0x03, 0x02}, "write rpm_cmd 515 acknowledged");
@@ -457,9 +484,11 @@ int main(int argc, char** argv) {
     bool all_bits = true;
     for (int value : {-32513, 0x7F80, -1, 0x00FF, -32768}) {
       const auto a = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_KP, value));
-      all_bits = all_bits && a && a->payload.at(0) == MCG_ST_OK && read_reg(sim, MCG_REG_KP) == value;
+      const auto c = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_COMMIT, 1));
+      all_bits = all_bits && a && a->payload.at(0) == MCG_ST_OK && c && c->payload.at(0) == MCG_ST_OK &&
+                 read_reg(sim, MCG_REG_KP) == value;
     }
-    check(all_bits, "Kp written and read back with the eighth bit of both bytes");
+    check(all_bits, "Kp written, committed and read back with the eighth bit of both bytes");
 
     const auto r = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_RPM_CMD, 800));
     check(r && r->payload == Bytes{MCG_ST_RANGE} && read_reg(sim, MCG_REG_RPM_CMD) == 515,
@@ -562,6 +591,23 @@ int main(int argc, char** argv) {
     const Bytes lcd = read_xram(sim, 0x9F20, 0x9F2F);
     const std::string row(lcd.begin(), lcd.end());
     check(row == "open   d  40.0% ", "LCD line 2: '" + row + "'");
+    sim.console("expr sim_start=1");
+
+    // The controller's set on the 8051 image: a PI with gains never written is refused with its own
+    // code and the duty stays; with gains it commits, and then owns the duty.
+    const auto status_of = [&](int reg, int value) {
+      const auto a = sim.request(MCG_CMD_WRITE, write_payload(static_cast<std::uint8_t>(reg), value));
+      return a ? a->payload.at(0) : 0xFF;
+    };
+    check(status_of(MCG_REG_MODE, MCG_MODE_PI) == MCG_ST_OK && status_of(MCG_REG_COMMIT, 1) == MCG_ST_NO_GAINS &&
+              read_reg(sim, MCG_REG_MODE) == static_cast<int>(MCG_MODE_OPEN) && read_reg(sim, MCG_REG_DUTY) == 400,
+          "mode pi with every gain zero: commit refused (NO_GAINS), open loop at duty 400 kept");
+    check(status_of(MCG_REG_B0, 300) == MCG_ST_OK && status_of(MCG_REG_B1, -280) == MCG_ST_OK &&
+              status_of(MCG_REG_MODE, MCG_MODE_PI) == MCG_ST_OK &&
+              read_reg(sim, MCG_REG_MODE) == static_cast<int>(MCG_MODE_OPEN) && status_of(MCG_REG_COMMIT, 1) == MCG_ST_OK &&
+              read_reg(sim, MCG_REG_MODE) == static_cast<int>(MCG_MODE_PI),
+          "a staged PI runs only after its commit");
+    check(status_of(MCG_REG_DUTY, 100) == MCG_ST_OWNED, "duty written in mode pi: refused (OWNED)");
   }
   if (argc == 4) {
     const std::vector<int> sim = bench_duties(argv[3], argv[2]);
@@ -577,9 +623,21 @@ int main(int argc, char** argv) {
                          ", C " + std::to_string(host[first_diff])
                    : "; got " + std::to_string(sim.size()) + " duties";
     }
-    check(sim.size() == 1024 && first_diff == host.size(),
-          "8051 P, PI, PID updates (F = 8, 11) equal the host C core: " + std::to_string(first_diff) +
-              " of " + std::to_string(host.size()) + " duties identical" + detail);
+    check(sim.size() == 256u * k_bench_sets && first_diff == host.size(),
+          "8051 P, PI, PID updates (F = 8, 11), a swap and 256 commits equal the host C core: " +
+              std::to_string(first_diff) + " of " + std::to_string(host.size()) + " duties identical" + detail);
+    // The swap on the 8051: up to the commit every duty is the PI's alone (the staged PID never
+    // reached the loop); the update right after the commit is already the PID's.
+    const std::vector<int> pi_alone = host_duties(false);
+    const std::size_t swap = 4 * 256;
+    bool untouched = sim.size() == host.size();
+    for (std::size_t i = swap; untouched && i < swap + k_commit_at; ++i) untouched = sim[i] == pi_alone[i];
+    check(untouched, "8051: the PID staged from update 100 leaves the PI's duties alone up to the commit");
+    check(untouched && sim[swap + k_commit_at] != pi_alone[swap + k_commit_at] &&
+              sim[swap + k_commit_at] == host[swap + k_commit_at],
+          "8051: the commit acts on one update: update 128 runs the PID (" +
+              std::to_string(sim.size() > swap + k_commit_at ? sim[swap + k_commit_at] : -1) + ", the PI alone " +
+              std::to_string(pi_alone[swap + k_commit_at]) + ")");
   }
   std::printf("%d passed, %d failed\n", g_pass, g_fail);
   return g_fail == 0 ? 0 : 1;

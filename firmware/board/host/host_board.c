@@ -207,4 +207,6 @@ uint32_t host_board_time_ms(void) { return s_time_ms; }
 
 uint8_t host_board_reg_write(uint8_t reg, int16_t value) { return regs_write(reg, value); }
 
+uint8_t host_board_reg_apply(uint8_t reg, int16_t value) { return regs_apply(reg, value); }
+
 uint8_t host_board_reg_read(uint8_t reg, int16_t* value) { return regs_read(reg, value); }

@@ -75,6 +75,9 @@ uint32_t host_board_time_ms(void);
  * the status the command would answer. */
 uint8_t host_board_reg_write(uint8_t reg, int16_t value);
 uint8_t host_board_reg_read(uint8_t reg, int16_t* value);
+/* A write as one atomic change (regs_apply): a register of the controller's set is staged onto the
+ * active set and committed, as mcg-serial set does it. */
+uint8_t host_board_reg_apply(uint8_t reg, int16_t value);
 
 #ifdef __cplusplus
 }

@@ -17,8 +17,10 @@ class FirmwareCore {
   FirmwareCore(const FirmwareCore&) = delete;
   FirmwareCore& operator=(const FirmwareCore&) = delete;
 
-  /// Writes register `reg` (MCG_REG_*) as the protocol's WRITE would, raw value; the caller
-  /// has checked the value against the register's range (MCG_DEMAND on the core's status).
+  /// Writes register `reg` (MCG_REG_*) as `mcg-serial set` would, raw value: a register of the
+  /// controller's set is staged and committed at once. Returns MCG_ST_OK or the board's refusal.
+  std::uint8_t apply(std::uint8_t reg, std::int16_t raw);
+  /// apply() that the caller knows the board takes (range checked, gains present): MCG_DEMAND.
   void write(std::uint8_t reg, std::int16_t raw);
   std::int16_t read(std::uint8_t reg) const;
 

@@ -35,6 +35,8 @@ struct Connection {
   /// F, the fractional bits of the coefficient registers (read once, cached).
   int frac_bits();
   void forget_frac_bits() { m_frac_bits.reset(); }
+  /// F as the gains that follow are to be written: the coef_frac just staged.
+  void set_frac_bits(int frac_bits) { m_frac_bits = frac_bits; }
   /// "host firmware 0.2.0, protocol 2".
   std::string board_text() const;
 

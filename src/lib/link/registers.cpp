@@ -16,7 +16,7 @@ namespace mcg::link {
 namespace {
 
 #define MCG_HOST_REGISTER(NAME, name, access, lo, hi, def, unit, doc) \
-  RegisterInfo{name, MCG_REG_##NAME, static_cast<Unit>(unit), (access) == MCG_RW, lo, hi, def, doc},
+  RegisterInfo{name, MCG_REG_##NAME, static_cast<Unit>(unit), (access) != MCG_RO, (access) == MCG_RS, lo, hi, def, doc},
 constexpr std::array<RegisterInfo, MCG_REG_COUNT - 1> k_registers{{MCG_REGISTERS(MCG_HOST_REGISTER)}};
 #undef MCG_HOST_REGISTER
 
@@ -195,9 +195,22 @@ std::string_view status_text(std::uint8_t status) {
       return "value outside the register's range";
     case MCG_ST_BUSY:
       return "board busy (log recording, dump or sequence playing)";
+    case MCG_ST_OWNED:
+      return "the controller owns duty in a closed-loop mode; set mode open first";
+    case MCG_ST_NO_GAINS:
+      return "a closed-loop mode with every gain zero (write its gains first); nothing changed";
+    case MCG_ST_LIMITS:
+      return "duty_min above duty_max; nothing changed";
     default:
       return "unknown status";
   }
+}
+
+std::string_view status_name(std::uint8_t status) {
+  static constexpr std::array<std::string_view, MCG_ST_COUNT> k_names{
+      "OK",        "BAD_CRC",  "TOO_LONG", "TIMEOUT", "OVERRUN", "BAD_CMD",  "BAD_LENGTH",
+      "BAD_REG",   "READ_ONLY", "RANGE",   "BUSY",    "OWNED",   "NO_GAINS", "LIMITS"};
+  return status < k_names.size() ? k_names[status] : "UNKNOWN";
 }
 
 }  // namespace mcg::link

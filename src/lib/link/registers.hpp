@@ -32,6 +32,9 @@ struct RegisterInfo {
   std::uint8_t id;
   Unit unit;
   bool writable;
+  /// One of the controller's set (MCG_RS): a write goes to the board's shadow set and acts only
+  /// when the commit register is written; a read shows the active set.
+  bool staged;
   std::int32_t raw_min;  ///< the range the board accepts (static part; the board checks the rest)
   std::int32_t raw_max;
   std::int16_t raw_default;  ///< the board's power-on value
@@ -64,5 +67,7 @@ std::string format_value(const RegisterInfo& reg, std::int16_t raw, int frac_bit
 
 /// Text of a protocol status code ("value outside the register's range", ...).
 std::string_view status_text(std::uint8_t status);
+/// The protocol's name of a status code ("RANGE", "NO_GAINS", ...), as mcg-protocol(7) lists it.
+std::string_view status_name(std::uint8_t status);
 
 }  // namespace mcg::link

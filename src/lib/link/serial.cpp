@@ -61,20 +61,30 @@ namespace {
 
 constexpr double k_pulses_to_rev = 1.0 / MCG_COUNTS_PER_REV;
 
-/// Writes `value` (engineering units) into `reg`, reads it back. Returns the raw value held.
-/// Notes a rounded value on `err`; throws when the board holds something else.
+/// Writes `value` (engineering units) into `reg` and checks what the board holds: for a staged
+/// register the shadow value its answer reports, else the register read back. Returns the raw value
+/// held. Notes a rounded value on `err`; throws when the board holds something else, and names the
+/// mode when the board refuses a duty its controller owns.
 std::int16_t write_verified(Connection& c, const RegisterInfo& reg, double value, std::string_view where,
                             std::ostream& err) {
   if (!reg.writable) fail("{}: {} is read-only", where, reg.name);
   const int frac = reg.unit == Unit::Gain ? c.frac_bits() : 0;
   const std::int16_t raw = to_raw(reg, value, frac);
-  c.session->write(reg, raw);
-  const std::int16_t held = c.session->read(reg);
+  std::int16_t held = 0;
+  try {
+    held = c.session->write(reg, raw);
+  } catch (const Refused& e) {
+    if (e.status() != MCG_ST_OWNED) throw;
+    const RegisterInfo& mode = require_register("mode");
+    fail("{}: writing {}: the controller owns {} in mode {}; set mode open first", c.port->name(), reg.name,
+         reg.name, format_value(mode, c.session->read(mode), 0));
+  }
+  if (!reg.staged) held = c.session->read(reg);
   if (held != raw) {
     fail("{}: {}: the board holds {} after writing {}", c.port->name(), reg.name, format_value(reg, held, frac),
          format_value(reg, raw, frac));
   }
-  if (reg.name == "coef_frac") c.forget_frac_bits();
+  if (reg.name == "coef_frac") c.set_frac_bits(held);  // the staged gains that follow are in this format
   const double held_value = to_engineering(reg, held, frac);
   if (held_value != value && reg.unit != Unit::Mode && reg.unit != Unit::SeqState) {
     err << fmt::format("mcg-serial: note: {}: {} is held as {} (the register's resolution)\n", reg.name,
@@ -83,15 +93,40 @@ std::int16_t write_verified(Connection& c, const RegisterInfo& reg, double value
   return held;
 }
 
-/// The order load writes registers in: the fixed-point format before the coefficients, the
-/// coefficients and limits before the mode that uses them, the mode last.
+/// Empties the board's shadow set (a copy of the active controller again), so that what follows
+/// stages onto the controller that runs and nothing another writer left half-done.
+void discard_staged(Connection& c) {
+  c.session->write(require_register("commit"), 0);
+  c.forget_frac_bits();
+}
+
+/// Makes the staged set the board's controller, at one tick, and checks that the board runs
+/// `staged` (register, raw value written). A refusal is one line naming the board's reason.
+void commit_staged(Connection& c, std::span<const std::pair<const RegisterInfo*, std::int16_t>> staged,
+                   std::string_view what) {
+  try {
+    c.session->write(require_register("commit"), 1);
+  } catch (const Refused& e) {
+    fail("{}: {}: refused ({}): {}", c.port->name(), what, status_name(e.status()), status_text(e.status()));
+  }
+  c.forget_frac_bits();
+  for (const auto& [reg, raw] : staged) {
+    const int frac = reg->unit == Unit::Gain ? c.frac_bits() : 0;
+    const std::int16_t held = c.session->read(*reg);
+    if (held != raw) {
+      fail("{}: {}: the board runs {} = {} after the commit, not {} (another writer?)", c.port->name(), what,
+           reg->name, format_value(*reg, held, frac), format_value(*reg, raw, frac));
+    }
+  }
+}
+
+/// The order load writes registers in: the controller's set (staged, committed at once), the
+/// fixed-point format before the gains it scales; then the rest, sequence playback and the stream last.
 int load_rank(const RegisterInfo& reg) {
   if (reg.name == "coef_frac") return 0;
-  if (reg.unit == Unit::Gain) return 1;
-  if (reg.name == "mode") return 4;
-  if (reg.name == "stream" || reg.name == "seq_state") return 5;
-  if (reg.name.starts_with("duty")) return 2;
-  return 3;
+  if (reg.staged) return 1;
+  if (reg.name == "stream" || reg.name == "seq_state") return 3;
+  return 2;
 }
 
 void print_board_section(Connection& c, std::span<const RegisterInfo* const> regs, std::ostream& out) {
@@ -100,7 +135,10 @@ void print_board_section(Connection& c, std::span<const RegisterInfo* const> reg
     const int frac = reg->unit == Unit::Gain ? c.frac_bits() : 0;
     const std::int16_t raw = c.session->read(*reg);
     const std::string_view comment = reg->doc;
-    if (reg->writable) {
+    if (reg->id == MCG_REG_COMMIT) {
+      out << fmt::format("; {} = {}  (an action, not a setting) {}\n", reg->name, format_value(*reg, raw, frac),
+                         comment);
+    } else if (reg->writable) {
       out << fmt::format("{} = {}  ; {}\n", reg->name, format_value(*reg, raw, frac), comment);
     } else {
       out << fmt::format("; {} = {}  (read-only) {}\n", reg->name, format_value(*reg, raw, frac), comment);
@@ -136,7 +174,16 @@ void run_set(const LinkOptions& link, const std::string& name, const std::string
   const double v = parse_value(reg, value, "set");
   if (reg.unit != Unit::Gain) to_raw(reg, v, 0);  // range check before touching the port
   auto c = connect(link);
-  write_verified(*c, reg, v, "set", err);
+  if (!reg.staged) {
+    write_verified(*c, reg, v, "set", err);
+    return;
+  }
+  // One register of the controller's set: staged onto the running set and committed, so the loop
+  // changes at one tick and a set the board refuses changes nothing.
+  discard_staged(*c);
+  const std::int16_t raw = write_verified(*c, reg, v, "set", err);
+  const std::pair<const RegisterInfo*, std::int16_t> staged[] = {{&reg, raw}};
+  commit_staged(*c, staged, fmt::format("committing {} {}", reg.name, value));
 }
 
 LoadPlan load_plan(const config::Ini& ini, const std::string& path) {
@@ -156,6 +203,7 @@ LoadPlan load_plan(const config::Ini& ini, const std::string& path) {
     const RegisterInfo* reg = find_register(e->key);
     if (reg == nullptr) ini.reject("board", e->key, "not a register of the board");
     if (!reg->writable) ini.reject("board", e->key, "read-only register");
+    if (reg->id == MCG_REG_COMMIT) ini.reject("board", e->key, "an action, not a setting (load commits itself)");
     add(*reg, parse_value(*reg, e->value, e->origin), e->origin);
   }
   for (const auto& [reg, value] : controller_registers(ini)) add(*reg, value, path);
@@ -183,18 +231,19 @@ LoadPlan load_plan(const config::Ini& ini, const std::string& path) {
 void run_load(const LinkOptions& link, const std::string& path, std::ostream& out, std::ostream& err) {
   const LoadPlan plan = load_plan(config::Ini::load(path), path);
   auto c = connect(link);
-  // duty_min and duty_max are checked against each other: when raising the floor above the
-  // old ceiling (or the reverse) the other one has to move first; one more pass settles it.
-  std::vector<const LoadWrite*> deferred;
+  // The controller's set is staged whole and committed once: the loop runs the old controller up
+  // to one tick and the new one, bumpless, from the next; the board checks the set as a whole
+  // (duty_min <= duty_max, gains for a closed-loop mode) and a refused set changes nothing. The
+  // rest (an open-loop duty within the new limits, the command, the outputs) follows.
+  discard_staged(*c);
+  std::vector<std::pair<const RegisterInfo*, std::int16_t>> staged;
   for (const LoadWrite& w : plan) {
-    try {
-      write_verified(*c, *w.reg, w.value, w.origin, err);
-    } catch (const Error&) {
-      if (!w.reg->name.starts_with("duty_m")) throw;
-      deferred.push_back(&w);
-    }
+    if (w.reg->staged) staged.emplace_back(w.reg, write_verified(*c, *w.reg, w.value, w.origin, err));
   }
-  for (const LoadWrite* w : deferred) write_verified(*c, *w->reg, w->value, w->origin, err);
+  if (!staged.empty()) commit_staged(*c, staged, fmt::format("committing the controller of {}", path));
+  for (const LoadWrite& w : plan) {
+    if (!w.reg->staged) write_verified(*c, *w.reg, w.value, w.origin, err);
+  }
 
   std::vector<const RegisterInfo*> regs;
   for (const LoadWrite& w : plan) regs.push_back(w.reg);
@@ -275,6 +324,7 @@ std::vector<SeqEntry> send_plan(const table::Table& tbl, int frac_bits) {
   std::vector<SeqEntry> entries;
   std::vector<double> last(cols.size(), std::nan(""));
   std::int64_t prev_ms = 0;
+  bool staged_in_row = false;
   for (std::size_t row = 0; row < tbl.rows(); ++row) {
     for (std::size_t k = 0; k < cols.size(); ++k) {
       const RegisterInfo& reg = *cols[k].first;
@@ -303,10 +353,15 @@ std::vector<SeqEntry> send_plan(const table::Table& tbl, int frac_bits) {
       }
       entries.push_back({static_cast<std::uint16_t>(at_ms - prev_ms), reg.id, raw});
       prev_ms = at_ms;
-      if (entries.size() > MCG_SEQ_MAX) {
-        fail("{}:{}: more than {} register changes; the board's sequence holds {}", src, tbl.line_of(row),
-             MCG_SEQ_MAX, MCG_SEQ_MAX);
-      }
+      staged_in_row = staged_in_row || reg.staged;
+    }
+    // The controller registers a row changes are staged; one commit right after them makes them
+    // act together, on the same tick.
+    if (staged_in_row) entries.push_back({0, MCG_REG_COMMIT, 1});
+    staged_in_row = false;
+    if (entries.size() > MCG_SEQ_MAX) {
+      fail("{}:{}: more than {} register changes; the board's sequence holds {}", src, tbl.line_of(row),
+           MCG_SEQ_MAX, MCG_SEQ_MAX);
     }
   }
   return entries;

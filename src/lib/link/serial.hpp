@@ -34,12 +34,16 @@ void run_get(const LinkOptions& link, const std::vector<std::string>& names, std
 
 /// set NAME VALUE: writes one register in engineering units and reads it back. A value the
 /// register cannot hold exactly is rounded to its resolution (a note on stderr says so); a
-/// board that holds something else after the write is an error.
+/// board that holds something else after the write is an error. A register of the controller's
+/// set (RegisterInfo::staged) is staged onto the running set and committed at once: the loop
+/// changes at one tick, and a set the board refuses (a closed-loop mode with every gain zero)
+/// changes nothing and fails with the board's reason.
 void run_set(const LinkOptions& link, const std::string& name, const std::string& value, std::ostream& err);
 
 /// load FILE.ini: writes the [board] section (register = value, as get prints it) or the
 /// [controller] fixed-point section of mcg-design (docs/formats.md), verifies each register
-/// and prints what the board holds as a [board] section.
+/// and prints what the board holds as a [board] section. The controller's registers are staged
+/// and committed once, so the loop swaps controllers at one tick, bumpless; then the rest.
 void run_load(const LinkOptions& link, const std::string& path, std::ostream& out, std::ostream& err);
 
 /// One register write of load FILE.ini and the file:line it came from.
@@ -81,7 +85,8 @@ struct SendOptions {
   std::string then;         ///< "", "play" or "loop": start playback after loading
 };
 /// The sequence of send FILE.csv without the board: an entry wherever a register column
-/// changes, gains in `frac_bits` fixed point. Throws mcg::Error naming file:line.
+/// changes, gains in `frac_bits` fixed point, and a commit after a row's changes of the
+/// controller's registers. Throws mcg::Error naming file:line.
 std::vector<SeqEntry> send_plan(const table::Table& tbl, int frac_bits);
 
 /// send FILE.csv: turns a table of register values over time into the board's command

@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "common/error.hpp"    // Error
 #include "link/frame.hpp"      // Frame, Decoder
 #include "link/port.hpp"       // Port
 #include "link/registers.hpp"  // RegisterInfo
@@ -51,6 +52,17 @@ struct SeqEntry {
   std::int16_t raw = 0;
 };
 
+/// The board refused a request: `status` (MCG_ST_*) says why. The message is as Session::request
+/// words it ("<port>: <what>: <status text>").
+class Refused : public Error {
+ public:
+  Refused(std::string_view what, std::uint8_t status) : Error(what), m_status(status) {}
+  std::uint8_t status() const { return m_status; }
+
+ private:
+  std::uint8_t m_status;
+};
+
 class Session {
  public:
   explicit Session(Port& port, SessionOptions options = {});
@@ -61,14 +73,15 @@ class Session {
 
   /// Sends a request and returns the answer's data (the bytes after the status). Resends
   /// after `reply_timeout_s` of silence, or at once when the board reports it dropped a
-  /// damaged frame, up to `attempts` times. Throws mcg::Error "<port>: <what>: <status text>"
-  /// for a refusal, "<port>: nothing answers ..." after the last attempt.
+  /// damaged frame, up to `attempts` times. Throws Refused "<port>: <what>: <status text>" for a
+  /// refusal, mcg::Error "<port>: nothing answers ..." after the last attempt.
   std::vector<std::uint8_t> request(std::uint8_t cmd, std::span<const std::uint8_t> payload,
                                     std::string_view what);
 
   /// The raw value of a register.
   std::int16_t read(const RegisterInfo& reg);
-  /// Writes a raw value; returns the value the board holds afterwards (from its answer).
+  /// Writes a raw value; returns the value the board holds afterwards (from its answer): for a
+  /// staged register, the value in the shadow set.
   std::int16_t write(const RegisterInfo& reg, std::int16_t raw);
 
   /// Starts nothing: reads the RAM log (MCG_CMD_LOG_DUMP and its data frames), retrying the

@@ -58,6 +58,13 @@ class BoardController final : public LoopController {
   BoardController(std::int16_t mode, const std::vector<std::pair<std::uint8_t, std::int16_t>>& registers)
       : m_mode(mode) {
     for (const auto& [id, raw] : registers) m_core.write(id, raw);
+    // The board refuses a closed-loop mode whose gains are all zero: say so before the run, not
+    // at its first command.
+    if (m_core.apply(MCG_REG_MODE, m_mode) != MCG_ST_OK) {
+      fail("the board refuses mode {} with every gain zero (it would hold its duty whatever the speed)",
+           m_mode == MCG_MODE_P ? "p" : m_mode == MCG_MODE_PI ? "pi" : "pid");
+    }
+    m_core.write(MCG_REG_MODE, MCG_MODE_OPEN);
   }
 
   double tick(double theta_rad, double rpm_cmd) override {
