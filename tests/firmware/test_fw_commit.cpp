@@ -68,10 +68,18 @@ TEST(FwCommit, StagedWritesNeverReachTheLoop) {
   pi_running();
   // The PID arrives one register per tick, as frames at 9600 baud would bring it.
   const std::vector<int> staged = run_on([](int n) {
-    if (n == 52) EXPECT_EQ(regs_write(MCG_REG_COEF_FRAC, k_pid.frac), MCG_ST_OK);
-    if (n == 55) EXPECT_EQ(regs_write(MCG_REG_MODE, MCG_MODE_PID), MCG_ST_OK);
-    if (n == 58) EXPECT_EQ(regs_write(MCG_REG_B0, k_pid.b0), MCG_ST_OK);
-    if (n == 61) EXPECT_EQ(regs_write(MCG_REG_DUTY_MAX, 400), MCG_ST_OK);
+    if (n == 52) {
+      EXPECT_EQ(regs_write(MCG_REG_COEF_FRAC, k_pid.frac), MCG_ST_OK);
+    }
+    if (n == 55) {
+      EXPECT_EQ(regs_write(MCG_REG_MODE, MCG_MODE_PID), MCG_ST_OK);
+    }
+    if (n == 58) {
+      EXPECT_EQ(regs_write(MCG_REG_B0, k_pid.b0), MCG_ST_OK);
+    }
+    if (n == 61) {
+      EXPECT_EQ(regs_write(MCG_REG_DUTY_MAX, 400), MCG_ST_OK);
+    }
   });
   EXPECT_EQ(staged, alone) << "the loop ran on part of the staged set";
   std::int16_t v = 0;
@@ -115,7 +123,7 @@ TEST(FwCommit, TheNextUpdateRunsTheWholeNewSetBumpless) {
 }
 
 TEST(FwCommit, RefusesAClosedLoopModeWithEveryGainZero) {
-  for (const std::uint8_t mode : {MCG_MODE_P, MCG_MODE_PI, MCG_MODE_PID}) {
+  for (const std::uint8_t mode : {std::uint8_t{MCG_MODE_P}, std::uint8_t{MCG_MODE_PI}, std::uint8_t{MCG_MODE_PID}}) {
     SCOPED_TRACE(static_cast<int>(mode));
     Board b;
     ASSERT_EQ(b.write(MCG_REG_DUTY, 250), MCG_ST_OK);
@@ -173,7 +181,7 @@ TEST(FwCommit, DutyIsTheControllersInEveryClosedLoopMode) {
   Board b;
   ASSERT_EQ(b.set(MCG_REG_KP, 100), MCG_ST_OK);
   ASSERT_EQ(b.set(MCG_REG_B0, 100), MCG_ST_OK);
-  for (const std::uint8_t mode : {MCG_MODE_P, MCG_MODE_PI, MCG_MODE_PID}) {
+  for (const std::uint8_t mode : {std::uint8_t{MCG_MODE_P}, std::uint8_t{MCG_MODE_PI}, std::uint8_t{MCG_MODE_PID}}) {
     ASSERT_EQ(b.set(MCG_REG_MODE, mode), MCG_ST_OK);
     EXPECT_EQ(b.write(MCG_REG_DUTY, 200), MCG_ST_OWNED) << static_cast<int>(mode);
   }

@@ -81,6 +81,10 @@ TEST(FwMenu, EditingKeys) {
 TEST(FwMenu, ModeChosenFromTheMenu) {
   Board b;
   keys(b, {k_c, k_d, 3, k_d});
+  EXPECT_EQ(b.read(MCG_REG_MODE), static_cast<int>(MCG_MODE_OPEN)) << "a PID whose gains were never written";
+  EXPECT_EQ(lcd(1), "refused  12     ");  // MCG_ST_NO_GAINS
+  ASSERT_EQ(b.set(MCG_REG_B0, 256), MCG_ST_OK);
+  keys(b, {k_d, 3, k_d});
   EXPECT_EQ(b.read(MCG_REG_MODE), static_cast<int>(MCG_MODE_PID));
   EXPECT_EQ(lcd(1), " 3 PID          ");
   keys(b, {k_c});
@@ -97,6 +101,9 @@ TEST(FwMenu, MainScreenLines) {
   EXPECT_EQ(lcd(0), "  410 rpm OL  C-");
   EXPECT_EQ(lcd(1), "open   d  37.5% ");
   ASSERT_EQ(b.write(MCG_REG_LOAD, 1), MCG_ST_OK);
+  // b0 e[n] + b1 e[n-1] = (e[n] - e[n-1]) / 256: steady pulses keep the duty.
+  ASSERT_EQ(b.set(MCG_REG_B0, 1), MCG_ST_OK);
+  ASSERT_EQ(b.set(MCG_REG_B1, -1), MCG_ST_OK);
   ASSERT_EQ(b.set(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_RPM_CMD, 555), MCG_ST_OK);
   b.run(500, 14);
@@ -147,6 +154,7 @@ TEST(FwMenu, SingleKeyActions) {
   EXPECT_EQ(b.read(MCG_REG_STREAM), 1);
   keys(b, {k_f});
   EXPECT_EQ(b.read(MCG_REG_FLAGS) & static_cast<int>(MCG_FLAG_LOGGING), static_cast<int>(MCG_FLAG_LOGGING));
+  ASSERT_EQ(b.set(MCG_REG_KP, 1), MCG_ST_OK);
   ASSERT_EQ(b.set(MCG_REG_MODE, MCG_MODE_P), MCG_ST_OK);
   ASSERT_EQ(b.set(MCG_REG_DUTY_BIAS, 500), MCG_ST_OK);
   b.run(5);

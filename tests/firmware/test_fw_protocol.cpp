@@ -143,15 +143,20 @@ TEST(FwProtocol, RangesOfEveryWritableRegister) {
       {MCG_REG_LOG_INTERVAL, 1, 255}, {MCG_REG_STREAM, 0, 1},
       {MCG_REG_CLUTCH, 1, 2},         {MCG_REG_LOAD, 0, 1},
   };
+  // What a register holds after a write: a staged one (mode, gains, ...) in the shadow set.
+  const auto held = [](Board& b, std::uint8_t reg) {
+    std::int16_t v = 0;
+    return Board::staged(reg) ? (regs_read_staged(reg, &v) == MCG_ST_OK ? v : -100000) : b.read(reg);
+  };
   for (const Case& c : cases) {
     Board b;
     SCOPED_TRACE(static_cast<int>(c.reg));
     EXPECT_EQ(b.write(c.reg, c.lo - 1), MCG_ST_RANGE);
     EXPECT_EQ(b.write(c.reg, c.hi + 1), MCG_ST_RANGE);
     EXPECT_EQ(b.write(c.reg, c.lo), MCG_ST_OK);
-    EXPECT_EQ(b.read(c.reg), c.lo);
+    EXPECT_EQ(held(b, c.reg), c.lo);
     EXPECT_EQ(b.write(c.reg, c.hi), MCG_ST_OK);
-    EXPECT_EQ(b.read(c.reg), c.hi);
+    EXPECT_EQ(held(b, c.reg), c.hi);
   }
 }
 

@@ -42,6 +42,8 @@ std::string unit_text(unsigned unit) {
   }
 }
 
+std::string access_text(unsigned access) { return access == MCG_RW ? "rw" : access == MCG_RS ? "rs" : "ro"; }
+
 std::string hex_id(unsigned id) {
   static const char digits[] = "0123456789ABCDEF";
   return std::string("0x") + digits[id >> 4] + digits[id & 15u];
@@ -50,9 +52,9 @@ std::string hex_id(unsigned id) {
 std::vector<std::string> expected_rows() {
   std::vector<std::string> rows;
 #define MAN_ROW(NAME, name, access, lo, hi, def, unit, doc)                                              \
-  rows.push_back(hex_id(MCG_REG_##NAME) + "\t" + name + "\t" + ((access) == MCG_RW ? "rw" : "ro") + "\t" + \
-                 number(lo) + ".." + number(hi) + "\t" + ((access) == MCG_RW ? number(def) : "") + "\t" +  \
-                 unit_text(unit) + "\t" + doc);
+  rows.push_back(hex_id(MCG_REG_##NAME) + "\t" + name + "\t" + access_text(access) + "\t" + number(lo) + \
+                 ".." + number(hi) + "\t" + ((access) != MCG_RO ? number(def) : "") + "\t" + unit_text(unit) + \
+                 "\t" + doc);
   MCG_REGISTERS(MAN_ROW)
 #undef MAN_ROW
   return rows;

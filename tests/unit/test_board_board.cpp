@@ -112,13 +112,20 @@ TEST(BoardBoard, EveryRegisterAtItsRangeEdges) {
       rig.session.write(reg("mode"), MCG_MODE_OPEN);
       rig.session.write(reg("duty_min"), -MCG_DUTY_FULL);
       rig.session.write(reg("duty_max"), MCG_DUTY_FULL);
+      rig.session.write(reg("commit"), 1);
       EXPECT_EQ(refusal(rig.session, r, edge), "") << r.name << " = " << edge;
-      if (r.id != MCG_REG_SEQ_STATE) {
+      if (r.staged) {
+        // Staged: the write's answer holds it; the active set has not changed.
+        EXPECT_EQ(rig.session.write(r, static_cast<std::int16_t>(edge)), edge) << r.name;
+        EXPECT_EQ(rig.session.read(reg("commit")), rig.session.read(r) != edge ? 1 : 0) << r.name;
+        rig.session.write(reg("commit"), 0);
+      } else if (r.id != MCG_REG_SEQ_STATE && r.id != MCG_REG_COMMIT) {
         EXPECT_EQ(rig.session.read(r), edge) << r.name;
       }
     }
     rig.session.write(reg("seq_state"), MCG_SEQ_STOP);
     rig.session.write(reg("mode"), MCG_MODE_OPEN);
+    rig.session.write(reg("commit"), 1);
     for (const std::int32_t beyond : {r.raw_min - 1, r.raw_max + 1}) {
       if (beyond < MCG_I16_MIN || beyond > MCG_I16_MAX) continue;
       EXPECT_EQ(refusal(rig.session, r, beyond), out_of_range) << r.name << " = " << beyond;
@@ -153,6 +160,7 @@ Settled settle_p(double kp) {
   rig.session.write(reg("coef_frac"), 8);
   rig.session.write(reg("kp"), link::to_raw(reg("kp"), kp, 8));
   rig.session.write(reg("mode"), MCG_MODE_P);
+  rig.session.write(reg("commit"), 1);
   rig.line.run(3.0);
   Settled s{0.0, 0.0};
   for (int k = 0; k < 20; ++k) {

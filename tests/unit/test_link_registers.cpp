@@ -3,6 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+#include <string_view>
+#include <vector>
+
 #include "common/error.hpp"
 #include "mcg_protocol.h"
 #include "test_support_error.hpp"
@@ -69,6 +73,33 @@ TEST(LinkRegisters, ParseAndFormat) {
   EXPECT_EQ(format_value(require_register("duty"), -355, 0), "-35.5");
   EXPECT_EQ(format_value(require_register("b1"), -3, 2), "-0.75");
   EXPECT_EQ(status_text(MCG_ST_RANGE), "value outside the register's range");
+}
+
+// Every status code of the protocol has its own text and its protocol name: a refusal never reads
+// as another one (a duty in closed loop was once "board busy").
+TEST(LinkRegisters, EveryStatusHasItsOwnText) {
+  std::set<std::string_view> texts;
+  for (unsigned st = 0; st < MCG_ST_COUNT; ++st) {
+    const auto s = static_cast<std::uint8_t>(st);
+    EXPECT_NE(status_text(s), "unknown status") << st;
+    EXPECT_NE(status_name(s), "UNKNOWN") << st;
+    texts.insert(status_text(s));
+  }
+  EXPECT_EQ(texts.size(), std::size_t{MCG_ST_COUNT});
+  EXPECT_EQ(status_name(MCG_ST_NO_GAINS), "NO_GAINS");
+  EXPECT_EQ(status_text(MCG_ST_OWNED), "the controller owns duty in a closed-loop mode; set mode open first");
+}
+
+TEST(LinkRegisters, TheControllersSetIsStaged) {
+  std::vector<std::string_view> staged;
+  for (const RegisterInfo& reg : registers()) {
+    if (reg.staged) staged.push_back(reg.name);
+    EXPECT_TRUE(!reg.staged || reg.writable) << reg.name;
+  }
+  EXPECT_EQ(staged, (std::vector<std::string_view>{"mode", "duty_bias", "kp", "b0", "b1", "b2", "coef_frac",
+                                                   "duty_min", "duty_max"}));
+  EXPECT_TRUE(require_register("commit").writable);
+  EXPECT_FALSE(require_register("commit").staged);
 }
 
 }  // namespace

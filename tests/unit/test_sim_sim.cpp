@@ -142,7 +142,7 @@ boardunits::BoardFixedPoint report_pi_registers() {
 }
 
 /// The emulated board (firmware core + plant) tick by tick: its registers written as
-/// mcg-serial load writes them, rpm_cmd switching at `t_switch_s`; omega after each tick.
+/// mcg-serial load writes them (staged, then one commit), rpm_cmd switching at `t_switch_s`; omega after each tick.
 std::vector<double> board_omega(const boardunits::BoardFixedPoint& q, const std::vector<double>& rpm_cmd) {
   board::EmulatedBoard board(board::BoardOptions{});
   const auto put = [](std::uint8_t reg, std::int32_t v) {
@@ -158,6 +158,7 @@ std::vector<double> board_omega(const boardunits::BoardFixedPoint& q, const std:
   }
   put(MCG_REG_CLUTCH, MCG_CLUTCH_ENGAGED);
   put(MCG_REG_MODE, q.mode == "p" ? MCG_MODE_P : q.mode == "pi" ? MCG_MODE_PI : MCG_MODE_PID);
+  put(MCG_REG_COMMIT, 1);
   std::vector<double> omega;
   for (double r : rpm_cmd) {
     put(MCG_REG_RPM_CMD, static_cast<std::int32_t>(r));
