@@ -32,13 +32,13 @@ struct RegisterInfo {
   std::uint8_t id;
   Unit unit;
   bool writable;
-  /// One of the controller's set (MCG_RS): a write goes to the board's shadow set and acts only
-  /// when the commit register is written; a read shows the active set.
-  bool staged;
   std::int32_t raw_min;  ///< the range the board accepts (static part; the board checks the rest)
   std::int32_t raw_max;
   std::int16_t raw_default;  ///< the board's power-on value
   std::string_view doc;  ///< unit and meaning, one line
+  /// One of the controller's set (MCG_RS): a write goes to the board's shadow set and acts only
+  /// when the commit register is written; a read shows the active set.
+  bool staged = false;
 };
 
 /// Every register of the protocol, in id order (MCG_REGISTERS expanded).
