@@ -29,7 +29,7 @@ inline constexpr int k_exit_lost_samples = 3;
 void run_list(std::ostream& out);
 
 /// get NAME...: each register's value in engineering units, one per line. Without names:
-/// every register as an INI [board] section (read-only ones as comments), which load reads.
+/// every register as an INI [board] section (read-only ones and commit as comments), which load reads.
 void run_get(const LinkOptions& link, const std::vector<std::string>& names, std::ostream& out);
 
 /// set NAME VALUE: writes one register in engineering units and reads it back. A value the
