@@ -39,11 +39,11 @@ static int16_t s_r_q8;               /* command r[n], Q8 pulses per tick */
 static int16_t MCG_XDATA s_r1, s_r2; /* r[n-1], r[n-2]: the commands of the last two ticks */
 static int32_t MCG_XDATA s_u_bias;   /* P-mode bias in Q(F+8) */
 /* What the shadow set derives, kept current as it is written, so that a commit only copies: */
-static int16_t MCG_XDATA s_next_scale;                   /* 2^F */
-static int32_t MCG_XDATA s_next_u_min, s_next_u_max;     /* limits in Q(F+8) */
-static int32_t MCG_XDATA s_next_u_bias;                  /* bias in Q(F+8) */
-static int32_t MCG_XDATA s_next_r;                       /* R once the command is settled */
-static uint16_t MCG_XDATA s_next_bp[3];                  /* operands of arith_pid_sum */
+static int16_t MCG_XDATA s_next_scale;               /* 2^F */
+static int32_t MCG_XDATA s_next_u_min, s_next_u_max; /* limits in Q(F+8) */
+static int32_t MCG_XDATA s_next_u_bias;              /* bias in Q(F+8) */
+static int32_t MCG_XDATA s_next_r;                   /* R once the command is settled */
+static uint16_t MCG_XDATA s_next_bp[3];              /* operands of arith_pid_sum */
 uint8_t g_ctl_p_hi;
 int32_t MCG_IDATA g_ctl_r[3];
 uint8_t g_ctl_r_k;
@@ -214,7 +214,8 @@ static uint8_t gains_missing(void) {
   if (g_ctl_shadow.mode == MCG_MODE_OPEN) {
     return 0;
   }
-  return g_ctl_shadow.b0 == 0 && g_ctl_shadow.b1 == 0 && (g_ctl_shadow.mode == MCG_MODE_PI || g_ctl_shadow.b2 == 0);
+  return g_ctl_shadow.b0 == 0 && g_ctl_shadow.b1 == 0 &&
+         (g_ctl_shadow.mode == MCG_MODE_PI || g_ctl_shadow.b2 == 0);
 }
 
 void control_discard(void) {
@@ -239,9 +240,9 @@ void control_discard(void) {
 
 uint8_t control_pending(void) {
   return (uint8_t)(g_ctl_shadow.mode != g_mode || g_ctl_shadow.kp != g_kp || g_ctl_shadow.b0 != g_b0 ||
-                   g_ctl_shadow.b1 != g_b1 || g_ctl_shadow.b2 != g_b2 || g_ctl_shadow.coef_frac != g_coef_frac ||
-                   g_ctl_shadow.duty_bias != g_duty_bias || g_ctl_shadow.duty_min != g_duty_min ||
-                   g_ctl_shadow.duty_max != g_duty_max);
+                   g_ctl_shadow.b1 != g_b1 || g_ctl_shadow.b2 != g_b2 ||
+                   g_ctl_shadow.coef_frac != g_coef_frac || g_ctl_shadow.duty_bias != g_duty_bias ||
+                   g_ctl_shadow.duty_min != g_duty_min || g_ctl_shadow.duty_max != g_duty_max);
 }
 
 /* Runs between two ticks (the main loop runs the updates and the dispatch one after the other), so the

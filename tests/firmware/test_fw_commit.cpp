@@ -123,7 +123,8 @@ TEST(FwCommit, TheNextUpdateRunsTheWholeNewSetBumpless) {
 }
 
 TEST(FwCommit, RefusesAClosedLoopModeWithEveryGainZero) {
-  for (const std::uint8_t mode : {std::uint8_t{MCG_MODE_P}, std::uint8_t{MCG_MODE_PI}, std::uint8_t{MCG_MODE_PID}}) {
+  for (const std::uint8_t mode :
+       {std::uint8_t{MCG_MODE_P}, std::uint8_t{MCG_MODE_PI}, std::uint8_t{MCG_MODE_PID}}) {
     SCOPED_TRACE(static_cast<int>(mode));
     Board b;
     ASSERT_EQ(b.write(MCG_REG_DUTY, 250), MCG_ST_OK);
@@ -134,7 +135,11 @@ TEST(FwCommit, RefusesAClosedLoopModeWithEveryGainZero) {
     b.run(5);
     EXPECT_EQ(host_board_duty(), 250) << "the rig does not move";
     // A gain of the mode makes it valid: b2 alone for the PID, b1 alone for the PI.
-    EXPECT_EQ(b.write(mode == MCG_MODE_P ? MCG_REG_KP : mode == MCG_MODE_PI ? MCG_REG_B1 : MCG_REG_B2, 1), MCG_ST_OK);
+    EXPECT_EQ(b.write(mode == MCG_MODE_P    ? MCG_REG_KP
+                      : mode == MCG_MODE_PI ? MCG_REG_B1
+                                            : MCG_REG_B2,
+                      1),
+              MCG_ST_OK);
     EXPECT_EQ(b.write(MCG_REG_MODE, mode), MCG_ST_OK);
     EXPECT_EQ(b.write(MCG_REG_COMMIT, 1), MCG_ST_OK);
     EXPECT_EQ(b.read(MCG_REG_MODE), static_cast<int>(mode));
@@ -181,7 +186,8 @@ TEST(FwCommit, DutyIsTheControllersInEveryClosedLoopMode) {
   Board b;
   ASSERT_EQ(b.set(MCG_REG_KP, 100), MCG_ST_OK);
   ASSERT_EQ(b.set(MCG_REG_B0, 100), MCG_ST_OK);
-  for (const std::uint8_t mode : {std::uint8_t{MCG_MODE_P}, std::uint8_t{MCG_MODE_PI}, std::uint8_t{MCG_MODE_PID}}) {
+  for (const std::uint8_t mode :
+       {std::uint8_t{MCG_MODE_P}, std::uint8_t{MCG_MODE_PI}, std::uint8_t{MCG_MODE_PID}}) {
     ASSERT_EQ(b.set(MCG_REG_MODE, mode), MCG_ST_OK);
     EXPECT_EQ(b.write(MCG_REG_DUTY, 200), MCG_ST_OWNED) << static_cast<int>(mode);
   }

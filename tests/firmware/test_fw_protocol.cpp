@@ -116,7 +116,7 @@ TEST(FwProtocol, EveryStatusCode) {
   EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_COMMIT, 1, 0}), MCG_ST_NO_GAINS);    // gains never written
   EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_DUTY_MIN, 0x2C, 0x01}), MCG_ST_OK);  // 300
   EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_DUTY_MAX, 200, 0}), MCG_ST_OK);
-  EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_COMMIT, 1, 0}), MCG_ST_LIMITS);      // 300 > 200
+  EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_COMMIT, 1, 0}), MCG_ST_LIMITS);  // 300 > 200
   EXPECT_EQ(b.set(MCG_REG_B0, 300), MCG_ST_OK);
   EXPECT_EQ(b.set(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
   EXPECT_EQ(answer(MCG_CMD_WRITE, {MCG_REG_DUTY, 100, 0}), MCG_ST_OWNED);  // duty is the controller's

@@ -53,8 +53,8 @@ std::vector<std::string> expected_rows() {
   std::vector<std::string> rows;
 #define MAN_ROW(NAME, name, access, lo, hi, def, unit, doc)                                              \
   rows.push_back(hex_id(MCG_REG_##NAME) + "\t" + name + "\t" + access_text(access) + "\t" + number(lo) + \
-                 ".." + number(hi) + "\t" + ((access) != MCG_RO ? number(def) : "") + "\t" + unit_text(unit) + \
-                 "\t" + doc);
+                 ".." + number(hi) + "\t" + ((access) != MCG_RO ? number(def) : "") + "\t" +             \
+                 unit_text(unit) + "\t" + doc);
   MCG_REGISTERS(MAN_ROW)
 #undef MAN_ROW
   return rows;

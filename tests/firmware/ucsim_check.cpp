@@ -440,7 +440,8 @@ std::vector<int> host_duties(bool swap = true) {
     for (unsigned i = 0; i < 256; ++i) {
       bool commit = false;
       if (m == 4 && swap) {
-        static const std::uint8_t regs[5] = {MCG_REG_MODE, MCG_REG_B0, MCG_REG_B1, MCG_REG_B2, MCG_REG_DUTY_MAX};
+        static const std::uint8_t regs[5] = {MCG_REG_MODE, MCG_REG_B0, MCG_REG_B1, MCG_REG_B2,
+                                             MCG_REG_DUTY_MAX};
         static const std::int16_t values[5] = {MCG_MODE_PID, 7000, -12000, 5200, 900};
         if (i >= k_stage_at && i < k_stage_at + 5) regs_write(regs[i - k_stage_at], values[i - k_stage_at]);
         commit = i == k_commit_at;
@@ -599,12 +600,15 @@ int main(int argc, char** argv) {
       const auto a = sim.request(MCG_CMD_WRITE, write_payload(static_cast<std::uint8_t>(reg), value));
       return a ? a->payload.at(0) : 0xFF;
     };
-    check(status_of(MCG_REG_MODE, MCG_MODE_PI) == MCG_ST_OK && status_of(MCG_REG_COMMIT, 1) == MCG_ST_NO_GAINS &&
-              read_reg(sim, MCG_REG_MODE) == static_cast<int>(MCG_MODE_OPEN) && read_reg(sim, MCG_REG_DUTY) == 400,
+    check(status_of(MCG_REG_MODE, MCG_MODE_PI) == MCG_ST_OK &&
+              status_of(MCG_REG_COMMIT, 1) == MCG_ST_NO_GAINS &&
+              read_reg(sim, MCG_REG_MODE) == static_cast<int>(MCG_MODE_OPEN) &&
+              read_reg(sim, MCG_REG_DUTY) == 400,
           "mode pi with every gain zero: commit refused (NO_GAINS), open loop at duty 400 kept");
     check(status_of(MCG_REG_B0, 300) == MCG_ST_OK && status_of(MCG_REG_B1, -280) == MCG_ST_OK &&
               status_of(MCG_REG_MODE, MCG_MODE_PI) == MCG_ST_OK &&
-              read_reg(sim, MCG_REG_MODE) == static_cast<int>(MCG_MODE_OPEN) && status_of(MCG_REG_COMMIT, 1) == MCG_ST_OK &&
+              read_reg(sim, MCG_REG_MODE) == static_cast<int>(MCG_MODE_OPEN) &&
+              status_of(MCG_REG_COMMIT, 1) == MCG_ST_OK &&
               read_reg(sim, MCG_REG_MODE) == static_cast<int>(MCG_MODE_PI),
           "a staged PI runs only after its commit");
     check(status_of(MCG_REG_DUTY, 100) == MCG_ST_OWNED, "duty written in mode pi: refused (OWNED)");
@@ -625,7 +629,8 @@ int main(int argc, char** argv) {
     }
     check(sim.size() == 256u * k_bench_sets && first_diff == host.size(),
           "8051 P, PI, PID updates (F = 8, 11), a swap and 256 commits equal the host C core: " +
-              std::to_string(first_diff) + " of " + std::to_string(host.size()) + " duties identical" + detail);
+              std::to_string(first_diff) + " of " + std::to_string(host.size()) + " duties identical" +
+              detail);
     // The swap on the 8051: up to the commit every duty is the PI's alone (the staged PID never
     // reached the loop); the update right after the commit is already the PID's.
     const std::vector<int> pi_alone = host_duties(false);
@@ -636,8 +641,8 @@ int main(int argc, char** argv) {
     check(untouched && sim[swap + k_commit_at] != pi_alone[swap + k_commit_at] &&
               sim[swap + k_commit_at] == host[swap + k_commit_at],
           "8051: the commit acts on one update: update 128 runs the PID (" +
-              std::to_string(sim.size() > swap + k_commit_at ? sim[swap + k_commit_at] : -1) + ", the PI alone " +
-              std::to_string(pi_alone[swap + k_commit_at]) + ")");
+              std::to_string(sim.size() > swap + k_commit_at ? sim[swap + k_commit_at] : -1) +
+              ", the PI alone " + std::to_string(pi_alone[swap + k_commit_at]) + ")");
   }
   std::printf("%d passed, %d failed\n", g_pass, g_fail);
   return g_fail == 0 ? 0 : 1;

@@ -67,8 +67,9 @@ SessionOptions quick() {
 TEST(LinkSession, WrongProtocolIsRefused) {
   ScriptedLine line([](const Frame&, int) { return version_answer(MCG_PROTOCOL_VERSION + 1); });
   Session s(line, quick());
-  EXPECT_EQ(error_of([&] { s.hello(); }),
-            "line: wrong firmware: it speaks protocol 4 (firmware 0.9.0 on c515), mcg-serial speaks protocol 3");
+  EXPECT_EQ(
+      error_of([&] { s.hello(); }),
+      "line: wrong firmware: it speaks protocol 4 (firmware 0.9.0 on c515), mcg-serial speaks protocol 3");
 }
 
 TEST(LinkSession, SilenceIsNothingAnsweringAfterEveryTry) {

@@ -142,7 +142,8 @@ boardunits::BoardFixedPoint report_pi_registers() {
 }
 
 /// The emulated board (firmware core + plant) tick by tick: its registers written as
-/// mcg-serial load writes them (staged, then one commit), rpm_cmd switching at `t_switch_s`; omega after each tick.
+/// mcg-serial load writes them (staged, then one commit), rpm_cmd switching at `t_switch_s`; omega after each
+/// tick.
 std::vector<double> board_omega(const boardunits::BoardFixedPoint& q, const std::vector<double>& rpm_cmd) {
   board::EmulatedBoard board(board::BoardOptions{});
   const auto put = [](std::uint8_t reg, std::int32_t v) {

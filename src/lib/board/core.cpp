@@ -22,7 +22,9 @@ FirmwareCore::FirmwareCore(std::uint32_t baud) {
 
 FirmwareCore::~FirmwareCore() { g_core_alive = false; }
 
-std::uint8_t FirmwareCore::apply(std::uint8_t reg, std::int16_t raw) { return host_board_reg_apply(reg, raw); }
+std::uint8_t FirmwareCore::apply(std::uint8_t reg, std::int16_t raw) {
+  return host_board_reg_apply(reg, raw);
+}
 
 void FirmwareCore::write(std::uint8_t reg, std::int16_t raw) { MCG_DEMAND(apply(reg, raw) == MCG_ST_OK); }
 

@@ -15,8 +15,9 @@ namespace mcg::link {
 
 namespace {
 
-#define MCG_HOST_REGISTER(NAME, name, access, lo, hi, def, unit, doc) \
-  RegisterInfo{name, MCG_REG_##NAME, static_cast<Unit>(unit), (access) != MCG_RO, lo, hi, def, doc, (access) == MCG_RS},
+#define MCG_HOST_REGISTER(NAME, name, access, lo, hi, def, unit, doc)                                    \
+  RegisterInfo{name, MCG_REG_##NAME, static_cast<Unit>(unit), (access) != MCG_RO, lo, hi, def, doc, \
+               (access) == MCG_RS},
 constexpr std::array<RegisterInfo, MCG_REG_COUNT - 1> k_registers{{MCG_REGISTERS(MCG_HOST_REGISTER)}};
 #undef MCG_HOST_REGISTER
 
@@ -208,8 +209,8 @@ std::string_view status_text(std::uint8_t status) {
 
 std::string_view status_name(std::uint8_t status) {
   static constexpr std::array<std::string_view, MCG_ST_COUNT> k_names{
-      "OK",        "BAD_CRC",  "TOO_LONG", "TIMEOUT", "OVERRUN", "BAD_CMD",  "BAD_LENGTH",
-      "BAD_REG",   "READ_ONLY", "RANGE",   "BUSY",    "OWNED",   "NO_GAINS", "LIMITS"};
+      "OK",      "BAD_CRC",   "TOO_LONG", "TIMEOUT", "OVERRUN", "BAD_CMD",  "BAD_LENGTH",
+      "BAD_REG", "READ_ONLY", "RANGE",    "BUSY",    "OWNED",   "NO_GAINS", "LIMITS"};
   return status < k_names.size() ? k_names[status] : "UNKNOWN";
 }
 

@@ -136,8 +136,8 @@ void print_board_section(Connection& c, std::span<const RegisterInfo* const> reg
     const std::int16_t raw = c.session->read(*reg);
     const std::string_view comment = reg->doc;
     if (reg->id == MCG_REG_COMMIT) {
-      out << fmt::format("; {} = {}  (an action, not a setting) {}\n", reg->name, format_value(*reg, raw, frac),
-                         comment);
+      out << fmt::format("; {} = {}  (an action, not a setting) {}\n", reg->name,
+                         format_value(*reg, raw, frac), comment);
     } else if (reg->writable) {
       out << fmt::format("{} = {}  ; {}\n", reg->name, format_value(*reg, raw, frac), comment);
     } else {
@@ -203,7 +203,9 @@ LoadPlan load_plan(const config::Ini& ini, const std::string& path) {
     const RegisterInfo* reg = find_register(e->key);
     if (reg == nullptr) ini.reject("board", e->key, "not a register of the board");
     if (!reg->writable) ini.reject("board", e->key, "read-only register");
-    if (reg->id == MCG_REG_COMMIT) ini.reject("board", e->key, "an action, not a setting (load commits itself)");
+    if (reg->id == MCG_REG_COMMIT) {
+      ini.reject("board", e->key, "an action, not a setting (load commits itself)");
+    }
     add(*reg, parse_value(*reg, e->value, e->origin), e->origin);
   }
   for (const auto& [reg, value] : controller_registers(ini)) add(*reg, value, path);

@@ -80,7 +80,9 @@ std::vector<std::uint8_t> Session::request(std::uint8_t cmd, std::span<const std
         if (f.cmd == answer_cmd && !f.payload.empty()) {
           const std::uint8_t status = f.payload[0];
           if (status == MCG_ST_OK && echoes_reg && (f.payload.size() < 2 || f.payload[1] != payload[0])) continue;
-          if (status != MCG_ST_OK) throw Refused(fmt::format("{}: {}: {}", m_port.name(), what, status_text(status)), status);
+          if (status != MCG_ST_OK) {
+            throw Refused(fmt::format("{}: {}: {}", m_port.name(), what, status_text(status)), status);
+          }
           return std::vector<std::uint8_t>(f.payload.begin() + 1, f.payload.end());
         }
         if (f.cmd == MCG_MSG_ERROR) {

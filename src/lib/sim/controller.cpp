@@ -62,7 +62,9 @@ class BoardController final : public LoopController {
     // at its first command.
     if (m_core.apply(MCG_REG_MODE, m_mode) != MCG_ST_OK) {
       fail("the board refuses mode {} with every gain zero (it would hold its duty whatever the speed)",
-           m_mode == MCG_MODE_P ? "p" : m_mode == MCG_MODE_PI ? "pi" : "pid");
+           m_mode == MCG_MODE_P    ? "p"
+           : m_mode == MCG_MODE_PI ? "pi"
+                                   : "pid");
     }
     m_core.write(MCG_REG_MODE, MCG_MODE_OPEN);
   }
