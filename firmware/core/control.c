@@ -134,10 +134,6 @@ void control_set_rpm_cmd(int16_t rpm) {
   }
 }
 
-/* R for the next three ticks from the active mode's coefficients c_i and the command history:
- *   R[k] = sum_i c_i r[n+k-i],  r[m] = the command for m >= n, s_r1, s_r2 before.
- * Once the history holds the command (g_ctl_settle == 0: s_r1 = s_r2 = r), all three are equal: three
- * products instead of seven, which keeps a commit within a tick on the 8051. */
 static int16_t MCG_XDATA s_c0, s_c1, s_c2; /* the active mode's coefficients (0 where it has none) */
 
 /* s_c0..2 and their offset-binary operands of arith_pid_sum. */
@@ -159,6 +155,10 @@ static void active_bp(void) {
   g_pid.bp[2] = (uint16_t)((uint16_t)s_c2 ^ 0x8000u);
 }
 
+/* R for the next three ticks from the active mode's coefficients c_i and the command history:
+ *   R[k] = sum_i c_i r[n+k-i],  r[m] = the command for m >= n, s_r1, s_r2 before.
+ * Once the history holds the command (g_ctl_settle == 0: s_r1 = s_r2 = r), all three are equal: three
+ * products instead of seven. */
 void control_refresh(void) {
   MCG_SLOW int32_t now;
   active_bp();
