@@ -174,6 +174,14 @@ void run_set(const LinkOptions& link, const std::string& name, const std::string
   const double v = parse_value(reg, value, "set");
   if (reg.unit != Unit::Gain) to_raw(reg, v, 0);  // range check before touching the port
   auto c = connect(link);
+  if (reg.id == MCG_REG_COMMIT) {  // an action: what others staged is committed (1) or dropped (0)
+    if (v == 0) {
+      discard_staged(*c);
+    } else {
+      commit_staged(*c, {}, "committing what is staged");
+    }
+    return;
+  }
   if (!reg.staged) {
     write_verified(*c, reg, v, "set", err);
     return;
