@@ -2,7 +2,9 @@
 # mcg-plot-gnuplot --live as a person watches it: a simulated run paced to about real time
 # drawn as it arrives, (a) into a PNG rewritten while the stream runs (every look at it a
 # whole PNG, showing the newest window; a shaft at rest drawn without a gnuplot warning),
-# (b) as text redrawn in place in a tmux pane, (c) in an x11 window under Xvfb, screenshotted.
+# (b) as text redrawn in place in a tmux pane, (c) in an x11 window under Xvfb, screenshotted,
+# (d) frames still arriving at the interval after 30 s of paced rows (the reader hands on what
+# the pipe has instead of waiting for a buffer to fill).
 # Args: TOOL_DIR SOURCE_DIR; exit 125 = skipped.
 set -u
 tools=$1
@@ -112,6 +114,38 @@ if ((colours >= 3)); then
   [[ -n "${MCG_KEEP_SCREENSHOT:-}" ]] && cp "$work/window.png" "$MCG_KEEP_SCREENSHOT"
 else
   fail "x11: the screenshot is blank ($colours colours)"
+fi
+
+# (d) 36 s of rows at about 500 a second (50 rows, then 0.1 s), into a PNG redrawn every 0.5 s:
+# between 30 s and 35 s the PNG must still be replaced at about the interval (each frame is
+# renamed over it: a new inode). A reader that waits to fill a growing buffer drew at 0.6, 1.6,
+# 3.2, 6.2, 12.2, 24.2 s and then not before 48 s.
+awk 'BEGIN { print "t,y"; for (k = 0; k < 18000; k++) { printf "%.3f,%d\n", k * 0.002, k % 100
+  if (k % 50 == 49) { fflush(); system("sleep 0.1") } } }' |
+  mcg-plot-gnuplot --live -y y --window 5 --interval 0.5 -o "$work/long.png" 2>"$work/long.err" &
+pid=$!
+start=$EPOCHREALTIME last_inode= frames=()
+while :; do
+  now=$EPOCHREALTIME
+  elapsed=$(awk -v a="$start" -v b="$now" 'BEGIN { printf "%.3f", b - a }')
+  awk -v e="$elapsed" 'BEGIN { exit !(e >= 35) }' && break
+  inode=$(stat -c %i "$work/long.png" 2>/dev/null)
+  if [[ -n "$inode" && "$inode" != "$last_inode" ]]; then
+    frames+=("$elapsed")
+    last_inode=$inode
+  fi
+  sleep 0.05
+done
+wait "$pid" || fail "long: exit $? ($(tail -1 "$work/long.err"))"
+# Frames drawn from 30 s on, and the longest wait for one (from 30 s, between frames, to 35 s).
+read -r late gap < <(printf '%s\n' "${frames[@]}" | awk -v from=30 -v to=35 '
+  BEGIN { prev = from }
+  $1 >= from { n++; if ($1 - prev > gap) gap = $1 - prev; prev = $1 }
+  END { if (to - prev > gap) gap = to - prev; printf "%d %.2f\n", n, gap }')
+if ((late >= 4)) && awk -v g="$gap" 'BEGIN { exit !(g <= 2) }'; then
+  echo "ok   long: $late frames between 30 s and 35 s of a paced stream (longest wait $gap s; interval 0.5 s)"
+else
+  fail "long: $late frames between 30 s and 35 s, longest wait $gap s (interval 0.5 s; ${#frames[@]} frames in all)"
 fi
 
 ((failures == 0))

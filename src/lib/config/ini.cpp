@@ -2,6 +2,7 @@
 #include "config/ini.hpp"
 
 #include "common/error.hpp"
+#include "common/line_reader.hpp"
 #include "table/table.hpp"
 
 #include <fmt/format.h>
@@ -35,15 +36,32 @@ std::string_view strip_comment(std::string_view s) {
   return s;
 }
 
+std::string index_key(std::string_view section, std::string_view key) {
+  return fmt::format("{}:{}{}", section.size(), section, key);
+}
+
 }  // namespace
+
+void Ini::add(Entry entry) {
+  m_index.emplace(index_key(entry.section, entry.key), m_entries.size());
+  auto [it, added] = m_by_section.try_emplace(entry.section);
+  if (added) m_sections.push_back(entry.section);
+  it->second.push_back(m_entries.size());
+  m_entries.push_back(std::move(entry));
+}
+
+const std::size_t* Ini::index_of(std::string_view section, std::string_view key) const {
+  const auto it = m_index.find(index_key(section, key));
+  return it == m_index.end() ? nullptr : &it->second;
+}
 
 Ini Ini::parse(std::istream& in, const std::string& source) {
   Ini ini;
   std::string section;
-  std::string raw;
-  std::size_t line_no = 0;
-  while (std::getline(in, raw)) {
-    ++line_no;
+  LineReader lines(in, source);
+  std::string_view raw;
+  while (lines.next(raw)) {
+    const std::size_t line_no = lines.line();
     std::string_view line = trim(raw);
     if (line.empty() || line.front() == ';' || line.front() == '#') continue;
     if (line.front() == '[') {
@@ -61,15 +79,13 @@ Ini Ini::parse(std::istream& in, const std::string& source) {
     const std::string_view key = trim(line.substr(0, eq));
     if (key.empty()) fail("{}:{}: empty key", source, line_no);
     const std::string_view value = trim(strip_comment(line.substr(eq + 1)));
-    Entry e{section, std::string(key), std::string(value), fmt::format("{}:{}", source, line_no), {}};
-    auto it = std::find_if(ini.m_entries.begin(), ini.m_entries.end(),
-                           [&](const Entry& x) { return x.section == e.section && x.key == e.key; });
-    if (it != ini.m_entries.end()) {
-      fail("{}: [{}] {}: given twice (first at {})", e.origin, printable(section), printable(key), it->origin);
+    const std::string origin = fmt::format("{}:{}", source, line_no);
+    if (const std::size_t* first = ini.index_of(section, key)) {
+      fail("{}: [{}] {}: given twice (first at {})", origin, printable(section), printable(key),
+           ini.m_entries[*first].origin);
     }
-    ini.m_entries.push_back(std::move(e));
+    ini.add(Entry{section, std::string(key), std::string(value), origin, {}});
   }
-  if (in.bad()) fail("{}: read error: {}", source, std::strerror(errno));
   return ini;
 }
 
@@ -88,27 +104,22 @@ Ini Ini::load_all(const std::vector<std::string>& paths) {
 
 void Ini::merge(const Ini& later) {
   for (const auto& e : later.m_entries) {
-    auto it = std::find_if(m_entries.begin(), m_entries.end(),
-                           [&](const Entry& x) { return x.section == e.section && x.key == e.key; });
-    if (it != m_entries.end()) {
-      *it = e;
+    if (const std::size_t* at = index_of(e.section, e.key)) {
+      m_entries[*at] = e;
     } else {
-      m_entries.push_back(e);
+      add(e);
     }
   }
 }
 
 const Ini::Entry* Ini::find(std::string_view section, std::string_view key) const {
-  auto it = std::find_if(m_entries.begin(), m_entries.end(),
-                         [&](const Entry& x) { return x.section == section && x.key == key; });
-  return it == m_entries.end() ? nullptr : &*it;
+  const std::size_t* at = index_of(section, key);
+  return at == nullptr ? nullptr : &m_entries[*at];
 }
 
 bool Ini::has(std::string_view section, std::string_view key) const { return find(section, key) != nullptr; }
 
-bool Ini::has_section(std::string_view section) const {
-  return std::any_of(m_entries.begin(), m_entries.end(), [&](const Entry& x) { return x.section == section; });
-}
+bool Ini::has_section(std::string_view section) const { return m_by_section.contains(std::string(section)); }
 
 std::optional<std::string> Ini::get(std::string_view section, std::string_view key) const {
   if (const Entry* e = find(section, key)) return e->value;
@@ -155,40 +166,34 @@ std::optional<std::vector<double>> Ini::numbers(std::string_view section, std::s
 }
 
 void Ini::set(std::string_view section, std::string_view key, std::string_view value, std::string_view comment) {
-  for (auto& e : m_entries) {
-    if (e.section == section && e.key == key) {
-      e.value = value;
-      e.origin.clear();
-      e.comment = comment;
-      return;
-    }
+  if (const std::size_t* at = index_of(section, key)) {
+    Entry& e = m_entries[*at];
+    e.value = value;
+    e.origin.clear();
+    e.comment = comment;
+    return;
   }
-  m_entries.push_back(Entry{std::string(section), std::string(key), std::string(value), {}, std::string(comment)});
+  add(Entry{std::string(section), std::string(key), std::string(value), {}, std::string(comment)});
 }
 
 void Ini::set(std::string_view section, std::string_view key, double value, std::string_view comment) {
   set(section, key, format_number(value), comment);
 }
 
-std::vector<std::string> Ini::sections() const {
-  std::vector<std::string> out;
-  for (const auto& e : m_entries) {
-    if (std::find(out.begin(), out.end(), e.section) == out.end()) out.push_back(e.section);
-  }
-  return out;
-}
+std::vector<std::string> Ini::sections() const { return m_sections; }
 
 std::vector<const Ini::Entry*> Ini::entries(std::string_view section) const {
   std::vector<const Entry*> out;
-  for (const auto& e : m_entries) {
-    if (e.section == section) out.push_back(&e);
-  }
+  const auto it = m_by_section.find(std::string(section));
+  if (it == m_by_section.end()) return out;
+  out.reserve(it->second.size());
+  for (const std::size_t at : it->second) out.push_back(&m_entries[at]);
   return out;
 }
 
 void Ini::write(std::ostream& out) const {
   bool first = true;
-  for (const auto& section : sections()) {
+  for (const auto& section : m_sections) {
     if (!section.empty()) {
       if (!first) out << '\n';
       out << '[' << section << "]\n";

@@ -1,10 +1,12 @@
 // INI parameter sets: "key = value" under "[section]", the named numbers tools exchange.
 #pragma once
 
+#include <cstddef>
 #include <iosfwd>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <vector>
 
 namespace mcg::config {
@@ -13,6 +15,8 @@ namespace mcg::config {
 /// line); keys before any [section] belong to section "". Each value remembers where it
 /// came from, so errors read "plant.ini:7: [plant] num: invalid number 'x'".
 /// Several files merge in order, later ones winning (--config a.ini --config b.ini).
+/// Lines are at most k_max_line_bytes (common/line_reader.hpp); reading, lookups and writing
+/// take time linear in the number of keys.
 class Ini {
  public:
   struct Entry {
@@ -52,7 +56,18 @@ class Ini {
   std::string str() const;
 
  private:
+  /// Appends an entry whose (section, key) is new.
+  void add(Entry entry);
+  /// Index into m_entries of (section, key), or none.
+  const std::size_t* index_of(std::string_view section, std::string_view key) const;
+
   std::vector<Entry> m_entries;
+  /// (section, key) -> position in m_entries; the key is the section's length, ':', the
+  /// section and the key, which no two different pairs share.
+  std::unordered_map<std::string, std::size_t> m_index;
+  /// Sections in first-seen order, and the positions of each one's entries in order.
+  std::vector<std::string> m_sections;
+  std::unordered_map<std::string, std::vector<std::size_t>> m_by_section;
 };
 
 /// Formats a double for INI/CSV text: shortest form that reads back exactly.

@@ -270,12 +270,18 @@ void run_live(const Options& o, Spec spec, const std::string& program) {
   const bool tty = spec.output.kind == Output::Kind::dumb && ::isatty(STDOUT_FILENO) != 0;
   std::size_t drawn = 0;
   std::size_t frame = 0;
+  // Frames are due on a fixed grid of --interval, so drawing one does not delay the next; one
+  // that took longer than the interval is followed at once.
+  const auto interval = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(o.interval_s));
+  auto due = std::chrono::steady_clock::now();
   for (;;) {
     bool finished = false;
     table::Table window;
+    due = std::max(due + interval, std::chrono::steady_clock::now());
     {
       std::unique_lock lock(mutex);
-      arrived.wait_for(lock, std::chrono::duration<double>(o.interval_s), [&] { return done; });
+      arrived.wait_until(lock, due, [&] { return done; });
       finished = done;
       if (ring.pushed() == drawn && !finished) continue;
       if (ring.size() > 0 && ring.pushed() != drawn) window = ring.table(reader.source(), meta);

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstring>
 #include <istream>
+#include <unordered_set>
 #include <limits>
 #include <ostream>
 
@@ -23,8 +24,6 @@ namespace mcg::table {
 
 namespace {
 
-constexpr std::size_t k_first_block = 4096;
-constexpr std::size_t k_read_block = 1 << 20;
 constexpr std::size_t k_write_block = 1 << 18;
 constexpr int k_default_digits = 10;
 
@@ -119,24 +118,29 @@ std::string column_list(const std::vector<std::string>& names) {
 }  // namespace
 
 std::optional<std::string> Metadata::get(std::string_view key) const {
-  for (const auto& [k, v] : m_entries) {
-    if (k == key) return v;
-  }
-  return std::nullopt;
+  const auto it = m_index.find(key);
+  if (it == m_index.end()) return std::nullopt;
+  return m_entries[it->second].second;
 }
 
 void Metadata::set(std::string_view key, std::string_view value) {
-  for (auto& [k, v] : m_entries) {
-    if (k == key) {
-      v = value;
-      return;
-    }
+  const auto [it, added] = m_index.try_emplace(std::string(key), m_entries.size());
+  if (!added) {
+    m_entries[it->second].second = value;
+    return;
   }
   m_entries.emplace_back(std::string(key), std::string(value));
 }
 
 void Metadata::erase(std::string_view key) {
-  std::erase_if(m_entries, [key](const Entry& e) { return e.first == key; });
+  const auto it = m_index.find(key);
+  if (it == m_index.end()) return;
+  const std::size_t at = it->second;
+  m_entries.erase(m_entries.begin() + static_cast<std::ptrdiff_t>(at));
+  m_index.erase(it);
+  for (auto& entry : m_index) {
+    if (entry.second > at) --entry.second;
+  }
 }
 
 bool parse_number(std::string_view text, double& value) {
@@ -219,6 +223,11 @@ void parse_part(Part& part, const std::vector<std::string>& names) {
     const auto nl = rest.find('\n');
     std::string_view line = rest.substr(0, nl);
     rest.remove_prefix(nl == std::string_view::npos ? rest.size() : nl + 1);
+    if (line.size() > k_max_line_bytes) {
+      part.error = line_too_long();
+      part.bad_line = k + 1;
+      return;
+    }
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (!parse_line(line, names, row.data(), part.error)) {
       part.bad_line = k + 1;
@@ -230,10 +239,11 @@ void parse_part(Part& part, const std::vector<std::string>& names) {
 
 }  // namespace
 
-Reader::Reader(std::istream& in, std::string source) : m_in(in), m_source(std::move(source)) {
+Reader::Reader(std::istream& in, std::string source) : m_lines(in, std::move(source)) {
+  const std::string& src = m_lines.source();
   std::string_view line;
   while (true) {
-    if (!read_line(line)) fail("{}: empty input: no header line", m_source);
+    if (!m_lines.next(line)) fail("{}: empty input: no header line", src);
     const std::string_view t = trim(line);
     if (t.empty()) continue;
     if (t.front() != '#') break;
@@ -245,17 +255,21 @@ Reader::Reader(std::istream& in, std::string source) : m_in(in), m_source(std::m
       m_meta.set(trim(body.substr(0, colon)), trim(body.substr(colon + 1)));
     }
   }
+  const std::size_t at = m_lines.line();
+  // The names seen, as views into the header line (it stays put until the next read).
+  std::unordered_set<std::string_view> seen;
   std::size_t start = 0;
   while (true) {
     const auto comma = line.find(',', start);
     const std::string_view name = trim(line.substr(start, comma == std::string_view::npos ? line.npos : comma - start));
-    if (name.empty()) fail("{}:{}: header: empty column name (column {})", m_source, m_line, m_columns.size() + 1);
-    if (std::find(m_columns.begin(), m_columns.end(), name) != m_columns.end()) {
-      fail("{}:{}: header: duplicate column {}", m_source, m_line, quote(name));
+    if (m_columns.size() == k_max_columns) {
+      fail("{}:{}: header: more than {} columns", src, at, k_max_columns);
     }
+    if (name.empty()) fail("{}:{}: header: empty column name (column {})", src, at, m_columns.size() + 1);
+    if (!seen.insert(name).second) fail("{}:{}: header: duplicate column {}", src, at, quote(name));
     double probe = 0;
     if (parse_number(name, probe)) {
-      fail("{}:{}: header: expected column names, found the number {}", m_source, m_line, quote(name));
+      fail("{}:{}: header: expected column names, found the number {}", src, at, quote(name));
     }
     m_columns.emplace_back(name);
     if (comma == std::string_view::npos) break;
@@ -266,84 +280,11 @@ Reader::Reader(std::istream& in, std::string source) : m_in(in), m_source(std::m
 
 Reader::~Reader() = default;
 
-bool Reader::read_line(std::string_view& line) {
-  while (true) {
-    const char* begin = m_buffer.data() + m_pos;
-    const std::size_t avail = m_end - m_pos;
-    if (const void* nl = std::memchr(begin, '\n', avail)) {
-      const auto len = static_cast<std::size_t>(static_cast<const char*>(nl) - begin);
-      line = std::string_view(begin, len);
-      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-      m_pos += len + 1;
-      ++m_line;
-      return true;
-    }
-    if (m_eof) {
-      if (avail == 0) return false;
-      line = std::string_view(begin, avail);
-      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-      m_pos = m_end;
-      ++m_line;
-      return true;
-    }
-    // Keep the unfinished line, then read into the free space. The buffer starts small and
-    // doubles when a read fills it (a long line, or a large input arriving fast), up to
-    // k_read_block per read: a three-line file costs 4 KiB, a large one reads in 1 MiB blocks.
-    if (m_pos > 0) {
-      std::memmove(m_buffer.data(), m_buffer.data() + m_pos, avail);
-      m_end = avail;
-      m_pos = 0;
-    }
-    const bool cramped = m_buffer.size() - m_end < m_buffer.size() / 2;
-    if (m_buffer.empty() || cramped || (m_filled && m_buffer.size() < k_read_block)) {
-      const std::size_t grown = m_buffer.empty() ? k_first_block : m_buffer.size() + std::min(m_buffer.size(), k_read_block);
-      m_buffer.resize(grown);
-    }
-    const std::size_t room = m_buffer.size() - m_end;
-    const auto got = m_in.rdbuf()->sgetn(m_buffer.data() + m_end, static_cast<std::streamsize>(room));
-    if (got <= 0) {
-      if (m_in.bad()) fail("{}: read error: {}", m_source, std::strerror(errno));
-      m_eof = true;
-    } else {
-      m_end += static_cast<std::size_t>(got);
-      m_filled = static_cast<std::size_t>(got) == room;
-    }
-  }
-}
-
-bool Reader::take_lines(std::string& out, std::size_t bytes) {
-  out.assign(m_buffer, m_pos, m_end - m_pos);
-  m_pos = m_end = 0;
-  std::size_t checked = 0;  // out[0, checked) holds no newline
-  while (!m_eof) {
-    if (out.size() >= bytes) {
-      if (std::memchr(out.data() + checked, '\n', out.size() - checked) != nullptr) break;
-      checked = out.size();  // one line longer than `bytes`: read on to its end
-    }
-    const std::size_t used = out.size();
-    out.resize(std::max(bytes, used + k_read_block));
-    const auto got = m_in.rdbuf()->sgetn(out.data() + used, static_cast<std::streamsize>(out.size() - used));
-    out.resize(used + static_cast<std::size_t>(std::max<std::streamsize>(got, 0)));
-    if (got <= 0) {
-      if (m_in.bad()) fail("{}: read error: {}", m_source, std::strerror(errno));
-      m_eof = true;
-    }
-  }
-  if (!m_eof) {
-    // The unfinished last line waits in the buffer for the next call.
-    const std::size_t keep = out.rfind('\n') + 1;
-    m_buffer.assign(out, keep);
-    m_end = m_buffer.size();
-    out.resize(keep);
-  }
-  return !out.empty();
-}
-
 bool Reader::next() {
-  std::string_view line;
-  if (!read_line(line)) return false;
+  std::string_view text;
+  if (!m_lines.next(text)) return false;
   std::string error;
-  if (!parse_line(line, m_columns, m_row.data(), error)) fail("{}:{}: {}", m_source, m_line, error);
+  if (!parse_line(text, m_columns, m_row.data(), error)) fail("{}:{}: {}", source(), line(), error);
   return true;
 }
 
@@ -355,7 +296,7 @@ std::optional<std::size_t> Reader::find(std::string_view name) const {
 
 std::size_t Reader::require(std::string_view name) const {
   if (auto i = find(name)) return *i;
-  fail("{}: missing column {} (has: {})", m_source, quote(name), column_list(m_columns));
+  fail("{}: missing column {} (has: {})", source(), quote(name), column_list(m_columns));
 }
 
 std::optional<std::size_t> Table::find(std::string_view name) const {
@@ -394,7 +335,8 @@ Table read(std::istream& in, std::string source) {
   table.first_line = reader.line() + 1;
   // Parts of 4 MiB of whole lines, one a core, parsed side by side and appended in order; the
   // first bad line of the input is the one reported, as the Reader reports it. The parts'
-  // buffers are reused, so the memory is the table's and a part a core.
+  // buffers grow with what comes and are reused, so the memory is the table's and at most a
+  // part a core: a small input costs a small buffer.
   constexpr std::size_t k_part_bytes = std::size_t{4} << 20;
   std::vector<Part> parts(parallel::worker_count(0, 64));
   for (bool more = true; more;) {
@@ -409,6 +351,7 @@ Table read(std::istream& in, std::string source) {
       }
     }
   }
+  if (reader.overlong()) fail("{}:{}: {}", table.source, table.line_of(table.rows()), line_too_long());
   return table;
 }
 

@@ -7,10 +7,17 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
+#include "common/line_reader.hpp"
+
 namespace mcg::table {
+
+/// The widest header a table may have; a wider one is a one-line error (mcg-csv(5), LIMITS).
+/// Lines are at most k_max_line_bytes (common/line_reader.hpp).
+inline constexpr std::size_t k_max_columns = 10000;
 
 /// The "# key: value" lines that precede the header, kept in order and passed on.
 class Metadata {
@@ -27,16 +34,24 @@ class Metadata {
   bool empty() const { return m_entries.empty(); }
 
  private:
+  struct Hash {
+    using is_transparent = void;
+    std::size_t operator()(std::string_view s) const { return std::hash<std::string_view>{}(s); }
+  };
   std::vector<Entry> m_entries;
+  /// Position of each key in m_entries (keys are unique there): a lookup costs the same for
+  /// the 100000th line of metadata as for the first.
+  std::unordered_map<std::string, std::size_t, Hash, std::equal_to<>> m_index;
 };
 
 /// Parses one field: decimal or exponent form, inf, -inf, nan (any case); an empty field
 /// (after trimming blanks) is "not measured" and reads as NaN. Returns false if malformed.
 bool parse_number(std::string_view text, double& value);
 
-/// Streaming reader: metadata and header on construction, then one row per next().
-/// Every error is an mcg::Error naming the source, the line and, for a field, the column
-/// and the text: "<stdin>:12: column 'rpm': invalid number '3a'".
+/// Streaming reader: metadata and header on construction, then one row per next(). It reads
+/// what the input has (a pipe's rows are handed on as they come, read(2) as it were), in time
+/// linear in the input. Every error is an mcg::Error naming the source, the line and, for a
+/// field, the column and the text: "<stdin>:12: column 'rpm': invalid number '3a'".
 class Reader {
  public:
   Reader(std::istream& in, std::string source);
@@ -46,7 +61,7 @@ class Reader {
 
   const Metadata& metadata() const { return m_meta; }
   const std::vector<std::string>& columns() const { return m_columns; }
-  const std::string& source() const { return m_source; }
+  const std::string& source() const { return m_lines.source(); }
   std::optional<std::size_t> find(std::string_view name) const;
   /// Index of column `name`; throws "<src>: missing column 'v' (has: t,rpm)".
   std::size_t require(std::string_view name) const;
@@ -56,26 +71,19 @@ class Reader {
   const std::vector<double>& row() const { return m_row; }
   double operator[](std::size_t column) const { return m_row[column]; }
   /// 1-based line number of the current row (or of the header before the first next()).
-  std::size_t line() const { return m_line; }
+  std::size_t line() const { return m_lines.line(); }
   /// The input not read yet as whole lines, at least `bytes` of them unless the input ends
-  /// first, into `out` (its storage reused); false at the end. read() parses them on every core
-  /// and counts their lines itself: line() does not move.
-  bool take_lines(std::string& out, std::size_t bytes);
+  /// first, into `out` (its storage reused); false at the end, or before a line longer than
+  /// k_max_line_bytes (then overlong()). read() parses them on every core and counts their
+  /// lines itself: line() does not move.
+  bool take_lines(std::string& out, std::size_t bytes) { return m_lines.take(out, bytes); }
+  bool overlong() const { return m_lines.overlong(); }
 
  private:
-  bool read_line(std::string_view& line);
-
-  std::istream& m_in;
-  std::string m_source;
+  LineReader m_lines;
   Metadata m_meta;
   std::vector<std::string> m_columns;
   std::vector<double> m_row;
-  std::string m_buffer;     ///< storage; bytes [m_pos, m_end) are read and not yet consumed
-  std::size_t m_end = 0;
-  bool m_filled = false;    ///< the last read filled the free space: the input comes fast, grow
-  std::size_t m_pos = 0;
-  std::size_t m_line = 0;
-  bool m_eof = false;
 };
 
 /// A whole table in memory, column-major.
