@@ -1,9 +1,12 @@
 // Unit tests of the register table: names, scales, ranges, text in and out.
 #include "link/registers.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <set>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -41,6 +44,22 @@ TEST(LinkRegisters, ScalesOfTheProtocol) {
   EXPECT_EQ(to_raw(require_register("rpm_cmd"), 420.4, 0), 420);
   // Counters travel as i16 but count up to 65535.
   EXPECT_DOUBLE_EQ(to_engineering(require_register("rx_errors"), -1, 0), 65535.0);
+}
+
+// A value read back prints as the shortest text that reads back to it: every duty in tenths of
+// a percent as its decimal (157 is 15.7, not 157 * 0.1 = 15.700000000000001), and that text
+// sets the same raw value again.
+TEST(LinkRegisters, ReadBackIsTheShortestDecimal) {
+  const auto& duty = require_register("duty");
+  for (int raw = -1000; raw <= 1000; ++raw) {
+    const int whole = std::abs(raw) / 10;
+    const int tenth = std::abs(raw) % 10;
+    const std::string expected = fmt::format("{}{}{}", raw < 0 ? "-" : "", whole, tenth ? fmt::format(".{}", tenth) : "");
+    const std::string text = format_value(duty, static_cast<std::int16_t>(raw), 0);
+    ASSERT_EQ(text, expected);
+    ASSERT_EQ(to_raw(duty, parse_value(duty, text, "x"), 0), raw);
+  }
+  EXPECT_EQ(format_value(require_register("kp"), 12933, 12), "3.157470703125");  // exact in binary
 }
 
 TEST(LinkRegisters, RangesAreCheckedBeforeSending) {

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common/error.hpp"  // mcg::fail
+#include "config/ini.hpp"    // format_number
 #include "mcg_protocol.h"    // MCG_REG_*, MCG_ST_*
 
 namespace mcg::link {
@@ -42,18 +43,18 @@ std::string normalise(std::string_view name) {
   return out;
 }
 
-double scale_of(const RegisterInfo& reg, int frac_bits) {
+/// Raw steps per engineering unit: the engineering value is raw / steps, a division, so that
+/// duty 157 reads as the double nearest 15.7 (157 * 0.1 is 15.700000000000001).
+double steps_per_unit(const RegisterInfo& reg, int frac_bits) {
   switch (reg.unit) {
     case Unit::Percent:
-      return 0.1;
+      return 10.0;
     case Unit::Gain:
-      return std::ldexp(1.0, -frac_bits);
+      return std::ldexp(1.0, frac_bits);
     default:
       return 1.0;
   }
 }
-
-std::string shortest(double value) { return fmt::format("{}", value); }
 
 }  // namespace
 
@@ -100,17 +101,17 @@ std::string_view unit_suffix(Unit unit) {
 
 double to_engineering(const RegisterInfo& reg, std::int16_t raw, int frac_bits) {
   if (reg.unit == Unit::Count || reg.unit == Unit::Flags) return static_cast<std::uint16_t>(raw);
-  return raw * scale_of(reg, frac_bits);
+  return raw / steps_per_unit(reg, frac_bits);
 }
 
 std::int16_t to_raw(const RegisterInfo& reg, double value, int frac_bits) {
-  const double scaled = std::round(value / scale_of(reg, frac_bits));
+  const double scaled = std::round(value * steps_per_unit(reg, frac_bits));
   if (!std::isfinite(value) || scaled < reg.raw_min || scaled > reg.raw_max) {
-    const double lo = reg.raw_min * scale_of(reg, frac_bits);
-    const double hi = reg.raw_max * scale_of(reg, frac_bits);
+    const double lo = reg.raw_min / steps_per_unit(reg, frac_bits);
+    const double hi = reg.raw_max / steps_per_unit(reg, frac_bits);
     const std::string_view unit = unit_suffix(reg.unit);
-    fail("{}: {}{}{} is outside {}..{}{}{}", reg.name, shortest(value), unit.empty() ? "" : " ", unit,
-         shortest(lo), shortest(hi), unit.empty() ? "" : " ", unit);
+    fail("{}: {}{}{} is outside {}..{}{}{}", reg.name, config::format_number(value), unit.empty() ? "" : " ",
+         unit, config::format_number(lo), config::format_number(hi), unit.empty() ? "" : " ", unit);
   }
   return static_cast<std::int16_t>(scaled);
 }
@@ -168,7 +169,7 @@ std::string format_value(const RegisterInfo& reg, std::int16_t raw, int frac_bit
       return out.empty() ? "none" : out;
     }
     default:
-      return shortest(to_engineering(reg, raw, frac_bits));
+      return config::format_number(to_engineering(reg, raw, frac_bits));
   }
 }
 
