@@ -81,9 +81,9 @@ q = lambda x: 1e3 * ages[min(len(ages) - 1, int(x * len(ages)))]
 minute = next(m for m in mem if m[0] >= min(60, mem[-1][0]))
 grow_tool = max(m[1] for m in mem if m[0] >= minute[0]) - minute[1]
 grow_gp = max(m[2] for m in mem if m[0] >= minute[0]) - minute[2]
-print("mcg-plot-gnuplot --live at %d rows/s for %.0f s, interval %.1f s: exit %d, %d frames, frame age median "
-      "%.0f ms, p99 %.0f ms, max %.0f ms; VmRSS %d KiB at 60 s, %d KiB at the end (growth after the first "
-      "minute %d KiB), gnuplot %d KiB at 60 s, %d KiB at the end (growth %d KiB)"
+print("mcg-plot-gnuplot --live at %d rows/s for %.0f s, interval %.1f s: exit %d, %d frames, "
+      "frame age median %.0f ms, p99 %.0f ms, max %.0f ms; VmRSS %d KiB at 60 s, %d KiB at the end "
+      "(growth after the first minute %d KiB), gnuplot %d KiB at 60 s, %d KiB at the end (growth %d KiB)"
       % (rate, seconds, interval, status, frames, q(0.5), q(0.99), 1e3 * ages[-1], minute[1], mem[-1][1],
          grow_tool, minute[2], mem[-1][2], grow_gp))
 PY

@@ -12,6 +12,7 @@ if wanted plot_live && ((plot_live_s > 0)); then
   ok=$(met "${p99:-1e9}" "<=" 600)
   [[ $(met "${tool_growth:-1e9}" "<=" 1024) == yes && $(met "${gp_growth:-1e9}" "<=" 1024) == yes ]] ||
     ok="missed (memory grew)"
-  row "\`mcg-plot-gnuplot --live -o frame.png --interval 0.5\` on rows paced at 500/s for $plot_live_s s (\`bench/bench_plot_live.sh\`)" \
+  what="\`mcg-plot-gnuplot --live -o frame.png --interval 0.5\` on rows paced at 500/s for $plot_live_s s"
+  row "$what (\`bench/bench_plot_live.sh\`)" \
     whole-process "frame age p99 <= interval + 100 ms, flat memory" "${figure:-not measured}" "$ok"
 fi

@@ -145,7 +145,8 @@ read -r late gap < <(printf '%s\n' "${frames[@]}" | awk -v from=30 -v to=35 '
 if ((late >= 4)) && awk -v g="$gap" 'BEGIN { exit !(g <= 2) }'; then
   echo "ok   long: $late frames between 30 s and 35 s of a paced stream (longest wait $gap s; interval 0.5 s)"
 else
-  fail "long: $late frames between 30 s and 35 s, longest wait $gap s (interval 0.5 s; ${#frames[@]} frames in all)"
+  fail "long: $late frames between 30 s and 35 s, longest wait $gap s" \
+    "(interval 0.5 s; ${#frames[@]} frames in all)"
 fi
 
 ((failures == 0))

@@ -1,12 +1,11 @@
 // LineReader: lines handed on as a pipe delivers them, each byte scanned once, a bounded line.
 #include <gtest/gtest.h>
-
-#include <ext/stdio_filebuf.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <ext/stdio_filebuf.h>
 #include <istream>
 #include <mutex>
 #include <sstream>
@@ -161,7 +160,8 @@ TEST(CommonLineReader, IniIndexFollowsMergeAndSet) {
   EXPECT_TRUE(ini.has_section("u"));
   EXPECT_FALSE(ini.has_section("v"));
   std::istringstream twice("[s]\nx = 1\n[t]\ny = 1\n[s]\nx = 2\n");
-  EXPECT_EQ(error_of([&] { config::Ini::parse(twice, "c.ini"); }), "c.ini:6: [s] x: given twice (first at c.ini:2)");
+  EXPECT_EQ(error_of([&] { config::Ini::parse(twice, "c.ini"); }),
+            "c.ini:6: [s] x: given twice (first at c.ini:2)");
 }
 
 }  // namespace

@@ -54,7 +54,8 @@ TEST(LinkRegisters, ReadBackIsTheShortestDecimal) {
   for (int raw = -1000; raw <= 1000; ++raw) {
     const int whole = std::abs(raw) / 10;
     const int tenth = std::abs(raw) % 10;
-    const std::string expected = fmt::format("{}{}{}", raw < 0 ? "-" : "", whole, tenth ? fmt::format(".{}", tenth) : "");
+    const std::string expected =
+        fmt::format("{}{}{}", raw < 0 ? "-" : "", whole, tenth ? fmt::format(".{}", tenth) : "");
     const std::string text = format_value(duty, static_cast<std::int16_t>(raw), 0);
     ASSERT_EQ(text, expected);
     ASSERT_EQ(to_raw(duty, parse_value(duty, text, "x"), 0), raw);

@@ -34,7 +34,8 @@ std::size_t read_available(std::streambuf& in, char* dest, std::size_t room, con
       n = std::max<std::streamsize>(in.in_avail(), 1);
     }
     const auto want = std::min(static_cast<std::size_t>(n), room);
-    return static_cast<std::size_t>(std::max<std::streamsize>(in.sgetn(dest, static_cast<std::streamsize>(want)), 0));
+    return static_cast<std::size_t>(
+        std::max<std::streamsize>(in.sgetn(dest, static_cast<std::streamsize>(want)), 0));
   } catch (const std::ios_base::failure& e) {
     fail("{}: read error: {}", source, e.code().message());
   }
@@ -54,7 +55,8 @@ void LineReader::fill() {
   }
   const bool cramped = m_buffer.size() - m_end < m_buffer.size() / 2;
   if (m_buffer.empty() || cramped || (m_filled && m_buffer.size() < k_read_block)) {
-    m_buffer.resize(m_buffer.empty() ? k_first_block : m_buffer.size() + std::min(m_buffer.size(), k_read_block));
+    m_buffer.resize(m_buffer.empty() ? k_first_block
+                                     : m_buffer.size() + std::min(m_buffer.size(), k_read_block));
   }
   const std::size_t room = m_buffer.size() - m_end;
   const std::size_t got = read_available(*m_in.rdbuf(), m_buffer.data() + m_end, room, m_source);

@@ -53,12 +53,12 @@ class LineReader {
 
   std::istream& m_in;
   std::string m_source;
-  std::string m_buffer;      ///< storage; bytes [m_pos, m_end) are read and not yet consumed
+  std::string m_buffer;  ///< storage; bytes [m_pos, m_end) are read and not yet consumed
   std::size_t m_pos = 0;
-  std::size_t m_scanned = 0; ///< bytes [m_pos, m_scanned) hold no newline: never scanned twice
+  std::size_t m_scanned = 0;  ///< bytes [m_pos, m_scanned) hold no newline: never scanned twice
   std::size_t m_end = 0;
   std::size_t m_line = 0;
-  bool m_filled = false;     ///< the last read filled the free space: the input comes fast, grow
+  bool m_filled = false;  ///< the last read filled the free space: the input comes fast, grow
   bool m_eof = false;
   bool m_overlong = false;
 };

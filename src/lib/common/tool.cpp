@@ -77,14 +77,16 @@ std::string usage_message(const CLI::App& app, const CLI::ParseError& e) {
   const auto extra = first_extra(app);
   if (!extra) return e.what();
   const auto& [where, arg] = *extra;
-  if (arg.size() > 1 && arg.front() == '-' && !std::isdigit(static_cast<unsigned char>(arg[1])) && arg[1] != '.') {
+  if (arg.size() > 1 && arg.front() == '-' && !std::isdigit(static_cast<unsigned char>(arg[1])) &&
+      arg[1] != '.') {
     const std::string option = arg.substr(0, arg.find('='));
     std::vector<std::string> names;
     for (const CLI::Option* o : where->get_options()) {
       for (const auto& n : o->get_lnames()) names.push_back("--" + n);
     }
     const auto near = nearest_name(option, names);
-    return fmt::format("unknown option {}{}", quote(option), near ? fmt::format(": did you mean {}?", quote(*near)) : "");
+    return fmt::format("unknown option {}{}", quote(option),
+                       near ? fmt::format(": did you mean {}?", quote(*near)) : "");
   }
   const auto subs = where->get_subcommands([](const CLI::App*) { return true; });
   if (!subs.empty() && where->get_subcommands().empty()) {
