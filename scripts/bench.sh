@@ -91,7 +91,7 @@ fi
 if wanted design; then
   plant='0.0146/((s/60+1)(s/850+1)(s/1800+1))'
   for c in "p --pm 55 --plant '$plant'" \
-           "pi --pm 50 --zero 500 --dt 0.001 --plant '$plant'" \
+           "pi --pm 50 --zero 500 --dt 0.001 --plant '$plant' --plant-units loop" \
            "lag --pm 50 --k-dc 2000 --plant '$plant'" \
            "tune --plant '$plant'" \
            "tune" \

@@ -15,6 +15,9 @@ void add_plant_options(CLI::App* sub, mcg::design::Options& o) {
   sub->add_option("--plant", o.plant, "plant as text in s or z, e.g. '16.557/((s/65+1)*(s/950+1))'");
   sub->add_option("--num", o.num, "plant numerator coefficients, descending powers ('1 2' or '1,2')");
   sub->add_option("--den", o.den, "plant denominator coefficients, descending powers");
+  sub->add_option(
+      "--plant-units", o.plant_units,
+      "what --plant maps: rpm/V, rad/s/V, rpm/duty, rad/s/duty (the loop chain is applied) or loop");
   sub->add_option("--domain", o.domain, "variable of --num/--den")->check(CLI::IsMember({"s", "z"}));
   sub->add_option("--delay", o.delay_s, "extra plant delay, s")->check(CLI::Range(0.0, k_inf));
   sub->add_option("--dt", o.dt_s, "sample period of the controller (and of a z plant), s")

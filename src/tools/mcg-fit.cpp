@@ -43,7 +43,9 @@ int main(int argc, char** argv) {
       ->required();
 
   mcg::fit::TfRunOptions tf;
-  CLI::App* tfc = app.add_subcommand("tf", "rational transfer function fitted to a frequency response");
+  CLI::App* tfc = app.add_subcommand(
+      "tf",
+      "rational transfer function fitted to a frequency response or to a time-domain run (output error)");
   tfc->add_option("--poles", tf.fit.poles, "number of poles")
       ->check(CLI::Range(1, 12))
       ->capture_default_str();
@@ -56,7 +58,15 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 1e9));
   tfc->add_flag("!--no-coherence", tf.fit.use_coherence, "weight all frequencies alike");
   tfc->add_flag("--delay", tf.fit.fit_delay, "fit a transport delay too (written as delay_s)");
-  tfc->add_option("file", tf.file, "f_hz,mag_db,phase_deg[,coherence] table ('-' = stdin)")
+  tfc->add_option(
+      "--units", tf.units,
+      "what the response maps when its metadata does not say: 'v -> rpm', 'duty -> rpm', 'v -> omega'");
+  tfc->add_option("--in", tf.in_column, "time-domain run: the input column (v)");
+  tfc->add_option("--out", tf.out_column, "time-domain run: the output column (rpm, else omega)");
+  tfc->add_option("--validate", tf.validate, "time-domain run: a held-out run the fit is scored on");
+  tfc->add_option(
+         "file", tf.file,
+         "f_hz,mag_db,phase_deg[,coherence] table, or a run with t and the two columns ('-' = stdin)")
       ->capture_default_str();
 
   mcg::fit::ModelRunOptions model;
@@ -147,6 +157,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (tfc->parsed()) {
+      tf.band_given = tfc->count("--f-min") + tfc->count("--f-max") + tfc->count("--no-coherence") > 0;
       mcg::fit::run_tf(tf, std::cout, std::cerr);
       return 0;
     }

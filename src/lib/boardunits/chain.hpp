@@ -36,12 +36,6 @@ inline constexpr double k_hbridge_gain = 4.0;
 inline constexpr double k_supply_V = k_pwm_logic_v * k_hbridge_gain;
 inline constexpr double k_report_counts_per_rev = k_encoder_lines;
 
-/// `[plant] maps` (docs/formats.md): a plant INI's transfer function maps omega/v (rad/s per V,
-/// mcg-fit tf's), around which mcg-design puts the LoopChain, or the loop itself (encoder counts
-/// per sample per duty count).
-inline constexpr const char* k_maps_physical = "omega/v";
-inline constexpr const char* k_maps_loop = "loop";
-
 /// The chain around a physical plant G(s) (omega in rad/s per V in volts):
 /// duty counts --PWM--> logic volts --H-bridge--> motor volts --G--> rad/s --encoder--> counts/rad
 /// --software conversion (counts over one period T)--> counts per sample.

@@ -5,6 +5,7 @@
 #include "design/rig.hpp"
 
 #include "boardunits/controller.hpp"
+#include "boardunits/plant_units.hpp"
 
 #include "common/error.hpp"
 #include "config/ini.hpp"
@@ -40,6 +41,7 @@ struct Resolved {
   Tf raw;              ///< the plant as given
   std::string raw_where;
   bool chain = false;
+  boardunits::PlantUnits units;  ///< what raw maps; physical units get the chain (converted to rad/s per V)
   Chain chain_values;
   bool hold = false;   ///< the continuous plant is sampled through a ZOH (the PWM)
   double dt_s = 0.0;   ///< controller sample period, 0 = continuous
@@ -91,8 +93,16 @@ double positive(const Ini& ini, const char* section, const char* key, std::optio
   return fallback;
 }
 
-using boardunits::k_maps_loop;
-using boardunits::k_maps_physical;
+using boardunits::PlantUnits;
+
+bool is_design_command(const std::string& command) {
+  for (const char* c : {"p", "pi", "pid", "lead", "lag", "rlocus-design", "tune"}) {
+    if (command == c) return true;
+  }
+  return false;
+}
+
+constexpr const char* k_units_choices = "rpm/V, rad/s/V, rpm/duty, rad/s/duty or loop";
 
 Resolved resolve(const Options& o) {
   Resolved r;
@@ -132,6 +142,20 @@ Resolved resolve(const Options& o) {
     const linsys::ParsedTf p = linsys::parse_tf(*text, r.raw_where);
     r.raw = p.tf;
     domain = p.domain;
+    // mcg-fit writes tf rounded for reading and num/den in full: from the same file, without a
+    // delay in the text, the full coefficients are the plant (the units' conversion keeps them).
+    const auto file_of = [&](const char* key) {
+      const auto* e = ini.find("plant", key);
+      const std::string origin = e ? e->origin : std::string();
+      return origin.substr(0, origin.rfind(':'));
+    };
+    const auto num = ini.numbers("plant", "num");
+    const auto den = ini.numbers("plant", "den");
+    if (num && den && p.tf.delay_s == 0.0 && file_of("num") == file_of("tf") &&
+        file_of("den") == file_of("tf")) {
+      r.raw_where = origin_of(ini, "plant", "den");
+      r.raw = tf_from_lists(*num, *den, r.raw_where);
+    }
   } else if (ini.has("plant", "num") || ini.has("plant", "den")) {
     const auto num = ini.numbers("plant", "num");
     const auto den = ini.numbers("plant", "den");
@@ -165,28 +189,58 @@ Resolved resolve(const Options& o) {
   }
 
   r.chain = o.loop || ini.has_section("loop") || builtin;
-  // An INI plant says what it maps: omega/v (rad/s per V, mcg-fit tf) gets the loop chain;
-  // loop (encoder counts per sample per duty count) is designed on as it is.
-  const bool ini_plant = !builtin && o.plant.empty() && !o.plant_given && o.num.empty() && o.den.empty() &&
-                         !o.rig && ini.get("plant", "model") != std::optional<std::string>("rig");
-  if (ini_plant) {
-    const std::optional<std::string> maps = ini.get("plant", "maps");
-    if (!maps && !r.chain) {
-      fail("{}: the plant does not say what it maps: give maps = omega/v (rad/s per V, as mcg-fit tf writes it; "
-           "the loop chain is applied) or maps = loop (encoder counts per sample per duty count), or --loop",
-           r.raw_where);
+  // The plant's units: stated (--plant-units, [plant] maps), or implied by the chain (whose input is
+  // rad/s per V). Physical units get the chain, converted to rad/s per V; loop units are designed on
+  // as they are.
+  const bool hand_plant = !o.plant.empty() || o.plant_given || !o.num.empty() || !o.den.empty();
+  const bool ini_plant =
+      !builtin && !hand_plant && !o.rig && ini.get("plant", "model") != std::optional<std::string>("rig");
+  std::optional<PlantUnits> units;
+  std::string units_where;
+  if (!o.plant_units.empty()) {
+    if (!hand_plant)
+      fail(
+          "--plant-units: states the units of --plant or --num/--den; an INI plant states its own ([plant] "
+          "maps)");
+    units = boardunits::parse_plant_units(o.plant_units);
+    if (!units) {
+      fail(
+          "--plant-units: {} are units mcg-design does not know: give {} (encoder counts per sample per duty "
+          "count)",
+          quote(o.plant_units), k_units_choices);
     }
-    if (maps && *maps != k_maps_physical && *maps != k_maps_loop) {
-      ini.reject("plant", "maps", fmt::format("must be {} or {}", k_maps_physical, k_maps_loop));
+    units_where = "--plant-units";
+  } else if (ini_plant) {
+    if (const std::optional<std::string> maps = ini.get("plant", "maps")) {
+      units = boardunits::parse_plant_units(*maps);
+      if (!units) {
+        ini.reject(
+            "plant", "maps",
+            fmt::format("{} are units mcg-design does not know: give v -> omega, v -> rpm, duty -> rpm, "
+                        "duty -> omega or loop",
+                        quote(*maps)));
+      }
+      units_where = origin_of(ini, "plant", "maps");
+    } else if (!r.chain) {
+      fail(
+          "{}: the plant does not say what it maps: give maps = v -> omega (rad/s per V), v -> rpm, duty -> "
+          "rpm "
+          "(as mcg-fit tf writes it from the response; the loop chain is applied) or maps = loop (encoder "
+          "counts "
+          "per sample per duty count), or --loop",
+          r.raw_where);
     }
-    if (maps && *maps == k_maps_loop && r.chain) {
-      ini.reject("plant", "maps",
-                 fmt::format("the plant maps the loop already (counts per sample per duty count); {} would apply "
-                             "the loop chain twice",
-                             o.loop ? "--loop" : "its [loop] section"));
-    }
-    if (maps && *maps == k_maps_physical) r.chain = true;
   }
+  if (units && units->loop && r.chain) {
+    const std::string why = fmt::format(
+        "the plant maps the loop already (counts per sample per duty count); {} would "
+        "apply the loop chain twice",
+        o.loop ? "--loop" : "its [loop] section");
+    if (units_where == "--plant-units") fail("--plant-units: {}", why);
+    ini.reject("plant", "maps", why);
+  }
+  if (units && !units->loop) r.chain = true;
+  r.units = units.value_or(r.chain ? PlantUnits{} : PlantUnits{true});
   const std::optional<double> dt_flag = flag(o.dt_s);
   if (dt_flag && (!(*dt_flag > 0.0) || !std::isfinite(*dt_flag))) fail("--dt: must be positive, got {}", *dt_flag);
   std::optional<double> dt = dt_flag;
@@ -198,6 +252,12 @@ Resolved resolve(const Options& o) {
     }
   }
   if (!dt && r.chain) dt = Chain{}.dt_s;
+  if (hand_plant && !units && !r.chain && dt && is_design_command(o.command)) {
+    fail(
+        "{}: the plant's units are not stated, and a sampled controller for the board depends on them: give "
+        "--plant-units ({}) or --loop (rad/s per V)",
+        r.raw_where, k_units_choices);
+  }
   if (r.chain) {
     Chain& c = r.chain_values;
     c.pwm_full_counts = positive(ini, "loop", "pwm_full_counts", flag(o.pwm_full_counts), "--pwm-full-counts", c.pwm_full_counts);
@@ -222,7 +282,8 @@ Resolved resolve(const Options& o) {
   r.dt_s = dt.value_or(0.0);
 
   Tf g = r.raw;
-  if (r.chain) g = linsys::scaled(g, r.chain_values.gain());
+  if (r.chain)
+    g = linsys::scaled(g, r.chain_values.gain() * boardunits::omega_per_v_factor(r.units, r.chain_values));
   if (r.hold) g = linsys::c2d(g, r.dt_s, linsys::C2dMethod::zoh, 0.0, r.raw_where);
   r.setup.plant = g;
   r.setup.dt_s = r.dt_s;
@@ -356,8 +417,9 @@ void write_margins(Ini& ini, const std::string& section, const std::vector<Tf>& 
 void echo_plant(Ini& ini, const Resolved& r) {
   ini.set("plant", "tf", linsys::tf_text(r.raw), r.raw_where);
   ini.set("plant", "domain", linsys::var_name(r.raw.domain));
-  ini.set("plant", "maps", r.chain ? k_maps_physical : k_maps_loop,
-          r.chain ? "rad/s per V; [loop] is the chain around it" : "encoder counts per sample per duty count");
+  ini.set("plant", "maps", boardunits::units_text(r.units),
+          r.chain ? boardunits::units_words(r.units) + "; [loop] is the chain around it"
+                  : boardunits::units_words(r.units));
   if (r.raw.discrete()) ini.set("plant", "dt_s", r.raw.dt_s);
   ini.set("plant", "hold", r.hold ? "zoh" : "none", r.hold ? "the PWM holds the duty over each period" : "");
   if (r.chain) {
@@ -699,7 +761,8 @@ void write_c2d(const Options& o, const Resolved& r, std::ostream& out) {
       o.method.empty() ? linsys::C2dMethod::zoh : linsys::parse_method(o.method, "--method");
   const double prewarp = std::isnan(o.prewarp_rad_s) ? 0.0 : o.prewarp_rad_s;
   Tf g = r.raw;
-  if (r.chain) g = linsys::scaled(g, r.chain_values.gain());
+  if (r.chain)
+    g = linsys::scaled(g, r.chain_values.gain() * boardunits::omega_per_v_factor(r.units, r.chain_values));
   const Tf h = linsys::c2d(g, r.dt_s, method, prewarp, r.raw_where);
   Ini ini;
   ini.set("plant", "tf", linsys::tf_text(h), fmt::format("{} of {}", linsys::method_name(method), linsys::tf_text(g)));

@@ -21,6 +21,7 @@ struct Options {
   std::string num;
   std::string den;
   std::string domain;  ///< for --num/--den: "s" (default) or "z"
+  std::string plant_units;  ///< what --plant maps (rpm/V, ..., loop): boardunits/plant_units.hpp
   double delay_s = NAN;
   double dt_s = NAN;
   std::string method;  ///< controller discretisation (tustin), c2d's method (zoh)

@@ -1,7 +1,7 @@
 // mcg-fit friction, tf and model: reading the files, calling the fits, writing INI or CSV.
 #include "fit/run.hpp"
 
-#include "boardunits/chain.hpp"  // k_maps_physical
+#include "boardunits/plant_units.hpp"
 #include "common/error.hpp"
 #include "common/parallel.hpp"
 #include "common/tool.hpp"
@@ -232,12 +232,43 @@ void check_phase_residual(const FrequencyResponse& fr, const TfRunOptions& optio
 
 }  // namespace
 
-void run_tf(const TfRunOptions& options, std::ostream& out, std::ostream& err) {
-  const FrequencyResponse fr = read_frequency_response(table::read_path(options.file));
-  const TfFit fit = fit_tf(fr, options.fit);
-  check_phase_residual(fr, options, fit, err);
+namespace {
+
+/// The fit's `[plant] maps` and the words for its comment: the response's units (its metadata or
+/// --units), canonical when they are a plant's; refused when neither says.
+std::pair<std::string, std::string> fitted_units(const FrequencyResponse& fr, const std::string& given) {
+  const auto known = [](const std::string& text) { return boardunits::parse_plant_units(text); };
+  const auto canonical = [&](const std::string& text) {
+    const auto u = known(text);
+    return u ? boardunits::units_text(*u) : text;
+  };
+  if (!given.empty() && !known(given) && given.find("->") == std::string::npos) {
+    fail(
+        "--units: {} are not units of a response: give IN -> OUT (v -> rpm, duty -> rpm, v -> omega) or "
+        "rpm/V, "
+        "rad/s/V, rpm/duty",
+        quote(given));
+  }
+  if (!given.empty() && !fr.units.empty() && canonical(given) != canonical(fr.units)) {
+    fail("--units: {} disagrees with the response's {} ({})", quote(given), quote(fr.units), fr.source);
+  }
+  const std::string text = given.empty() ? fr.units : given;
+  if (text.empty()) {
+    fail(
+        "{}: the response does not say its units (no '# response: IN -> OUT' line, as mcg-sweep bode writes "
+        "it): "
+        "give --units, e.g. --units 'v -> rpm'",
+        fr.source);
+  }
+  if (const auto u = known(text)) return {boardunits::units_text(*u), boardunits::units_words(*u)};
+  return {text, "units mcg-design does not convert"};
+}
+
+/// [plant] and the Bode form's numbers of [fit.tf], the same for both kinds of data.
+config::Ini plant_ini(const TfFit& fit, const TfFitOptions& o, const std::string& maps,
+                      const std::string& words) {
   config::Ini ini;
-  ini.set("plant", "tf", format_factored(fit), "omega/v, rad/s per V");
+  ini.set("plant", "tf", format_factored(fit), fmt::format("{}, {}", maps, words));
   std::string num;
   std::string den;
   for (double c : fit.tf.num) num += (num.empty() ? "" : " ") + config::format_number(c);
@@ -245,12 +276,15 @@ void run_tf(const TfRunOptions& options, std::ostream& out, std::ostream& err) {
   ini.set("plant", "num", num, "descending powers of s");
   ini.set("plant", "den", den, "descending powers of s");
   ini.set("plant", "domain", "s");
-  ini.set("plant", "maps", boardunits::k_maps_physical, "rad/s per V: mcg-design applies the loop chain");
-  if (options.fit.fit_delay) ini.set("plant", "delay_s", num6(fit.delay_s), se_comment(fit.delay_se, "s"));
+  const bool physical = maps == boardunits::units_text({});
+  ini.set("plant", "maps", maps,
+          fmt::format("{}: mcg-design {}applies the loop chain", words,
+                      physical ? "" : "converts it to rad/s per V and "));
+  if (o.fit_delay) ini.set("plant", "delay_s", num6(fit.delay_s), se_comment(fit.delay_se, "s"));
   const std::string sec = "fit.tf";
   ini.set(sec, "source", fmt::format("mcg-fit {}", k_version));
-  ini.set(sec, "poles", static_cast<double>(options.fit.poles));
-  ini.set(sec, "zeros", static_cast<double>(options.fit.zeros));
+  ini.set(sec, "poles", static_cast<double>(o.poles));
+  ini.set(sec, "zeros", static_cast<double>(o.zeros));
   ini.set(sec, "gain", num6(fit.gain), se_comment(fit.gain_se, ""));
   const auto corners = [&](const std::vector<Factor>& list, const char* what) {
     for (std::size_t k = 0; k < list.size(); ++k) {
@@ -264,6 +298,70 @@ void run_tf(const TfRunOptions& options, std::ostream& out, std::ostream& err) {
   };
   corners(fit.poles, "pole");
   corners(fit.zeros, "zero");
+  return ini;
+}
+
+/// The time-domain fit of run_tf.
+void run_tf_time(const table::Table& table, const TfRunOptions& options, std::ostream& out,
+                 std::ostream& err) {
+  if (options.band_given) {
+    fail("{}: --f-min, --f-max and --no-coherence apply to a frequency response; this is a time-domain run",
+         table.source);
+  }
+  const std::string in = options.in_column.empty() ? "v" : options.in_column;
+  const std::string out_col = options.out_column.empty()
+                                  ? (table.has("rpm") || !table.has("omega") ? "rpm" : "omega")
+                                  : options.out_column;
+  const TimeSeries run = read_time_series(table, in, out_col);
+  if (!run.skipped_note.empty()) err << "mcg-fit: note: " << run.skipped_note << '\n';
+  FrequencyResponse columns;
+  columns.source = run.source;
+  columns.units = fmt::format("{} -> {}", in, out_col);
+  const auto [maps, words] = fitted_units(columns, options.units);
+  const TimeTfFit fit = fit_tf_time(run, options.fit);
+  std::optional<double> held_out;
+  if (!options.validate.empty()) {
+    const TimeSeries other = read_time_series(table::read_path(options.validate), in, out_col);
+    if (!other.skipped_note.empty()) err << "mcg-fit: note: " << other.skipped_note << '\n';
+    held_out = validation_fit_percent(fit, other);
+  }
+  config::Ini ini = plant_ini(fit.fit, options.fit, maps, words);
+  const std::string sec = "fit.tf";
+  ini.set(sec, "data", fmt::format("time series, output error: {} -> {}", in, out_col));
+  ini.set(sec, "samples", static_cast<double>(fit.fit.points));
+  ini.set(sec, "dt_s", num6(run.dt_s), "s");
+  ini.set(sec, "skipped_rows", static_cast<double>(run.skipped), "leading rows without a measured value");
+  ini.set(sec, "u_ref", num6(fit.u_ref),
+          se_comment(fit.u_ref_se, in + ": the run starts settled at this input"));
+  ini.set(sec, "y0", num6(fit.y0), se_comment(fit.y0_se, out_col + " there"));
+  ini.set(sec, "fit_percent", num6(fit.fit_percent), "100 (1 - |y - y_hat| / |y - mean y|)");
+  ini.set(sec, "rms", num6(fit.rms), out_col + ", y - y_hat");
+  if (held_out) {
+    ini.set(sec, "validate", options.validate);
+    ini.set(sec, "validate_fit_percent", num6(*held_out), "the held-out run, its offset re-estimated");
+  }
+  ini.set(sec, "iterations", static_cast<double>(fit.fit.nls.iterations));
+  ini.write(out);
+}
+
+}  // namespace
+
+void run_tf(const TfRunOptions& options, std::ostream& out, std::ostream& err) {
+  const table::Table table = table::read_path(options.file);
+  if (!table.has("f_hz") && table.has("t")) {
+    run_tf_time(table, options, out, err);
+    return;
+  }
+  if (!options.in_column.empty() || !options.out_column.empty() || !options.validate.empty()) {
+    fail("{}: --in, --out and --validate apply to a time-domain run; this is a frequency response",
+         table.source);
+  }
+  const FrequencyResponse fr = read_frequency_response(table);
+  const TfFit fit = fit_tf(fr, options.fit);
+  const auto [maps, words] = fitted_units(fr, options.units);
+  check_phase_residual(fr, options, fit, err);
+  config::Ini ini = plant_ini(fit, options.fit, maps, words);
+  const std::string sec = "fit.tf";
   ini.set(sec, "points", static_cast<double>(fit.points));
   ini.set(sec, "rms_mag_db", num6(fit.rms_mag_db));
   ini.set(sec, "rms_phase_deg", num6(fit.rms_phase_deg));

@@ -4,6 +4,7 @@
 // band, so that the powers of x stay near 1 and the linear systems are well conditioned:
 //   G = B(x) / A(x),  B = sum_{i<=m} b_i x^i,  A = x^n + sum_{i<n} a_i x^i  (monic).
 #include "fit/tf.hpp"
+#include "fit/tf_core.hpp"
 
 #include "common/error.hpp"
 
@@ -18,15 +19,11 @@
 
 namespace mcg::fit {
 
-namespace {
-
 using Complex = std::complex<double>;
 
-struct Point {
-  double w_rad_s;
-  Complex h;
-  double weight;
-};
+namespace tf_core {
+
+namespace {
 
 Complex polyval_ascending(const Eigen::VectorXd& c, Eigen::Index count, Eigen::Index offset, Complex x) {
   Complex y = 0.0;
@@ -34,51 +31,21 @@ Complex polyval_ascending(const Eigen::VectorXd& c, Eigen::Index count, Eigen::I
   return y;
 }
 
-struct Scaled {
-  int m;
-  int n;
-  double w0;
+}  // namespace
 
-  Complex numerator(const Eigen::VectorXd& theta, Complex x) const { return polyval_ascending(theta, m + 1, 0, x); }
-  Complex denominator(const Eigen::VectorXd& theta, Complex x) const {
-    return polyval_ascending(theta, n, m + 1, x) + std::pow(x, n);
-  }
-  Complex model(const Eigen::VectorXd& theta, double w) const {
-    const Complex x(0.0, w / w0);
-    return numerator(theta, x) / denominator(theta, x);
-  }
-};
-
-/// One linearised least-squares solve: min sum_k |(B - H A) sqrt(w_k) / |A_prev||^2.
-Eigen::VectorXd linear_step(const Scaled& sc, const std::vector<Point>& pts, const Eigen::VectorXd* previous) {
-  const Eigen::Index unknowns = sc.m + 1 + sc.n;
-  const auto rows = static_cast<Eigen::Index>(2 * pts.size());
-  Eigen::MatrixXd a(rows, unknowns);
-  Eigen::VectorXd b(rows);
-  for (std::size_t k = 0; k < pts.size(); ++k) {
-    const Complex x(0.0, pts[k].w_rad_s / sc.w0);
-    double c = std::sqrt(pts[k].weight);
-    if (previous != nullptr) c /= std::abs(sc.denominator(*previous, x));
-    const auto r = static_cast<Eigen::Index>(2 * k);
-    Complex xp = 1.0;
-    for (int i = 0; i <= sc.m; ++i, xp *= x) {
-      a(r, i) = c * xp.real();
-      a(r + 1, i) = c * xp.imag();
-    }
-    xp = 1.0;
-    for (int i = 0; i < sc.n; ++i, xp *= x) {
-      const Complex term = -pts[k].h * xp;
-      a(r, sc.m + 1 + i) = c * term.real();
-      a(r + 1, sc.m + 1 + i) = c * term.imag();
-    }
-    const Complex rhs = pts[k].h * std::pow(x, sc.n);
-    b[r] = c * rhs.real();
-    b[r + 1] = c * rhs.imag();
-  }
-  return a.colPivHouseholderQr().solve(b);
+Complex Scaled::numerator(const Eigen::VectorXd& theta, Complex x) const {
+  return polyval_ascending(theta, m + 1, 0, x);
 }
 
-/// s-domain coefficients (descending) from the scaled ones, normalised as RationalTf says.
+Complex Scaled::denominator(const Eigen::VectorXd& theta, Complex x) const {
+  return polyval_ascending(theta, n, m + 1, x) + std::pow(x, n);
+}
+
+Complex Scaled::model(const Eigen::VectorXd& theta, double w) const {
+  const Complex x(0.0, w / w0);
+  return numerator(theta, x) / denominator(theta, x);
+}
+
 RationalTf to_s_domain(const Scaled& sc, const Eigen::VectorXd& theta) {
   RationalTf tf;
   for (int i = sc.m; i >= 0; --i) tf.num.push_back(theta[i] / std::pow(sc.w0, i));
@@ -116,8 +83,6 @@ std::vector<Factor> factors_of(const std::vector<double>& coefficients) {
   return out;
 }
 
-/// The quantities reported with standard errors: gain, then per pole and zero factor its
-/// corner and (for pairs) its damping.
 Eigen::VectorXd reported(const Scaled& sc, const Eigen::VectorXd& theta) {
   const RationalTf tf = to_s_domain(sc, theta);
   std::vector<double> q{lowest_nonzero(tf.num) / lowest_nonzero(tf.den)};
@@ -128,6 +93,96 @@ Eigen::VectorXd reported(const Scaled& sc, const Eigen::VectorXd& theta) {
     }
   }
   return Eigen::Map<Eigen::VectorXd>(q.data(), static_cast<Eigen::Index>(q.size()));
+}
+
+void complete(const Scaled& sc, Eigen::Index n_theta, bool fit_delay, double largest, TfFit& fit) {
+  const Eigen::VectorXd best = fit.nls.values.head(n_theta);
+  if (fit_delay) {
+    fit.delay_s = fit.nls.values[n_theta];
+    fit.delay_se = fit.nls.std_errors[n_theta];
+  }
+  fit.tf = to_s_domain(sc, best);
+  fit.gain = lowest_nonzero(fit.tf.num) / lowest_nonzero(fit.tf.den);
+  fit.poles = factors_of(fit.tf.den);
+  fit.zeros = factors_of(fit.tf.num);
+
+  // Delta method: cov(q) = G cov(theta) G^T with G = dq/dtheta by central differences.
+  const Eigen::VectorXd q0 = reported(sc, best);
+  const Eigen::Index nq = q0.size();
+  const Eigen::Index nt = best.size();
+  Eigen::MatrixXd g(nq, nt);
+  bool same_shape = true;
+  for (Eigen::Index j = 0; j < nt; ++j) {
+    const double h = 1e-6 * std::max(std::abs(best[j]), 1e-8 * largest);
+    Eigen::VectorXd tp = best;
+    Eigen::VectorXd tm = best;
+    tp[j] += h;
+    tm[j] -= h;
+    const Eigen::VectorXd qp = reported(sc, tp);
+    const Eigen::VectorXd qm = reported(sc, tm);
+    if (qp.size() != nq || qm.size() != nq) {
+      same_shape = false;
+      break;
+    }
+    g.col(j) = (qp - qm) / (2.0 * h);
+  }
+  Eigen::VectorXd q_se = Eigen::VectorXd::Constant(nq, std::numeric_limits<double>::quiet_NaN());
+  if (same_shape && fit.nls.std_errors.head(nt).allFinite()) {
+    const Eigen::VectorXd se = fit.nls.std_errors.head(nt);
+    const Eigen::MatrixXd cov = se.asDiagonal() * fit.nls.correlation.topLeftCorner(nt, nt) * se.asDiagonal();
+    q_se = (g * cov * g.transpose()).diagonal().cwiseSqrt();
+  }
+  Eigen::Index qi = 0;
+  fit.gain_se = q_se[qi++];
+  for (auto* list : {&fit.poles, &fit.zeros}) {
+    for (Factor& f : *list) {
+      f.corner_se = q_se[qi++];
+      if (f.complex_pair) f.zeta_se = q_se[qi++];
+    }
+  }
+}
+
+}  // namespace tf_core
+
+namespace {
+
+using tf_core::Scaled;
+using tf_core::to_s_domain;
+
+struct Point {
+  double w_rad_s;
+  Complex h;
+  double weight;
+};
+
+/// One linearised least-squares solve: min sum_k |(B - H A) sqrt(w_k) / |A_prev||^2.
+Eigen::VectorXd linear_step(const Scaled& sc, const std::vector<Point>& pts,
+                            const Eigen::VectorXd* previous) {
+  const Eigen::Index unknowns = sc.m + 1 + sc.n;
+  const auto rows = static_cast<Eigen::Index>(2 * pts.size());
+  Eigen::MatrixXd a(rows, unknowns);
+  Eigen::VectorXd b(rows);
+  for (std::size_t k = 0; k < pts.size(); ++k) {
+    const Complex x(0.0, pts[k].w_rad_s / sc.w0);
+    double c = std::sqrt(pts[k].weight);
+    if (previous != nullptr) c /= std::abs(sc.denominator(*previous, x));
+    const auto r = static_cast<Eigen::Index>(2 * k);
+    Complex xp = 1.0;
+    for (int i = 0; i <= sc.m; ++i, xp *= x) {
+      a(r, i) = c * xp.real();
+      a(r + 1, i) = c * xp.imag();
+    }
+    xp = 1.0;
+    for (int i = 0; i < sc.n; ++i, xp *= x) {
+      const Complex term = -pts[k].h * xp;
+      a(r, sc.m + 1 + i) = c * term.real();
+      a(r + 1, sc.m + 1 + i) = c * term.imag();
+    }
+    const Complex rhs = pts[k].h * std::pow(x, sc.n);
+    b[r] = c * rhs.real();
+    b[r + 1] = c * rhs.imag();
+  }
+  return a.colPivHouseholderQr().solve(b);
 }
 
 std::string num_text(double x, int digits) { return fmt::format("{:.{}g}", x, digits); }
@@ -190,6 +245,7 @@ FrequencyResponse read_frequency_response(const table::Table& table) {
   fr.f_hz = table.col("f_hz");
   fr.mag_db = table.col("mag_db");
   fr.phase_deg = table.col("phase_deg");
+  fr.units = table.meta.get("response").value_or("");
   for (std::size_t k = 0; k < fr.f_hz.size(); ++k) {
     if (!(fr.f_hz[k] > 0.0)) fail("{}:{}: column 'f_hz': frequency must be positive", table.source, table.line_of(k));
   }
@@ -291,14 +347,7 @@ TfFit fit_tf(const FrequencyResponse& response, const TfFitOptions& options) {
   if (!fit.nls.converged) fail("{}: the transfer-function fit did not converge: {}", response.source, fit.nls.reason);
 
   const Eigen::VectorXd best = fit.nls.values.head(n_theta);
-  if (options.fit_delay) {
-    fit.delay_s = fit.nls.values[n_theta];
-    fit.delay_se = fit.nls.std_errors[n_theta];
-  }
-  fit.tf = to_s_domain(sc, best);
-  fit.gain = lowest_nonzero(fit.tf.num) / lowest_nonzero(fit.tf.den);
-  fit.poles = factors_of(fit.tf.den);
-  fit.zeros = factors_of(fit.tf.num);
+  tf_core::complete(sc, n_theta, options.fit_delay, largest, fit);
   fit.points = pts.size();
 
   double sq_mag = 0.0;
@@ -311,40 +360,6 @@ TfFit fit_tf(const FrequencyResponse& response, const TfFitOptions& options) {
   fit.rms_mag_db = std::sqrt(sq_mag / static_cast<double>(pts.size()));
   fit.rms_phase_deg = std::sqrt(sq_phase / static_cast<double>(pts.size()));
 
-  // Delta method: cov(q) = G cov(theta) G^T with G = dq/dtheta by central differences.
-  const Eigen::VectorXd q0 = reported(sc, best);
-  const Eigen::Index nq = q0.size();
-  const Eigen::Index nt = best.size();
-  Eigen::MatrixXd g(nq, nt);
-  bool same_shape = true;
-  for (Eigen::Index j = 0; j < nt; ++j) {
-    const double h = 1e-6 * std::max(std::abs(best[j]), 1e-8 * largest);
-    Eigen::VectorXd tp = best;
-    Eigen::VectorXd tm = best;
-    tp[j] += h;
-    tm[j] -= h;
-    const Eigen::VectorXd qp = reported(sc, tp);
-    const Eigen::VectorXd qm = reported(sc, tm);
-    if (qp.size() != nq || qm.size() != nq) {
-      same_shape = false;
-      break;
-    }
-    g.col(j) = (qp - qm) / (2.0 * h);
-  }
-  Eigen::VectorXd q_se = Eigen::VectorXd::Constant(nq, std::numeric_limits<double>::quiet_NaN());
-  if (same_shape && fit.nls.std_errors.head(nt).allFinite()) {
-    const Eigen::VectorXd se = fit.nls.std_errors.head(nt);
-    const Eigen::MatrixXd cov = se.asDiagonal() * fit.nls.correlation.topLeftCorner(nt, nt) * se.asDiagonal();
-    q_se = (g * cov * g.transpose()).diagonal().cwiseSqrt();
-  }
-  Eigen::Index qi = 0;
-  fit.gain_se = q_se[qi++];
-  for (auto* list : {&fit.poles, &fit.zeros}) {
-    for (Factor& f : *list) {
-      f.corner_se = q_se[qi++];
-      if (f.complex_pair) f.zeta_se = q_se[qi++];
-    }
-  }
   return fit;
 }
 

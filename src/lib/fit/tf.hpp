@@ -5,6 +5,7 @@
 #include "table/table.hpp"
 
 #include <complex>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,9 @@ struct FrequencyResponse {
   std::vector<double> mag_db;
   std::vector<double> phase_deg;
   std::vector<double> coherence;  ///< empty when the table has none
+  /// What the response maps, from its `# response: IN -> OUT` metadata (mcg-sweep bode's);
+  /// empty when the table does not say.
+  std::string units;
 };
 
 /// Reads and checks the columns; throws naming the file and line of a bad value.
@@ -87,6 +91,53 @@ struct TfFit {
 /// (a grid over 0..pi/w_max) and the best start is refined jointly with the delay. Throws mcg::Error on too few points, zeros > poles, or a fit that does not
 /// converge.
 TfFit fit_tf(const FrequencyResponse& response, const TfFitOptions& options);
+
+/// An input/output run for the time-domain fit, uniformly sampled: u[k] acts over
+/// [k dt, (k+1) dt) (mcg-csv(5)'s timing), y[k] is sampled at k dt.
+struct TimeSeries {
+  std::string source;
+  std::string in;   ///< the input column's name
+  std::string out;  ///< the output column's name
+  double dt_s = 0.0;
+  std::vector<double> u;
+  std::vector<double> y;
+  std::size_t skipped = 0;   ///< leading rows without a measured value, dropped
+  std::string skipped_note;  ///< what was skipped, one line; empty when nothing was
+};
+
+/// Takes columns `in` and `out` of a run (a board capture or mcg-sim's output, unedited): the
+/// leading rows in which either is unmeasured are skipped (said in skipped_note), an unmeasured
+/// or infinite value elsewhere, uneven sampling, a run too short or an input that never changes
+/// (the run excites nothing) throws, naming the file.
+TimeSeries read_time_series(const table::Table& table, const std::string& in, const std::string& out);
+
+/// y[k] of G(s) e^(-s delay_s) driven through a zero-order hold by u, from rest: exact at the
+/// sampling instants (the delay's fraction of a sample splits the held input between two steps).
+std::vector<double> simulate_tf(const RationalTf& g, double delay_s, double dt_s, std::span<const double> u);
+
+/// The time-domain fit: the transfer function, the operating point, how well it explains the run.
+/// The model is output error: y[k] = y0 + (G e^(-s delay) (u - u_ref))(k dt) + e[k], e white,
+/// the run starting in the steady state of the input u_ref (u[0] for a run begun settled; for one
+/// begun at rest, the input that friction holds back), y0 the output there: an affine model, whose
+/// offset y0 - K u_ref absorbs the friction's.
+struct TimeTfFit {
+  TfFit fit;           ///< tf, Bode form and standard errors; points = samples used
+  double u_ref = 0.0;  ///< the input the run starts settled at
+  double u_ref_se = 0.0;
+  double y0 = 0.0;  ///< the output there
+  double y0_se = 0.0;
+  double fit_percent = 0.0;  ///< 100 (1 - |y - y_hat| / |y - mean y|), as MATLAB's compare
+  double rms = 0.0;          ///< RMS of y - y_hat, in the output's unit
+};
+
+/// Fits G(s) (options.poles, options.zeros, options.fit_delay; the band options do not apply)
+/// to the run by output error: an equation-error (ARX) fit over trial delays gives the start,
+/// its poles mapped to s by log(z)/dt, then Levenberg-Marquardt on y - y_hat.
+TimeTfFit fit_tf_time(const TimeSeries& run, const TfFitOptions& options);
+
+/// The fit % of `fit` on another run (held out): the model as fitted, the run's own starting
+/// point (y0 and u_ref) re-estimated by linear least squares.
+double validation_fit_percent(const TimeTfFit& fit, const TimeSeries& run);
 
 /// The Bode (factored) form in the syntax mcg-design reads, e.g.
 /// "16.557/((s/65+1)*(s/950+1))", numbers with `digits` significant digits.

@@ -285,7 +285,12 @@ void generate(Generator generator, const GeneratorOptions& o, std::ostream& out)
 }
 
 void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
-  const table::Table tbl = table::read_path(o.input);
+  table::Table tbl = table::read_path(o.input);
+  // A capture starts with rows the speed estimator has not filled yet: skipped, and said so.
+  if (const auto skipped = table::leading_unmeasured(tbl, {o.in_column, o.out_column}); skipped.rows > 0) {
+    warn << "mcg-sweep: note: " << table::skipped_note(tbl, skipped) << '\n';
+    tbl = table::drop_leading(tbl, skipped.rows);
+  }
   const std::vector<double>& t_in = tbl.col("t");
   const std::vector<double>& x_in = tbl.col(o.in_column);
   const std::vector<double>& y_in = tbl.col(o.out_column);

@@ -367,6 +367,53 @@ void require_finite(const Table& table, std::string_view name) {
   }
 }
 
+LeadingUnmeasured leading_unmeasured(const Table& table, const std::vector<std::string>& names) {
+  LeadingUnmeasured out;
+  std::vector<const std::vector<double>*> cols;
+  for (const auto& name : names) cols.push_back(&table.col(name));
+  const auto unmeasured = [&](std::size_t r) {
+    return std::any_of(cols.begin(), cols.end(), [r](const auto* c) { return std::isnan((*c)[r]); });
+  };
+  while (out.rows < table.rows() && unmeasured(out.rows)) ++out.rows;
+  for (std::size_t k = 0; k < names.size() && out.rows > 0; ++k) {
+    const auto& c = *cols[k];
+    if (std::any_of(c.begin(), c.begin() + static_cast<std::ptrdiff_t>(out.rows),
+                    [](double x) { return std::isnan(x); })) {
+      out.columns.push_back(names[k]);
+    }
+  }
+  if (out.rows > 0 && out.rows == table.rows()) {
+    std::string which;
+    for (const auto& c : out.columns) which += (which.empty() ? "" : ", ") + quote(c);
+    fail("{}: no row has {} measured", table.source, which);
+  }
+  return out;
+}
+
+Table drop_leading(const Table& table, std::size_t first) {
+  MCG_DEMAND(first <= table.rows());
+  Table out;
+  out.source = table.source;
+  out.meta = table.meta;
+  out.names = table.names;
+  out.first_line = table.first_line + first;
+  for (const auto& c : table.columns)
+    out.columns.emplace_back(c.begin() + static_cast<std::ptrdiff_t>(first), c.end());
+  return out;
+}
+
+std::string skipped_note(const Table& table, const LeadingUnmeasured& skipped) {
+  std::string which;
+  for (const auto& c : skipped.columns) which += (which.empty() ? "" : ", ") + quote(c);
+  const bool speed = std::any_of(skipped.columns.begin(), skipped.columns.end(),
+                                 [](const std::string& c) { return c.rfind("rpm", 0) == 0 || c == "omega"; });
+  return fmt::format("{}: skipped the first {} row{} (line{} {}{}): {} not measured yet{}", table.source,
+                     skipped.rows, skipped.rows == 1 ? "" : "s", skipped.rows == 1 ? "" : "s",
+                     table.line_of(0),
+                     skipped.rows == 1 ? std::string() : fmt::format("-{}", table.line_of(skipped.rows - 1)),
+                     which, speed ? " (the speed estimator's warm-up)" : "");
+}
+
 void require_increasing(const Table& table, std::string_view name) {
   require_finite(table, name);
   const auto& v = table.col(name);

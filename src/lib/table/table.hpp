@@ -117,6 +117,20 @@ void require_increasing(const Table& table, std::string_view name);
 /// Throws unless every value of column `name` is finite, naming the first bad line.
 void require_finite(const Table& table, std::string_view name);
 
+/// The rows at the start of the table in which one of `names` is unmeasured (NaN), such as a
+/// capture's first rows while the board's speed estimator fills its window, and which of the
+/// columns were; a table with no measured row throws, naming the columns.
+struct LeadingUnmeasured {
+  std::size_t rows = 0;
+  std::vector<std::string> columns;
+};
+LeadingUnmeasured leading_unmeasured(const Table& table, const std::vector<std::string>& names);
+/// The table from row `first` on; its lines keep their numbers in messages.
+Table drop_leading(const Table& table, std::size_t first);
+/// One line for a note on what was skipped: "<src>: skipped the first 5 rows (lines 9-13): 'rpm' not
+/// measured yet (the speed estimator's warm-up)".
+std::string skipped_note(const Table& table, const LeadingUnmeasured& skipped);
+
 /// Buffered writer. Numbers use `digits` significant digits (default 10), inf/-inf/nan
 /// as the contract spells them. Writes in large blocks; a closed pipe throws
 /// mcg::BrokenPipe, any other failure mcg::Error.
