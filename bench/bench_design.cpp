@@ -35,6 +35,7 @@ std::vector<Case> cases() {
     o.pm_deg = 50.0;
     o.zero_rad_s = 500.0;
     o.dt_s = 0.001;
+    o.plant_units = "loop";
     out.push_back({"pi/report-zero-500-tustin-fixed-point", o});
   }
   {
@@ -54,6 +55,7 @@ std::vector<Case> cases() {
     o.pm_deg = 50.0;
     o.wc_rad_s = 600.0;
     o.dt_s = 0.001;
+    o.plant_units = "loop";
     out.push_back({"lead/third-order-tustin", o});
   }
   {
