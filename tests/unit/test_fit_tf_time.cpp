@@ -58,6 +58,42 @@ TEST(FitTfTime, SimulationIsExactAtTheSamples) {
   }
 }
 
+// A speed counted over a window of 4 samples is the lag's response averaged over the window:
+// (1/W) int_{t-W}^{t} K (1 - e^(-p s)) ds, the integral starting at 0 before the step.
+TEST(FitTfTime, WindowedSimulationIsTheMeanOverTheWindow) {
+  const RationalTf g{{3.0}, {1.0 / 40.0, 1.0}};
+  const double dt = 0.004;
+  const double w = 4 * dt;
+  const std::vector<double> y = simulate_tf(g, 0.0, dt, std::vector<double>(50, 1.0), 4);
+  const auto integral = [](double t) {
+    return t <= 0.0 ? 0.0 : 3.0 * (t - (1.0 - std::exp(-40.0 * t)) / 40.0);
+  };
+  for (std::size_t k = 0; k < y.size(); ++k) {
+    const double t = static_cast<double>(k) * dt;
+    EXPECT_NEAR(y[k], (integral(t) - integral(t - w)) / w, 1e-12) << k;
+  }
+}
+
+// The board's speed (counts over 16 ms, a row per 4 ms) of the report's plant: fitted through the
+// window, the plant itself comes back, not the window's lag.
+TEST(FitTfTime, RoundTripThroughTheEstimatorWindow) {
+  const double dt = 0.004;
+  const std::vector<double> u = prbs(1000, 9.0, 3.0, 3, 5);
+  std::vector<double> du(u.size());
+  for (std::size_t k = 0; k < u.size(); ++k) du[k] = u[k] - 9.0;
+  std::vector<double> y = simulate_tf(report_plant(), 0.0, dt, du, 4);
+  for (double& v : y) v += 1400.0;
+  table::Table t = run_table(u, y, dt);
+  t.meta.set("rpm_estimator", "counts over 0.016 s window, 2048 counts/rev");
+  const TimeSeries run = read_time_series(t, "v", "rpm");
+  EXPECT_EQ(run.window_samples, 4U);
+  const TimeTfFit fit = fit_tf_time(run, {});
+  ASSERT_EQ(fit.fit.poles.size(), 2U);
+  EXPECT_NEAR(fit.fit.gain, 16.557, 1e-5);
+  EXPECT_NEAR(fit.fit.poles[0].corner_rad_s, 65.0, 1e-4);
+  EXPECT_NEAR(fit.fit.poles[1].corner_rad_s, 950.0, 0.5);
+}
+
 // The report's plant with a 1.5 ms delay, a PRBS about 9 V from the steady state at 9 V: the fit
 // gives back the gain, both poles and the delay, and the starting point.
 TEST(FitTfTime, RoundTripExactPrbs) {

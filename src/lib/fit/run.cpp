@@ -331,6 +331,10 @@ void run_tf_time(const table::Table& table, const TfRunOptions& options, std::os
   ini.set(sec, "samples", static_cast<double>(fit.fit.points));
   ini.set(sec, "dt_s", num6(run.dt_s), "s");
   ini.set(sec, "skipped_rows", static_cast<double>(run.skipped), "leading rows without a measured value");
+  if (run.window_samples > 0) {
+    ini.set(sec, "output_window_s", num6(static_cast<double>(run.window_samples) * run.dt_s),
+            "the model's output averaged over the rpm_estimator's window");
+  }
   ini.set(sec, "u_ref", num6(fit.u_ref),
           se_comment(fit.u_ref_se, in + ": the run starts settled at this input"));
   ini.set(sec, "y0", num6(fit.y0), se_comment(fit.y0_se, out_col + " there"));

@@ -103,6 +103,9 @@ struct TimeSeries {
   std::vector<double> y;
   std::size_t skipped = 0;   ///< leading rows without a measured value, dropped
   std::string skipped_note;  ///< what was skipped, one line; empty when nothing was
+  /// y is a speed from counts over this many samples (`# rpm_estimator:`, a whole number of
+  /// samples): the model is seen through that window; 0: y is the output itself.
+  std::size_t window_samples = 0;
 };
 
 /// Takes columns `in` and `out` of a run (a board capture or mcg-sim's output, unedited): the
@@ -113,7 +116,10 @@ TimeSeries read_time_series(const table::Table& table, const std::string& in, co
 
 /// y[k] of G(s) e^(-s delay_s) driven through a zero-order hold by u, from rest: exact at the
 /// sampling instants (the delay's fraction of a sample splits the held input between two steps).
-std::vector<double> simulate_tf(const RationalTf& g, double delay_s, double dt_s, std::span<const double> u);
+/// With window_samples > 0, y[k] is the output's mean over the last window_samples periods (a
+/// speed from encoder counts over a window), exactly too.
+std::vector<double> simulate_tf(const RationalTf& g, double delay_s, double dt_s, std::span<const double> u,
+                                std::size_t window_samples = 0);
 
 /// The time-domain fit: the transfer function, the operating point, how well it explains the run.
 /// The model is output error: y[k] = y0 + (G e^(-s delay) (u - u_ref))(k dt) + e[k], e white,

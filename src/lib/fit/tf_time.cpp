@@ -11,6 +11,7 @@
 #include "common/demand.hpp"
 #include "common/error.hpp"
 #include "common/quote.hpp"
+#include "measurement/measurement.hpp"
 #include "signal/spectrum.hpp"
 
 #include <Eigen/QR>
@@ -51,19 +52,27 @@ ScaledTf from_theta(const Scaled& sc, const Eigen::VectorXd& theta) {
   return g;
 }
 
-/// The exact sampled output of g e^(-s delay) for the held input u (deviations, zero before k = 0).
-std::vector<double> simulate_scaled(const ScaledTf& g, double delay_s, double dt_s,
-                                    std::span<const double> u) {
-  const auto n = static_cast<Eigen::Index>(g.alpha.size());
+/// The exact sampled output of g e^(-s delay) for the held input u (deviations, zero before k = 0);
+/// with window > 0, its mean over the last `window` periods, as a speed from encoder counts over a
+/// window is: the output's integral is a state, y[k] = (int[k] - int[k - window]) / (window T).
+std::vector<double> simulate_scaled(const ScaledTf& g, double delay_s, double dt_s, std::span<const double> u,
+                                    std::size_t window) {
+  const auto order = static_cast<Eigen::Index>(g.alpha.size());
+  const Eigen::Index n = order + (window > 0 ? 1 : 0);
   const double d = g.beta[g.alpha.size()];
   Eigen::MatrixXd aug = Eigen::MatrixXd::Zero(n + 1, n + 1);
-  Eigen::RowVectorXd c(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    if (i + 1 < n) aug(i, i + 1) = g.w0;
-    aug(n - 1, i) = -g.alpha[static_cast<std::size_t>(i)] * g.w0;
+  Eigen::RowVectorXd c = Eigen::RowVectorXd::Zero(n);
+  for (Eigen::Index i = 0; i < order; ++i) {
+    if (i + 1 < order) aug(i, i + 1) = g.w0;
+    aug(order - 1, i) = -g.alpha[static_cast<std::size_t>(i)] * g.w0;
     c[i] = g.beta[static_cast<std::size_t>(i)] - d * g.alpha[static_cast<std::size_t>(i)];
   }
-  aug(n - 1, n) = g.w0;
+  aug(order - 1, n) = g.w0;
+  if (window > 0) {
+    // d int/dt = c x + d u.
+    aug.block(order, 0, 1, order) = c.head(order);
+    aug(order, n) = d;
+  }
   const auto whole = static_cast<std::ptrdiff_t>(std::floor(delay_s / dt_s + 1e-9));
   double eps = delay_s - static_cast<double>(whole) * dt_s;
   if (eps < 1e-9 * dt_s) eps = 0.0;
@@ -79,12 +88,19 @@ std::vector<double> simulate_scaled(const ScaledTf& g, double delay_s, double dt
   }
   const auto input = [&](std::ptrdiff_t j) { return j < 0 ? 0.0 : u[static_cast<std::size_t>(j)]; };
   std::vector<double> y(u.size());
+  std::vector<double> integral(window > 0 ? u.size() : 0);
+  const double window_s = static_cast<double>(window) * dt_s;
   Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
   for (std::size_t k = 0; k < u.size(); ++k) {
     const auto now = static_cast<std::ptrdiff_t>(k) - whole;
     const double held_before = input(now - 1);
     const double held = input(now);
-    y[k] = c.dot(x) + d * (eps > 0.0 ? held_before : held);
+    if (window > 0) {
+      integral[k] = x[order];
+      y[k] = (integral[k] - (k >= window ? integral[k - window] : 0.0)) / window_s;
+    } else {
+      y[k] = c.dot(x) + d * (eps > 0.0 ? held_before : held);
+    }
     x = phi * x + gamma_a * held_before + gamma_b * held;
   }
   return y;
@@ -230,14 +246,25 @@ TimeSeries read_time_series(const table::Table& table, const std::string& in, co
   }
   ts.u = rest.col(in);
   ts.y = rest.col(out);
+  // A speed counted over a window of whole samples is modelled through that window (mcg-csv(5):
+  // a tool comparing a model with a measured rpm applies the same estimator).
+  if (const auto text = rest.meta.get("rpm_estimator");
+      text && out.rfind("rpm", 0) == 0 && out != "rpm_true") {
+    const double window_s = measurement::parse_rpm_estimator(*text, rest.source + ": rpm_estimator").window_s;
+    const double samples = std::round(window_s / ts.dt_s);
+    if (samples >= 1.0 && std::abs(samples * ts.dt_s - window_s) <= 1e-6 * window_s) {
+      ts.window_samples = static_cast<std::size_t>(samples);
+    }
+  }
   const auto [lo, hi] = std::minmax_element(ts.u.begin(), ts.u.end());
   if (*lo == *hi) fail("{}: column {} never changes: the run excites nothing to fit", rest.source, quote(in));
   return ts;
 }
 
-std::vector<double> simulate_tf(const RationalTf& g, double delay_s, double dt_s, std::span<const double> u) {
+std::vector<double> simulate_tf(const RationalTf& g, double delay_s, double dt_s, std::span<const double> u,
+                                std::size_t window_samples) {
   MCG_DEMAND(dt_s > 0.0 && delay_s >= 0.0);
-  return simulate_scaled(scaled_of(g, dt_s), delay_s, dt_s, u);
+  return simulate_scaled(scaled_of(g, dt_s), delay_s, dt_s, u, window_samples);
 }
 
 TimeTfFit fit_tf_time(const TimeSeries& run, const TfFitOptions& options) {
@@ -274,12 +301,16 @@ TimeTfFit fit_tf_time(const TimeSeries& run, const TfFitOptions& options) {
   RationalTf start;
   start.den = den_s;
   start.num = {den_s.back()};
-  const double delay0 = static_cast<double>(delay_samples) * run.dt_s;
+  // The equation-error delay includes the window's lag (half of it), which the model has itself.
+  const double delay0 =
+      std::max(0.0, static_cast<double>(delay_samples) - 0.5 * static_cast<double>(run.window_samples)) *
+      run.dt_s;
   // y ~ y0 + K (s_u - u_ref s_1), s_u and s_1 the unit-gain responses to u - u[0] and to 1: linear in
   // (y0, K, K u_ref).
   const std::vector<double> ones(run.u.size(), 1.0);
-  const Eigen::VectorXd c = linear_fit(
-      {simulate_tf(start, delay0, run.dt_s, du), simulate_tf(start, delay0, run.dt_s, ones)}, run.y);
+  const Eigen::VectorXd c = linear_fit({simulate_tf(start, delay0, run.dt_s, du, run.window_samples),
+                                        simulate_tf(start, delay0, run.dt_s, ones, run.window_samples)},
+                                       run.y);
   const double gain = c[1] != 0.0 ? c[1] : 1.0;
   const double y0 = c[0];
   const double u_ref0 = run.u.front() - c[2] / gain;
@@ -309,13 +340,14 @@ TimeTfFit fit_tf_time(const TimeSeries& run, const TfFitOptions& options) {
 
   const ResidualFunction residual = [&](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
     const double delay = options.fit_delay ? std::abs(p[n_theta]) : 0.0;
-    const std::vector<double> y_hat =
-        simulate_scaled(from_theta(sc, p.head(n_theta)), delay, run.dt_s, deviations(run.u, p[i_u_ref]));
+    const std::vector<double> y_hat = simulate_scaled(from_theta(sc, p.head(n_theta)), delay, run.dt_s,
+                                                      deviations(run.u, p[i_u_ref]), run.window_samples);
     for (std::size_t k = 0; k < y_hat.size(); ++k)
       r[static_cast<Eigen::Index>(k)] = p[i_y0] + y_hat[k] - run.y[k];
   };
   NlsOptions nls_options;
   nls_options.central_differences = true;
+  nls_options.max_evaluations = 20000;
   TimeTfFit out;
   out.fit.nls = least_squares(specs, run.y.size(), residual, nls_options);
   if (!out.fit.nls.converged) {
@@ -342,9 +374,10 @@ TimeTfFit fit_tf_time(const TimeSeries& run, const TfFitOptions& options) {
 
 double validation_fit_percent(const TimeTfFit& fit, const TimeSeries& run) {
   // y ~ y0 + s_u - u_ref s_1 with the fitted model: (y0, u_ref) by linear least squares.
-  const std::vector<double> s_u = simulate_tf(fit.fit.tf, fit.fit.delay_s, run.dt_s, run.u);
-  const std::vector<double> s_1 =
-      simulate_tf(fit.fit.tf, fit.fit.delay_s, run.dt_s, std::vector<double>(run.u.size(), 1.0));
+  const std::vector<double> s_u =
+      simulate_tf(fit.fit.tf, fit.fit.delay_s, run.dt_s, run.u, run.window_samples);
+  const std::vector<double> s_1 = simulate_tf(fit.fit.tf, fit.fit.delay_s, run.dt_s,
+                                              std::vector<double>(run.u.size(), 1.0), run.window_samples);
   std::vector<double> rest(run.y.size());
   for (std::size_t k = 0; k < rest.size(); ++k) rest[k] = run.y[k] - s_u[k];
   const Eigen::VectorXd c = linear_fit({s_1}, rest);
