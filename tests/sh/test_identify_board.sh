@@ -4,7 +4,8 @@
 # capture as it is (time domain, v -> rpm, the estimator's warm-up rows skipped with a note).
 # The fit must find the true rig's gain and slow pole (the rig model linearised at the run's
 # speed) where the nominal rig's differ by more than the bounds; the design on it converts rpm
-# per V to the loop's units.
+# per V to the loop's units, and the PI designed on it, run on the board, rises and overshoots
+# within 10 % of what mcg-design predicted.
 # Usage: test_identify_board.sh TOOL_DIR SOURCE_DIR
 tools=$1
 source "$(dirname "$0")/serial_lib.sh"
@@ -36,7 +37,7 @@ sleep 1
 check "duty steps loaded" eval 'S send "$work/steps.csv" > /dev/null'
 check "captured without loss" eval 'S stream --seconds 3.4 --then play > "$work/steps-run.csv" 2> "$work/err" &&
   [ ! -s "$work/err" ]'
-check "mcg-fit tf fits the capture as it is" eval 'mcg-fit tf --poles 2 --delay "$work/steps-run.csv" \
+check "mcg-fit tf fits the capture as it is" eval 'mcg-fit tf --poles 2 "$work/steps-run.csv" \
   > "$work/plant.ini" 2> "$work/fit.err"'
 check "the warm-up rows are skipped with one note" eval '[ "$(wc -l < "$work/fit.err")" = 1 ] &&
   grep -Eq "^mcg-fit: note: .*: skipped the first [0-9]+ rows? \(lines? [0-9-]+\): .rpm. not measured yet" "$work/fit.err"'
@@ -65,4 +66,30 @@ check "the design takes the fitted plant in rpm per V and converts it" eval '
   mcg-design pi --pm 50 --zero 500 --config "$work/plant.ini" --dt 0.001 > "$work/pi.ini" &&
   grep -q "^maps = v -> rpm  ; rpm per V; \[loop\] is the chain around it" "$work/pi.ini" &&
   awk -F" *= *" "/^pm_deg/ { exit !(\$2 + 0 > 49.9 && \$2 + 0 < 50.1) }" "$work/pi.ini"'
+
+# The loop: the PI designed on the identified plant, loaded and stepped from 420 to 520 rpm; its
+# rise time (10-90 %, crossings interpolated between the 4 ms rows) and overshoot against what
+# mcg-design predicts for it on that plant.
+mcg-design step --config "$work/pi.ini" --metrics > "$work/predicted.ini"
+check "the PI loads; the board holds 420 rpm under it" eval 'S load "$work/pi.ini" > /dev/null && S set mode open &&
+  S set duty 0 && S set rpm_cmd 420 && S set mode pi'
+sleep 1.5
+printf 't,stream,mode,rpm_cmd\n0,1,2,420\n1,1,2,520\n' > "$work/step.csv"
+check "closed-loop step loaded" eval 'S send "$work/step.csv" > /dev/null'
+check "closed-loop step captured without loss" eval 'S stream --seconds 2 --then play > "$work/closed.csv" 2> "$work/err" &&
+  [ ! -s "$work/err" ]'
+S set mode open > /dev/null
+read -r rise over <<< "$(grep -v '^#' "$work/closed.csv" | awk -F, 'NR > 1 && $1 >= 1 && $1 < 1.6 && $2 != "nan" {
+  if (!a && $2 >= 430) a = pt + (430 - py) / ($2 - py) * ($1 - pt)
+  if (!b && $2 >= 510) b = pt + (510 - py) / ($2 - py) * ($1 - pt)
+  if ($2 > m) m = $2; pt = $1; py = $2 } END { printf "%.6g %.6g", b - a, m - 520 }')"
+p_rise=$(awk -F' *= *' '/^rise_time_s/ { print $2 + 0 }' "$work/predicted.ini")
+p_over=$(awk -F' *= *' '/^overshoot_pct/ { print $2 + 0 }' "$work/predicted.ini")
+echo "  predicted rise $p_rise s, overshoot $p_over %; the board: $rise s, $over %"
+check "the board's rise time is within 10 % of the prediction" eval '
+  awk -v m="$rise" -v p="$p_rise" "BEGIN { exit !(m / p > 0.9 && m / p < 1.1) }"'
+# The board's rpm moves in counts of 60/(2048 x 0.016 s) = 1.83 rpm, 1.83 % of the 100 rpm step:
+# the overshoot is within 10 % of the prediction or within that one count of it.
+check "the board's overshoot is within 10 % of the prediction (or one count of its speed)" eval '
+  awk -v m="$over" -v p="$p_over" "BEGIN { d = m - p; if (d < 0) d = -d; exit !(d <= 0.1 * p || d <= 1.84) }"'
 finish
