@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "common/range.hpp"
 #include "common/tool.hpp"
 #include "fit/gap.hpp"
 #include "fit/run.hpp"
@@ -17,16 +18,16 @@ int main(int argc, char** argv) {
   fr->add_option("--config", friction.config, "INI parameter set (R, Kt, Ke, J; repeatable, later files win)")
       ->allow_extra_args(false);
   fr->add_option("--order", friction.fit.order, "order of the viscous polynomial")
-      ->check(CLI::Range(1, 3))
+      ->check(mcg::Range(1, 3))
       ->capture_default_str();
   fr->add_option("--settle", friction.fit.settle_s, "time skipped after a jump of v, s")
-      ->check(CLI::Range(0.0, 100.0))
+      ->check(mcg::Range(0.0, 100.0))
       ->capture_default_str();
   fr->add_option("--jump", friction.fit.jump_V, "change of v between rows that counts as a jump, V")
-      ->check(CLI::Range(0.0, 100.0))
+      ->check(mcg::Range(0.0, 100.0))
       ->capture_default_str();
   fr->add_option("--window", friction.fit.window_s, "averaging window, s")
-      ->check(CLI::Range(0.002, 100.0))
+      ->check(mcg::Range(0.002, 100.0))
       ->capture_default_str();
   fr->add_flag("!--no-current", friction.fit.use_current,
                "ignore a measured current (use the voltage balance)");
@@ -47,15 +48,15 @@ int main(int argc, char** argv) {
       "tf",
       "rational transfer function fitted to a frequency response or to a time-domain run (output error)");
   tfc->add_option("--poles", tf.fit.poles, "number of poles")
-      ->check(CLI::Range(1, 12))
+      ->check(mcg::Range(1, 12))
       ->capture_default_str();
   tfc->add_option("--zeros", tf.fit.zeros, "number of zeros")
-      ->check(CLI::Range(0, 12))
+      ->check(mcg::Range(0, 12))
       ->capture_default_str();
   tfc->add_option("--f-min,--fmin", tf.fit.f_min_hz, "ignore frequencies below, Hz")
-      ->check(CLI::Range(0.0, 1e9));
+      ->check(mcg::Range(0.0, 1e9));
   tfc->add_option("--f-max,--fmax", tf.fit.f_max_hz, "ignore frequencies above, Hz")
-      ->check(CLI::Range(0.0, 1e9));
+      ->check(mcg::Range(0.0, 1e9));
   tfc->add_flag("!--no-coherence", tf.fit.use_coherence, "weight all frequencies alike");
   tfc->add_flag("--delay", tf.fit.fit_delay, "fit a transport delay too (written as delay_s)");
   tfc->add_option(
@@ -100,13 +101,13 @@ int main(int argc, char** argv) {
   md->add_flag("--batch", model.batch, "one fit per file, one CSV row each, files in parallel");
   md->add_flag("--list", model.list, "list the parameter names, values, units and bounds, then stop");
   md->add_option("--threads", model.threads, "worker threads (0 = every core)")
-      ->check(CLI::Range(0, 1024))
+      ->check(mcg::Range(0, 1024))
       ->capture_default_str();
   md->add_option("--max-step", model.max_step_s, "integrator step bound during the fit, s")
-      ->check(CLI::Range(1e-6, 1e-3))
+      ->check(mcg::Range(1e-6, 1e-3))
       ->capture_default_str();
   md->add_option("--max-evaluations", model.max_evaluations, "simulation budget of the solver")
-      ->check(CLI::Range(1, 1000000))
+      ->check(mcg::Range(1, 1000000))
       ->capture_default_str();
   md->add_option("files", model.files, "measured runs ('-' = stdin)");
 
@@ -118,7 +119,7 @@ int main(int argc, char** argv) {
   gp->add_option("--validate", gap.validate,
                  "held-out runs they are scored on (none: one --train file is split)");
   gp->add_option("--split", gap.split_fraction, "training share of a single file that is split")
-      ->check(CLI::Range(0.2, 0.8))
+      ->check(mcg::Range(0.2, 0.8))
       ->capture_default_str();
   gp->add_option("--format", gap.format, "csv (summary on stderr) or text")
       ->check(CLI::IsMember({"csv", "text"}))
@@ -144,7 +145,7 @@ int main(int argc, char** argv) {
   gp->add_flag("--progress,!--no-progress", gap.progress,
                "progress lines on stderr (default: when it is a terminal)");
   gp->add_option("--threads", gap.threads, "candidates fitted at once (0 = every core)")
-      ->check(CLI::Range(0, 1024))
+      ->check(mcg::Range(0, 1024))
       ->capture_default_str();
 
   gap.progress = mcg::stderr_is_terminal();

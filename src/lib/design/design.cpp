@@ -416,7 +416,7 @@ bool meets(const Setup& setup, const Tf& cont, const TuneLimits& limits) {
     }
   }
   if (f[0].domain == f[1].domain) {
-    if (!linsys::is_stable(linsys::closed_loop_poles(linsys::series(f[0], f[1])), f[1].domain)) return false;
+    if (!linsys::closed_loop_stable(linsys::series(f[0], f[1]))) return false;
   }
   const linsys::Margins m = linsys::margins(f);
   if (m.phase_margins_deg.empty()) return false;

@@ -15,6 +15,8 @@
 #include "table/table.hpp"
 
 #include <algorithm>
+#include <iterator>
+#include <string_view>
 #include <cmath>
 #include <numbers>
 #include <optional>
@@ -104,10 +106,58 @@ bool is_design_command(const std::string& command) {
 
 constexpr const char* k_units_choices = "rpm/V, rad/s/V, rpm/duty, rad/s/duty or loop";
 
+/// Every key a [plant] section may hold: those resolve() reads and those c2d and the designs
+/// write (so that an output is an input again).
+constexpr std::string_view k_plant_keys[] = {"tf",    "num",       "den",       "domain",     "maps",   "delay_s",
+                                             "dt_s",  "hold",      "model",     "clutch",     "speed_rpm",
+                                             "r_load_ohm", "method", "prewarp_rad_s"};
+/// The sections mcg-design reads. Other tools' sections pass, but one a typing slip away from
+/// these is an error: a misspelt [plnat] would otherwise leave the built-in plant analysed.
+constexpr std::string_view k_design_sections[] = {"plant", "loop", "controller", "design"};
+
+/// Levenshtein distance (the names compared are a few characters long).
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+/// Unknown [plant] keys and near misses of mcg-design's sections are errors naming file:line.
+void check_plant_names(const Ini& ini) {
+  for (const auto* e : ini.entries("plant")) {
+    if (std::find(std::begin(k_plant_keys), std::end(k_plant_keys), e->key) == std::end(k_plant_keys)) {
+      ini.reject("plant", e->key, "unknown key (tf, num, den, domain, maps, delay_s, dt_s, hold, model, clutch, "
+                                  "speed_rpm, r_load_ohm)");
+    }
+  }
+  for (const std::string& section : ini.sections()) {
+    for (const std::string_view known : k_design_sections) {
+      if (section == known) break;
+      const std::size_t d = edit_distance(section, known);
+      if (d > 0 && d <= std::max<std::size_t>(1, known.size() / 3)) {
+        const auto entries = ini.entries(section);
+        const std::string where = entries.empty() || entries.front()->origin.empty() ? std::string("config")
+                                                                                     : entries.front()->origin;
+        fail("{}: unknown section {} (did you mean [{}]?)", where, quote("[" + section + "]"), known);
+      }
+    }
+  }
+}
+
 Resolved resolve(const Options& o) {
   Resolved r;
   r.ini = Ini::load_all(o.configs);
   const Ini& ini = r.ini;
+  check_plant_names(ini);
   bool builtin = false;
   std::optional<Domain> domain;
   if (!o.plant.empty() || o.plant_given) {
@@ -376,7 +426,7 @@ void write_margins(Ini& ini, const std::string& section, const std::vector<Tf>& 
   const Tf loop = single_loop(factors, &note);
   bool padded = false;
   const auto poles = linsys::closed_loop_poles(loop, &padded);
-  const bool stable = linsys::is_stable(poles, loop.domain);
+  const bool stable = linsys::closed_loop_stable(loop);
   ini.set(section, "stable", stable ? "yes" : "no",
           padded ? "closed-loop poles with a [6/6] Pade delay" : (note.empty() ? "" : note));
   ini.set(section, "pm_deg", m.pm_deg, "phase margin nearest 0");

@@ -170,6 +170,9 @@ std::vector<std::string> fix_parameters(model::Model& model, const std::vector<s
     if (std::none_of(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; })) {
       fail("--fix: unknown parameter {} (see mcg-fit model --list)", quote(name));
     }
+    if (const auto problem = model::parameter_problem(model, name, value)) {
+      fail("--fix: {}: {}", quote(item), *problem);
+    }
     model::set_parameter(model, name, value);
     names.push_back(name);
   }

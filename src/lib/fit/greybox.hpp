@@ -68,7 +68,7 @@ table::Table with_rpm(table::Table table);
 
 /// Pins parameters at measured values: each "NAME=VALUE" (names as model::parameters()
 /// spells them) is set in `model`; returns the names. Throws mcg::Error "--fix: ..." for a
-/// malformed item, an unknown name or a value that is not a finite number.
+/// malformed item, an unknown name or a value the INI form refuses (model::parameter_problem).
 std::vector<std::string> fix_parameters(model::Model& model, const std::vector<std::string>& items);
 
 /// Simulates `model` on the run's inputs and returns, per output of the run, the series as

@@ -274,19 +274,25 @@ Margins margins(const std::vector<Tf>& factors) {
   return m;
 }
 
-std::vector<Complex> closed_loop_poles(const Tf& loop, bool* padded) {
+namespace {
+
+/// The closed loop's characteristic polynomial den + num; a continuous delay as its [6/6] Padé
+/// approximant in x = s·τ, `tau_s` then the scale back to s (1 without a delay).
+Poly characteristic(const Tf& loop, double& tau_s, bool* padded) {
   Tf l = loop;
+  tau_s = 1.0;
   if (padded) *padded = false;
   if (l.discrete()) {
     l = fold_delay(l, "loop");
   } else if (l.delay_s > 0.0) {
     // Solved in x = s tau, where the Pade coefficients are O(1): in s their tau^k spread (1e29
     // for a day-long delay) left the companion matrix's roots meaningless.
-    const double tau_s = l.delay_s;
-    const auto in_x = [tau_s](const Poly& q) {  // q(x / tau)
+    tau_s = l.delay_s;
+    const double tau = tau_s;
+    const auto in_x = [tau](const Poly& q) {  // q(x / tau)
       Poly r = q;
       double f = 1.0;
-      for (std::size_t i = r.size(); i-- > 0; f /= tau_s) r[i] *= f;
+      for (std::size_t i = r.size(); i-- > 0; f /= tau) r[i] *= f;
       return r;
     };
     l.num = in_x(l.num);
@@ -294,11 +300,23 @@ std::vector<Complex> closed_loop_poles(const Tf& loop, bool* padded) {
     l.delay_s = 0.0;
     l = series(l, pade(1.0, 6));
     if (padded) *padded = true;
-    std::vector<Complex> poles = roots(add(l.den, l.num));
-    for (Complex& x : poles) x /= tau_s;
-    return poles;
   }
-  return roots(add(l.den, l.num));
+  return add(l.den, l.num);
+}
+
+}  // namespace
+
+std::vector<Complex> closed_loop_poles(const Tf& loop, bool* padded) {
+  double tau_s = 1.0;
+  std::vector<Complex> poles = roots(characteristic(loop, tau_s, padded));
+  for (Complex& x : poles) x /= tau_s;
+  return poles;
+}
+
+bool closed_loop_stable(const Tf& loop) {
+  double tau_s = 1.0;
+  const Poly p = characteristic(loop, tau_s, nullptr);
+  return roots_stable(p, loop.discrete());
 }
 
 bool is_stable(const std::vector<Complex>& poles, Domain domain) {
@@ -344,7 +362,10 @@ std::vector<GainRange> stable_gain_ranges(const Tf& loop) {
     } else {
       probe = std::sqrt(a * b);
     }
-    if (is_stable(closed_loop_poles(scaled(loop, probe)), loop.domain)) {
+    // Many probes for a long delay in z (a crossover per 2π/τ): Schur–Cohn, not eigenvalues.
+    const Tf probed = scaled(loop, probe);
+    double tau_s = 1.0;
+    if (loop.discrete() ? schur_cohn_stable(characteristic(probed, tau_s, nullptr)) : closed_loop_stable(probed)) {
       if (!out.empty() && out.back().k_high == a) {
         out.back().k_high = b;
       } else {

@@ -60,6 +60,10 @@ class LoopEval {
 /// Closed-loop poles of L/(1 + L). A continuous delay uses its [6/6] Padé approximant
 /// (`padded` says so); a discrete delay is exact (z^−k).
 std::vector<Complex> closed_loop_poles(const Tf& loop, bool* padded = nullptr);
+/// The closed loop L/(1 + L) is stable, by roots_stable() of its characteristic polynomial (a
+/// continuous delay as in closed_loop_poles()); throws mcg::Error when double precision cannot
+/// decide it.
+bool closed_loop_stable(const Tf& loop);
 /// All poles strictly inside the left half-plane (s) or the unit circle (z).
 bool is_stable(const std::vector<Complex>& poles, Domain domain);
 

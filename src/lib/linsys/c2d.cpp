@@ -6,51 +6,16 @@
 
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
+#include <numbers>
+#include <vector>
 
 namespace mcg::linsys {
 
 namespace {
-
-/// Parlett–Reinsch balancing with powers of 2: returns D with D^−1·A·D balanced (A updated).
-Eigen::VectorXd balance(Eigen::MatrixXd& a) {
-  const Eigen::Index n = a.rows();
-  Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
-  bool converged = false;
-  for (int sweep = 0; sweep < 100 && !converged; ++sweep) {
-    converged = true;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      double c = 0.0;
-      double r = 0.0;
-      for (Eigen::Index j = 0; j < n; ++j) {
-        if (j == i) continue;
-        c += std::abs(a(j, i));
-        r += std::abs(a(i, j));
-      }
-      if (c == 0.0 || r == 0.0) continue;
-      const double s = c + r;
-      double f = 1.0;
-      double g = r / 2.0;
-      while (c < g) {
-        f *= 2.0;
-        c *= 4.0;
-      }
-      g = r * 2.0;
-      while (c >= g) {
-        f /= 2.0;
-        c /= 4.0;
-      }
-      if ((c + r) / f < 0.95 * s) {
-        converged = false;
-        d(i) *= f;
-        a.row(i) /= f;
-        a.col(i) *= f;
-      }
-    }
-  }
-  return d;
-}
 
 /// Whole samples and the fraction θ of τ = d·T + θ; d is at most `room` (checked, so that the
 /// z^−d the caller multiplies in stays within k_max_degree).
@@ -85,10 +50,82 @@ long whole_delay(const Tf& g, double dt_s, const std::string& what, const char* 
   return d;
 }
 
-/// (N(z) + D·den(z)) for the system (Φ, Γ, C, D).
-Poly ss_tf_num(const Eigen::MatrixXd& phi, const Eigen::VectorXd& gamma, const Eigen::RowVectorXd& c, double d,
-               const Poly& den) {
-  return add(ss_numerator(phi, gamma, c), scale(den, d));
+/// How far a numerator may disagree with its state-space system, relative to its largest value
+/// on the unit circle, before c2d refuses it (see numerator()).
+constexpr double k_numerator_tolerance = 1e-6;
+
+/// P(z) = det [[zI − Φ, z·g0 + g1], [−C, d]] = det(zI − Φ)·(C(zI − Φ)^−1(z·g0 + g1) + d): the
+/// numerator over det(zI − Φ) of the sampled system, of degree <= n.
+///
+/// Not as det(zI − Φ + ΓC) − det(zI − Φ): for a short sample period ΓC is tiny beside Φ ≈ I
+/// and that difference cancels to nothing (1/(s+1)^6 at 1 ms: a numerator of 1e-21 beside
+/// coefficients of 20). Instead P is evaluated at n + 1 points of the unit circle, each by an LU
+/// factorisation of the bordered matrix (backward stable, no difference of near-equal
+/// polynomials), and its coefficients follow by the inverse DFT, which is perfectly conditioned
+/// on the circle. n + 1 further points check the result: where P disagrees there with its
+/// system by more than k_numerator_tolerance of max |P| the evaluation is not accurate enough
+/// and c2d refuses it; coefficients below that noise are zero.
+Poly numerator(const Eigen::MatrixXd& phi, const Eigen::VectorXd& g0, const Eigen::VectorXd& g1,
+               const Eigen::RowVectorXd& c, double d, const std::string& what) {
+  const Eigen::Index n = phi.rows();
+  if (n == 0) return trim(Poly{d});
+  const std::size_t m = static_cast<std::size_t>(n) + 1;
+  constexpr double k_two_pi = 2.0 * std::numbers::pi;
+  // An offset that keeps the points off z = ±1, where integrators and Nyquist zeros sit.
+  const double offset = 0.3 * k_two_pi / static_cast<double>(m);
+  auto value_at = [&](Complex z) {
+    Eigen::MatrixXcd b = Eigen::MatrixXcd::Zero(n + 1, n + 1);
+    b.topLeftCorner(n, n) = -phi.cast<Complex>();
+    b.topLeftCorner(n, n).diagonal().array() += z;
+    b.topRightCorner(n, 1) = g0.cast<Complex>() * z + g1.cast<Complex>();
+    b.bottomLeftCorner(1, n) = -c.cast<Complex>();
+    b(n, n) = d;
+    return Complex(Eigen::PartialPivLU<Eigen::MatrixXcd>(b).determinant());
+  };
+  auto angle = [&](std::size_t k, double shift) {
+    return offset + shift + k_two_pi * static_cast<double>(k) / static_cast<double>(m);
+  };
+  std::vector<Complex> v(m);
+  double v_max = 0.0;
+  for (std::size_t k = 0; k < m; ++k) {
+    v[k] = value_at(std::polar(1.0, angle(k, 0.0)));
+    v_max = std::max(v_max, std::abs(v[k]));
+  }
+  if (!std::isfinite(v_max)) fail("{}: the sampled system's numerator overflows", what);
+  // Ascending coefficients a_j = (1/m) sum_k v_k e^(−i j θ_k).
+  Poly ascending(m, 0.0);
+  for (std::size_t j = 0; j < m; ++j) {
+    Complex acc(0.0, 0.0);
+    for (std::size_t k = 0; k < m; ++k) acc += v[k] * std::polar(1.0, -angle(k, 0.0) * static_cast<double>(j));
+    ascending[j] = acc.real() / static_cast<double>(m);
+  }
+  Poly p(ascending.rbegin(), ascending.rend());
+  double residual = 0.0;
+  for (std::size_t k = 0; k < m; ++k) {
+    const Complex z = std::polar(1.0, angle(k, std::numbers::pi / static_cast<double>(m)));
+    residual = std::max(residual, std::abs(eval(p, z) - value_at(z)));
+  }
+  if (v_max == 0.0) return {};
+  if (!(residual <= k_numerator_tolerance * v_max)) {
+    fail("{}: cannot be discretised accurately: the numerator agrees with the sampled system only to {:.1g} of "
+         "its size (at most {:g}); the poles or the sample period are too far apart",
+         what, residual / v_max, k_numerator_tolerance);
+  }
+  const double noise = std::max(residual, static_cast<double>(m) * std::numeric_limits<double>::epsilon() * v_max);
+  for (double& x : p) {
+    if (std::abs(x) <= 8.0 * noise) x = 0.0;
+  }
+  return trim(p);
+}
+
+/// e^(M) for the block matrices of the holds, refused when it overflows: a pole far in the
+/// right half-plane (Re p·T above about 709) has no sampled value in double.
+Eigen::MatrixXd checked_exp(const Eigen::MatrixXd& m, const std::string& what) {
+  const Eigen::MatrixXd e = m.exp();
+  if (!e.allFinite()) {
+    fail("{}: e^(A*dt) overflows: a pole p with Re(p)*dt above 709 has no sampled value", what);
+  }
+  return e;
 }
 
 Tf tustin(const Tf& g, double dt_s, double prewarp_rad_s) {
@@ -224,8 +261,16 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
     Tf h = matched(g, dt_s);
     return make_z(h.num, h.den, dt_s, d);
   }
-  const StateSpace ss = realise(g);
+  // The gain travels outside the realisation: 1e-300/(s+1) keeps its 1e-300 exactly.
+  const Poly num0 = trim(g.num);
+  double gain = 0.0;
+  for (double x : num0) gain = std::max(gain, std::abs(x));
+  const StateSpace ss = realise(scaled(g, 1.0 / gain));
   const Eigen::Index n = ss.a.rows();
+  const Eigen::VectorXd none = Eigen::VectorXd::Zero(n);
+  auto finish = [&](const Poly& num, const Poly& den, long delay) {
+    return make_z(scale(num, gain), den, dt_s, delay);
+  };
   if (method == C2dMethod::zoh) {
     long d = 0;
     double theta = 0.0;
@@ -235,17 +280,14 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
     m.topLeftCorner(n, n) = ss.a;
     m.topRightCorner(n, 1) = ss.b;
     auto block_exp = [&](double t, Eigen::MatrixXd& phi, Eigen::VectorXd& psi) {
-      const Eigen::MatrixXd e = (m * t).exp();
+      const Eigen::MatrixXd e = checked_exp(m * t, what);
       phi = e.topLeftCorner(n, n);
       psi = e.topRightCorner(n, 1);
     };
     Eigen::MatrixXd phi;
     Eigen::VectorXd gamma;
     block_exp(dt_s - theta, phi, gamma);
-    if (theta == 0.0) {
-      const Poly den = charpoly(phi);
-      return make_z(ss_tf_num(phi, gamma, ss.c, ss.d, den), den, dt_s, d);
-    }
+    if (theta == 0.0) return finish(numerator(phi, none, gamma, ss.c, ss.d, what), charpoly(phi), d);
     Eigen::MatrixXd phi_theta;
     Eigen::VectorXd psi_theta;
     block_exp(theta, phi_theta, psi_theta);
@@ -253,11 +295,8 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
     Eigen::MatrixXd phi_full;
     Eigen::VectorXd unused;
     block_exp(dt_s, phi_full, unused);
-    const Poly den = charpoly(phi_full);
-    const Poly n0 = ss_numerator(phi_full, gamma, ss.c);
-    const Poly n1 = ss_numerator(phi_full, gamma1, ss.c);
-    const Poly num = add(add(mul(n0, Poly{1.0, 0.0}), n1), scale(den, ss.d));
-    return make_z(num, den, dt_s, d + 1);
+    // z·N0 + N1 + D·den: one bordered determinant with the column z·Γ0 + Γ1.
+    return finish(numerator(phi_full, gamma, gamma1, ss.c, ss.d, what), charpoly(phi_full), d + 1);
   }
   if (method == C2dMethod::foh) {
     const long d = whole_delay(g, dt_s, what, "foh");
@@ -265,21 +304,19 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
     m.topLeftCorner(n, n) = ss.a * dt_s;
     m.block(0, n, n, 1) = ss.b * dt_s;
     m(n, n + 1) = 1.0;
-    const Eigen::MatrixXd e = m.exp();
+    const Eigen::MatrixXd e = checked_exp(m, what);
     const Eigen::MatrixXd phi = e.topLeftCorner(n, n);
     const Eigen::VectorXd gamma1 = e.block(0, n, n, 1);
     const Eigen::VectorXd gamma2 = e.block(0, n + 1, n, 1);
     const Eigen::VectorXd gamma = gamma1 + (phi - Eigen::MatrixXd::Identity(n, n)) * gamma2;
     const double dd = ss.d + (ss.c * gamma2)(0);
-    const Poly den = charpoly(phi);
-    return make_z(ss_tf_num(phi, gamma, ss.c, dd, den), den, dt_s, d);
+    return finish(numerator(phi, none, gamma, ss.c, dd, what), charpoly(phi), d);
   }
   const long d = whole_delay(g, dt_s, what, "impulse");
   if (!g.strictly_proper()) fail("{}: impulse invariance needs a strictly proper transfer function", what);
-  const Eigen::MatrixXd phi = (ss.a * dt_s).exp();
-  const Poly den = charpoly(phi);
-  const Poly num = mul(scale(ss_numerator(phi, ss.b, ss.c), dt_s), Poly{1.0, 0.0});
-  return make_z(num, den, dt_s, d);
+  const Eigen::MatrixXd phi = checked_exp(ss.a * dt_s, what);
+  // T·z·C·adj(zI − Φ)·B: the column z·(T·B).
+  return finish(numerator(phi, ss.b * dt_s, none, ss.c, 0.0, what), charpoly(phi), d);
 }
 
 }  // namespace mcg::linsys

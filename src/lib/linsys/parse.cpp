@@ -36,6 +36,9 @@ class Parser {
   Parser(std::string_view text, const std::string& where) : m_text(text), m_where(where) {}
 
   ParsedTf parse() {
+    if (m_text.size() > k_max_tf_chars) {
+      fail("{}: expression of {} characters above the limit of {}", m_where, m_text.size(), k_max_tf_chars);
+    }
     skip_blanks();
     if (m_pos >= m_text.size()) error_at(m_pos, "empty expression");
     Value v = expr();
@@ -175,15 +178,19 @@ class Parser {
     return v;
   }
 
+  /// Signs are counted in a loop, not by recursion: a chain of 10^5 of them costs no stack.
   Value factor() {
-    skip_blanks();
-    if (accept('-')) {
-      Value v = factor();
-      v.num = scale(v.num, -1.0);
-      return v;
+    bool negative = false;
+    for (;;) {
+      if (accept('-')) {
+        negative = !negative;
+      } else if (!accept('+')) {
+        break;
+      }
     }
-    if (accept('+')) return factor();
-    return power();
+    Value v = power();
+    if (negative) v.num = scale(v.num, -1.0);
+    return v;
   }
 
   Value power() {
@@ -240,6 +247,7 @@ class Parser {
     const std::size_t at = m_pos;
     if (c == '(') {
       ++m_pos;
+      const Nest nest(*this, at);
       Value v = expr();
       skip_blanks();
       if (!accept(')')) {
@@ -274,6 +282,7 @@ class Parser {
     skip_blanks();
     if (!accept('(')) error_at(m_pos, "expected '(' after exp");
     const std::size_t open = m_pos - 1;
+    const Nest nest(*this, open);
     const Value arg = expr();
     skip_blanks();
     if (!accept(')')) {
@@ -306,9 +315,27 @@ class Parser {
     return constant(value);
   }
 
+  /// One level of '(' (or exp's): every level is a few frames of recursion, so the depth is
+  /// capped well inside the smallest stack the tools run on (a sanitizer's too).
+  class Nest {
+   public:
+    Nest(Parser& p, std::size_t at) : m_parser(p) {
+      if (++m_parser.m_depth > k_max_tf_depth) {
+        m_parser.error_at(at, fmt::format("parentheses nested deeper than {}", k_max_tf_depth));
+      }
+    }
+    ~Nest() { --m_parser.m_depth; }
+    Nest(const Nest&) = delete;
+    Nest& operator=(const Nest&) = delete;
+
+   private:
+    Parser& m_parser;
+  };
+
   std::string_view m_text;
   std::string m_where;
   std::size_t m_pos = 0;
+  int m_depth = 0;
   std::optional<Domain> m_domain;
 };
 

@@ -3,9 +3,13 @@
 
 #include <Eigen/Dense>
 
-#include <algorithm>
 #include "common/demand.hpp"
+#include "common/error.hpp"
+
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
+#include <limits>
 
 namespace mcg::linsys {
 
@@ -67,6 +71,90 @@ double eval(const Poly& p, double x) {
   return acc;
 }
 
+/// Parlett–Reinsch balancing with powers of 2: returns D with D^−1·A·D balanced (A updated).
+Eigen::VectorXd balance(Eigen::MatrixXd& a) {
+  const Eigen::Index n = a.rows();
+  Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
+  bool converged = false;
+  for (int sweep = 0; sweep < 100 && !converged; ++sweep) {
+    converged = true;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      double c = 0.0;
+      double r = 0.0;
+      for (Eigen::Index j = 0; j < n; ++j) {
+        if (j == i) continue;
+        c += std::abs(a(j, i));
+        r += std::abs(a(i, j));
+      }
+      if (c == 0.0 || r == 0.0) continue;
+      const double s = c + r;
+      double f = 1.0;
+      double g = r / 2.0;
+      while (c < g) {
+        f *= 2.0;
+        c *= 4.0;
+      }
+      g = r * 2.0;
+      while (c >= g) {
+        f /= 2.0;
+        c /= 4.0;
+      }
+      if ((c + r) / f < 0.95 * s) {
+        converged = false;
+        d(i) *= f;
+        a.row(i) /= f;
+        a.col(i) *= f;
+      }
+    }
+  }
+  return d;
+}
+
+namespace {
+
+/// p's coefficients in x = s/σ, σ = (|c_n|/|c_0|)^(1/n), scaled to a largest of 1: formed in
+/// logarithms, so that 1e308·s + 1e-308 becomes x + 1 instead of an underflow to x + 0.
+Poly scaled_variable(const Poly& q, double& log_sigma) {
+  const int m = static_cast<int>(q.size()) - 1;
+  log_sigma = (std::log(std::abs(q.back())) - std::log(std::abs(q.front()))) / m;
+  std::vector<double> logs(q.size());
+  double top = -std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    // c_i s^(m−i) = c_i σ^(m−i) x^(m−i).
+    logs[i] = q[i] == 0.0 ? -std::numeric_limits<double>::infinity() : std::log(std::abs(q[i])) + (m - static_cast<int>(i)) * log_sigma;
+    top = std::max(top, logs[i]);
+  }
+  Poly r(q.size());
+  for (std::size_t i = 0; i < q.size(); ++i) r[i] = q[i] == 0.0 ? 0.0 : std::copysign(std::exp(logs[i] - top), q[i]);
+  return r;
+}
+
+/// Roots of a polynomial with no root at 0, as eigenvalues of its balanced companion matrix.
+std::vector<Complex> companion_roots(const Poly& q) {
+  const int m = static_cast<int>(q.size()) - 1;
+  std::vector<Complex> out;
+  if (m == 1) {
+    out.emplace_back(-q[1] / q[0], 0.0);
+    return out;
+  }
+  Eigen::MatrixXd companion = Eigen::MatrixXd::Zero(m, m);
+  for (int j = 0; j < m; ++j) companion(0, j) = -q[static_cast<std::size_t>(j) + 1] / q[0];
+  for (int i = 1; i < m; ++i) companion(i, i - 1) = 1.0;
+  balance(companion);
+  Eigen::EigenSolver<Eigen::MatrixXd> solver(companion, false);
+  const auto& ev = solver.eigenvalues();
+  for (int i = 0; i < m; ++i) out.push_back(ev(i));
+  return out;
+}
+
+void sort_roots(std::vector<Complex>& r) {
+  std::sort(r.begin(), r.end(), [](Complex a, Complex b) {
+    return a.real() != b.real() ? a.real() < b.real() : a.imag() < b.imag();
+  });
+}
+
+}  // namespace
+
 std::vector<Complex> roots(const Poly& p0) {
   const Poly p = trim(p0);
   const int n = static_cast<int>(p.size()) - 1;
@@ -74,21 +162,80 @@ std::vector<Complex> roots(const Poly& p0) {
   const int nz = zeros_at_origin(p);
   std::vector<Complex> out(static_cast<std::size_t>(nz), Complex(0.0, 0.0));
   const Poly q = drop_origin(p, nz);
-  const int m = n - nz;
-  if (m == 1) {
-    out.emplace_back(-q[1] / q[0], 0.0);
-  } else if (m > 1) {
-    Eigen::MatrixXd companion = Eigen::MatrixXd::Zero(m, m);
-    for (int j = 0; j < m; ++j) companion(0, j) = -q[static_cast<std::size_t>(j) + 1] / q[0];
-    for (int i = 1; i < m; ++i) companion(i, i - 1) = 1.0;
-    Eigen::EigenSolver<Eigen::MatrixXd> solver(companion, false);
-    const auto& ev = solver.eigenvalues();
-    for (int i = 0; i < m; ++i) out.push_back(ev(i));
+  if (q.size() > 1) {
+    double log_sigma = 0.0;
+    const Poly x = scaled_variable(q, log_sigma);
+    const double sigma = std::exp(log_sigma);
+    for (const Complex& r : companion_roots(x)) out.push_back(r * sigma);
   }
-  std::sort(out.begin(), out.end(), [](Complex a, Complex b) {
-    return a.real() != b.real() ? a.real() < b.real() : a.imag() < b.imag();
-  });
+  sort_roots(out);
   return out;
+}
+
+bool roots_stable(const Poly& p0, bool unit_circle) {
+  const Poly p = trim(p0);
+  if (p.size() <= 1) return true;
+  if (zeros_at_origin(p) > 0 && !unit_circle) return false;
+  // In s a scaled variable keeps the sign of Re; in z the circle fixes the scale.
+  double log_sigma = 0.0;
+  const Poly q = unit_circle ? scale(p, 1.0 / std::abs(p.front())) : scaled_variable(p, log_sigma);
+  const int m = static_cast<int>(q.size()) - 1;
+  Poly dq;
+  for (int i = 0; i < m; ++i) dq.push_back(q[static_cast<std::size_t>(i)] * (m - i));
+  Poly abs_q = q;
+  for (double& c : abs_q) c = std::abs(c);
+  const int nz = unit_circle ? zeros_at_origin(q) : 0;
+  if (m - nz < 1) return true;
+  bool unstable = false;
+  bool undecided = false;
+  Complex worst;
+  double worst_bound = 0.0;
+  for (Complex x : companion_roots(drop_origin(q, nz))) {
+    // First-order bound of the root's error for a backward error of 4·n·ε in each coefficient.
+    const double slope = std::abs(eval(dq, x));
+    const double bound = 4.0 * m * std::numeric_limits<double>::epsilon() * eval(abs_q, std::abs(x)) /
+                         std::max(slope, std::numeric_limits<double>::min());
+    // Distance inside the boundary: −Re s, or 1 − |z|.
+    const double inside = unit_circle ? 1.0 - std::abs(x) : -x.real();
+    if (inside < -bound) {
+      unstable = true;
+    } else if (!(inside > bound)) {
+      // On the boundary as far as double can tell: marginal (not stable) when the bound is
+      // tight, undecidable when rounding alone could move the root across.
+      if (bound <= 1e-6 * std::max(std::abs(x), 1.0)) {
+        unstable = true;
+      } else if (!undecided || bound > worst_bound) {
+        undecided = true;
+        worst = x;
+        worst_bound = bound;
+      }
+    }
+  }
+  if (unstable) return false;
+  if (undecided) {
+    const double sigma = std::exp(log_sigma);
+    fail("closed-loop stability cannot be decided in double precision: the pole near {} = {:.6g}{:+.6g}j of a "
+         "degree-{} characteristic polynomial may be off by {:.2g}, across the {}",
+         unit_circle ? "z" : "s", worst.real() * sigma, worst.imag() * sigma, m, worst_bound * sigma,
+         unit_circle ? "unit circle" : "imaginary axis");
+  }
+  return true;
+}
+
+bool schur_cohn_stable(const Poly& p0) {
+  std::vector<long double> a;
+  for (double c : trim(p0)) a.push_back(c);
+  // Schur–Cohn: all roots inside |z| < 1 iff every reflection coefficient r = a_n/a_0 of the
+  // recursion a_i <- a_i − r·a_(n−i) (degree n to n−1) has |r| < 1.
+  while (a.size() > 1) {
+    const long double r = a.back() / a.front();
+    if (!(std::abs(r) < 1.0L)) return false;
+    const std::size_t n = a.size() - 1;
+    std::vector<long double> b(n);
+    for (std::size_t i = 0; i < n; ++i) b[i] = a[i] - r * a[n - i];
+    a = std::move(b);
+  }
+  return true;
 }
 
 Poly from_roots(const std::vector<Complex>& r) {

@@ -257,7 +257,7 @@ StepResponse step_response(const Tf& plant, const std::optional<Tf>& controller,
   Tf exact_closed = exact_loop.discrete() ? fold_delay(exact_loop, "loop") : exact_loop;
   exact_closed.delay_s = 0.0;
   exact_closed = feedback(exact_closed);
-  out.final_value = is_stable(closed_loop_poles(exact_loop), exact_loop.domain)
+  out.final_value = closed_loop_stable(exact_loop)
                         ? exact_closed.dc_gain()
                         : std::numeric_limits<double>::quiet_NaN();
   return out;

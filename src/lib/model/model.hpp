@@ -14,6 +14,7 @@
 
 #include <array>
 #include <limits>
+#include <optional>
 #include <iosfwd>
 #include <string>
 #include <string_view>
@@ -200,6 +201,10 @@ struct ParamInfo {
 /// "motor.Kt_Nm_A", "motor.Tc_Nm", "motor.c1", "drive.dead_time_s") followed by every
 /// parameter of the active effects ("EFFECT.key").
 std::vector<ParamInfo> parameters(const Model& model);
+/// Why `value` is not a valid value of parameter `name` ("must be a finite number > 0", "out of
+/// range [0, 0.05]"), by the same rules the INI form checks; nullopt when it is, or for a name
+/// the model does not know (set_parameter() refuses those).
+std::optional<std::string> parameter_problem(const Model& model, std::string_view name, double value);
 /// Sets one parameter by its name; throws mcg::Error for an unknown name.
 void set_parameter(Model& model, std::string_view name, double value);
 /// Reads one parameter by its name; throws mcg::Error for an unknown name.

@@ -145,7 +145,28 @@ const NominalParam* find_nominal(std::string_view name) {
 
 constexpr std::string_view k_effect_prefix = "effect.";
 
+std::optional<std::string> effect_value_problem(const EffectParamSpec& spec, double v) {
+  if (v >= spec.lower && v <= spec.upper) return std::nullopt;
+  return fmt::format("out of range [{}, {}]", config::format_number(spec.lower), config::format_number(spec.upper));
+}
+
 }  // namespace
+
+std::optional<std::string> parameter_problem(const Model& model, std::string_view name, double value) {
+  if (const NominalParam* np = find_nominal(name)) {
+    if (passes(np->check, value)) return std::nullopt;
+    return std::string(check_text(np->check));
+  }
+  const auto dot = name.find('.');
+  if (dot != std::string_view::npos && model.effect(name.substr(0, dot)) != nullptr) {
+    if (const EffectSpec* spec = find_effect(std::string(name.substr(0, dot)))) {
+      for (const auto& p : spec->params) {
+        if (p.name == name.substr(dot + 1)) return effect_value_problem(p, value);
+      }
+    }
+  }
+  return std::nullopt;
+}
 
 Params builtin_rig() {
   Params p;
@@ -215,11 +236,7 @@ Model model_from_ini(const config::Ini& ini, Model base) {
       }();
       if (ps == nullptr) ini.reject(section, entry->key, "unknown parameter of effect '" + name + "'");
       const double v = *ini.number(section, entry->key);
-      if (!(v >= ps->lower && v <= ps->upper)) {
-        ini.reject(section, entry->key,
-                   fmt::format("out of range [{}, {}]", config::format_number(ps->lower),
-                               config::format_number(ps->upper)));
-      }
+      if (const auto problem = effect_value_problem(*ps, v)) ini.reject(section, entry->key, *problem);
       effect.set(entry->key, v);
     }
     bool replaced = false;
