@@ -103,3 +103,34 @@ TEST(LinsysMargins, RejectsImproperLoop) { EXPECT_THROW(margins(tf("s^2/(s+1)"))
 
 }  // namespace
 }  // namespace mcg::linsys
+
+namespace mcg::linsys {
+namespace {
+
+TEST(LinsysMargins, StabilityIsDecidedOrRefused) {
+  // Roots of (s+1)^12 + 1 have Re s = −1 + cos((2k+1)π/12) <= −0.034: stable.
+  EXPECT_TRUE(closed_loop_stable(parse_tf("1/(s+1)^12", "t").tf));
+  // (s+1)^64 + 1: every root has Re s <= −0.0012, but rounding the coefficients alone can move
+  // a root across the axis: refused, not called unstable.
+  EXPECT_THROW((void)closed_loop_stable(parse_tf("1/(s+1)^64", "t").tf), mcg::Error);
+  // (1 + 1e308) s + 1e-308: its root −1e-616 underflows, its sign does not.
+  EXPECT_TRUE(closed_loop_stable(parse_tf("1e308*s/(s+1e-308)", "t").tf));
+  // Poles on the axis exactly (s² + 1) are not stable.
+  EXPECT_FALSE(closed_loop_stable(parse_tf("1/s^2", "t").tf));
+  EXPECT_TRUE(schur_cohn_stable({1.0, -0.5}));
+  EXPECT_FALSE(schur_cohn_stable({1.0, -1.5}));
+  EXPECT_FALSE(schur_cohn_stable({1.0, 0.0, 1.0}));
+}
+
+TEST(LinsysMargins, StabilityAgreesWithTheStableGainRange) {
+  // A day-long delay on 1/(s+1): gains below 1 are stable, and so is K = 1 itself.
+  Tf g = parse_tf("1/(s+1)", "t").tf;
+  g.delay_s = 1e9;
+  const auto ranges = stable_gain_ranges(g);
+  ASSERT_FALSE(ranges.empty());
+  EXPECT_EQ(ranges.front().k_low, 0.0);
+  EXPECT_GT(ranges.front().k_high, 1.0);
+}
+
+}  // namespace
+}  // namespace mcg::linsys

@@ -5,9 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 namespace mcg::linsys {
 namespace {
@@ -164,6 +166,107 @@ TEST(LinsysC2d, CharpolyOfCompanionIsItsPolynomial) {
   const Poly want = from_roots({Complex(-60, 0), Complex(-850, 0), Complex(-1800, 0)});
   ASSERT_EQ(p.size(), want.size());
   for (std::size_t i = 0; i < p.size(); ++i) EXPECT_NEAR(p[i] / want[i], 1.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace mcg::linsys
+
+namespace mcg::linsys {
+namespace {
+
+/// An independent oracle for 1/(s+1)^n: the sampled impulse response h_k in long double from
+/// Taylor series of e^(A t) (no matrix exponential, no determinants), then N = den·H truncated,
+/// den = (z − e^(−T))^n expanded in long double. `impulse`: h_k = T·g(kT); else ZOH.
+std::vector<long double> oracle_numerator(int n, long double t, bool impulse) {
+  using Vec = std::vector<long double>;
+  // Companion form of (s+1)^n: x1' = −Σ c_j x_j + u, x_(i+1)' = x_i, y = x_n.
+  Vec c(static_cast<std::size_t>(n) + 1, 1.0L);
+  for (int k = 1; k <= n; ++k) c[static_cast<std::size_t>(k)] = c[static_cast<std::size_t>(k) - 1] * (n - k + 1) / k;
+  auto apply_a = [&](const Vec& x) {
+    Vec y(x.size(), 0.0L);
+    for (int j = 0; j < n; ++j) y[0] -= c[static_cast<std::size_t>(j) + 1] * x[static_cast<std::size_t>(j)];
+    for (int i = 1; i < n; ++i) y[static_cast<std::size_t>(i)] = x[static_cast<std::size_t>(i) - 1];
+    return y;
+  };
+  // x(t) for x' = A x + b·w, x(0) = x0, by the Taylor series of e^(A t) and its integral.
+  auto flow = [&](Vec x0, long double w) {
+    Vec sum = x0;
+    Vec term = x0;
+    Vec bterm(static_cast<std::size_t>(n), 0.0L);
+    bterm[0] = w * t;  // ∫ e^(Aσ) b dσ, first term b·t
+    for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += bterm[i];
+    for (int k = 1; k < 60; ++k) {
+      term = apply_a(term);
+      bterm = apply_a(bterm);
+      for (auto& v : term) v *= t / k;
+      for (auto& v : bterm) v *= t / (k + 1);
+      for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += term[i] + bterm[i];
+    }
+    return sum;
+  };
+  Vec h(static_cast<std::size_t>(n) + 1, 0.0L);
+  Vec x(static_cast<std::size_t>(n), 0.0L);
+  if (impulse) {
+    x[0] = 1.0L;  // x(0+) = b after a unit impulse
+    for (int k = 0; k <= n; ++k) {
+      h[static_cast<std::size_t>(k)] = t * x[static_cast<std::size_t>(n) - 1];
+      x = flow(x, 0.0L);
+    }
+  } else {
+    x = flow(x, 1.0L);  // one sample of a held unit input
+    for (int k = 1; k <= n; ++k) {
+      h[static_cast<std::size_t>(k)] = x[static_cast<std::size_t>(n) - 1];
+      x = flow(x, 0.0L);
+    }
+  }
+  const long double a = std::exp(-t);
+  Vec den(static_cast<std::size_t>(n) + 1, 0.0L);
+  den[0] = 1.0L;
+  for (int k = 1; k <= n; ++k) {
+    for (int j = k; j >= 1; --j) den[static_cast<std::size_t>(j)] -= a * den[static_cast<std::size_t>(j) - 1];
+  }
+  Vec num(static_cast<std::size_t>(n) + 1, 0.0L);
+  for (int k = 0; k <= n; ++k) {
+    for (int j = 0; j <= k; ++j) num[static_cast<std::size_t>(k)] += den[static_cast<std::size_t>(j)] * h[static_cast<std::size_t>(k - j)];
+  }
+  return num;  // descending powers of z, degree n (leading h_0 = 0 for ZOH)
+}
+
+void expect_oracle(const std::string& plant, int n, double dt, C2dMethod method) {
+  const Tf h = c2d(parse_tf(plant, "t").tf, dt, method, 0.0, "t");
+  const std::vector<long double> want = oracle_numerator(n, dt, method == C2dMethod::impulse);
+  Poly got = trim(h.num);
+  // The impulse numerator keeps its root at z = 0 (make_z cancels it only against a pole there).
+  ASSERT_LE(got.size(), want.size()) << plant;
+  Poly padded(want.size() - got.size(), 0.0);
+  padded.insert(padded.end(), got.begin(), got.end());
+  long double largest = 0.0L;
+  for (long double w : want) largest = std::max(largest, std::abs(w));
+  ASSERT_GT(largest, 0.0L);
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    EXPECT_NEAR(static_cast<double>(padded[i] / largest), static_cast<double>(want[i] / largest), 1e-9)
+        << plant << " at dt " << dt << ", coefficient " << i;
+  }
+}
+
+TEST(LinsysC2d, ShortSamplePeriodsKeepTheirNumerator) {
+  // The old numerator, det(zI − Φ + ΓC) − det(zI − Φ), cancelled to exactly 0 here.
+  expect_oracle("1/(s+1)^6", 6, 0.001, C2dMethod::zoh);
+  expect_oracle("1/(s+1)^6", 6, 0.001, C2dMethod::impulse);
+  expect_oracle("1/(s+1)^2", 2, 1e-9, C2dMethod::zoh);
+  expect_oracle("1/(s+1)^3", 3, 1e-6, C2dMethod::zoh);
+}
+
+TEST(LinsysC2d, TinyGainsAndOverflowingPoles) {
+  const Tf h = c2d(parse_tf("1e-300/(s+1)", "t").tf, 0.001, C2dMethod::zoh, 0.0, "t");
+  ASSERT_EQ(trim(h.num).size(), 1U);
+  EXPECT_NEAR(h.num[0] / (1e-300 * -std::expm1(-0.001)), 1.0, 1e-12);
+  try {
+    (void)c2d(parse_tf("1/(s-1e300)", "t").tf, 0.001, C2dMethod::zoh, 0.0, "--plant");
+    FAIL() << "an overflowing pole was discretised";
+  } catch (const mcg::Error& e) {
+    EXPECT_EQ(std::string(e.what()), "--plant: e^(A*dt) overflows: a pole p with Re(p)*dt above 709 has no sampled value");
+  }
 }
 
 }  // namespace

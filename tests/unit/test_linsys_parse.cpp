@@ -109,3 +109,33 @@ TEST(LinsysParse, JuxtapositionAfterDivisionIsRefused) {
 
 }  // namespace
 }  // namespace mcg::linsys
+
+namespace mcg::linsys {
+namespace {
+
+TEST(LinsysParse, DepthAndLengthAreBoundedWithoutRecursion) {
+  // 7000 parentheses overflowed the stack (2000 under AddressSanitizer).
+  const std::string deep = "1/" + std::string(7000, '(') + "s+1" + std::string(7000, ')');
+  EXPECT_THROW((void)parse_tf(deep, "--plant"), mcg::Error);
+  try {
+    (void)parse_tf(deep, "--plant");
+  } catch (const mcg::Error& e) {
+    EXPECT_EQ(std::string(e.what()), "--plant: parentheses nested deeper than 200 at character 203");
+  }
+  const std::string at_limit = std::string(200, '(') + "s+1" + std::string(200, ')');
+  EXPECT_EQ(trim(parse_tf("1/" + at_limit, "t").tf.den).size(), 2u);
+  // A chain of signs is counted in a loop: 60,000 of them cost no stack.
+  const Tf even = parse_tf("1/" + std::string(60000, '-') + "(s+1)", "t").tf;
+  EXPECT_GT(even.eval(Complex(0.0, 0.0)).real(), 0.0);
+  const Tf odd = parse_tf("1/" + std::string(59999, '-') + "(s+1)", "t").tf;
+  EXPECT_LT(odd.eval(Complex(0.0, 0.0)).real(), 0.0);
+  try {
+    (void)parse_tf("1/" + std::string(120000, '-') + "(s+1)", "[plant] tf");
+    FAIL() << "120,000 signs were read";
+  } catch (const mcg::Error& e) {
+    EXPECT_EQ(std::string(e.what()), "[plant] tf: expression of 120007 characters above the limit of 65536");
+  }
+}
+
+}  // namespace
+}  // namespace mcg::linsys

@@ -21,7 +21,9 @@ TEST(LinsysResponse, SecondOrderStepMetricsMatchTheClosedForm) {
     return 1.0 - std::exp(-zeta * wn * t) * (std::cos(wd * t) + zeta / std::sqrt(1.0 - zeta * zeta) * std::sin(wd * t));
   };
   const StepResponse s = step_response(parse_tf("100/(s*(s+10))", "t").tf, std::nullopt, 2.0, 20000);
-  for (std::size_t k = 0; k < s.t_s.size(); k += 997) EXPECT_NEAR(s.y[k], y(s.t_s[k]), 1e-10) << s.t_s[k];
+  // 20000 samples of poles within 1e-3 of z = 1: the rounding of the sampled denominator alone
+  // moves the response by about 1e-10.
+  for (std::size_t k = 0; k < s.t_s.size(); k += 997) EXPECT_NEAR(s.y[k], y(s.t_s[k]), 3e-10) << s.t_s[k];
   const StepMetrics m = step_info(s, 1.0);
   EXPECT_DOUBLE_EQ(m.final_value, 1.0);
   // The peak is located exactly, at the root of y', not on the sample grid.
