@@ -110,9 +110,12 @@ namespace {
 TEST(LinsysMargins, StabilityIsDecidedOrRefused) {
   // Roots of (s+1)^12 + 1 have Re s = −1 + cos((2k+1)π/12) <= −0.034: stable.
   EXPECT_TRUE(closed_loop_stable(parse_tf("1/(s+1)^12", "t").tf));
-  // (s+1)^64 + 1: every root has Re s <= −0.0012, but rounding the coefficients alone can move
-  // a root across the axis: refused, not called unstable.
-  EXPECT_THROW((void)closed_loop_stable(parse_tf("1/(s+1)^64", "t").tf), mcg::Error);
+  // (s+1)^64 + 1: every root has Re s <= −0.0012 (it was called unstable).
+  EXPECT_TRUE(closed_loop_stable(parse_tf("1/(s+1)^64", "t").tf));
+  // A sampled cluster: 1/(s+1)^6 through a ZOH at 1 ms has closed-loop poles 1.3e-4 inside the
+  // unit circle, and rounding its coefficients moves them by 1e-3: refused, not called unstable.
+  const Tf zoh = c2d(parse_tf("1/(s+1)^6", "t").tf, 0.001, C2dMethod::zoh, 0.0, "t");
+  EXPECT_THROW((void)closed_loop_stable(zoh), mcg::Error);
   // (1 + 1e308) s + 1e-308: its root −1e-616 underflows, its sign does not.
   EXPECT_TRUE(closed_loop_stable(parse_tf("1e308*s/(s+1e-308)", "t").tf));
   // Poles on the axis exactly (s² + 1) are not stable.

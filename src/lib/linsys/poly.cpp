@@ -112,20 +112,25 @@ Eigen::VectorXd balance(Eigen::MatrixXd& a) {
 
 namespace {
 
-/// p's coefficients in x = s/σ, σ = (|c_n|/|c_0|)^(1/n), scaled to a largest of 1: formed in
-/// logarithms, so that 1e308·s + 1e-308 becomes x + 1 instead of an underflow to x + 0.
-Poly scaled_variable(const Poly& q, double& log_sigma) {
+/// p's coefficients in x = s/σ, σ = 2^k near (|c_n|/|c_0|)^(1/n) (a power of 2: the scaling
+/// rounds nothing), scaled to a largest of 1: formed in logarithms, so that 1e308·s + 1e-308
+/// becomes x + 1 instead of an underflow to x + 0.
+Poly scaled_variable(const Poly& q, int& k) {
   const int m = static_cast<int>(q.size()) - 1;
-  log_sigma = (std::log(std::abs(q.back())) - std::log(std::abs(q.front()))) / m;
-  std::vector<double> logs(q.size());
-  double top = -std::numeric_limits<double>::infinity();
+  k = static_cast<int>(std::lround((std::log2(std::abs(q.back())) - std::log2(std::abs(q.front()))) / m));
+  // c_i s^(m−i) = c_i 2^(k(m−i)) x^(m−i), by exponents alone: exact but for what underflows
+  // beside the largest.
+  std::vector<int> exponents(q.size());
+  std::vector<double> mantissas(q.size());
+  int top = std::numeric_limits<int>::min();
   for (std::size_t i = 0; i < q.size(); ++i) {
-    // c_i s^(m−i) = c_i σ^(m−i) x^(m−i).
-    logs[i] = q[i] == 0.0 ? -std::numeric_limits<double>::infinity() : std::log(std::abs(q[i])) + (m - static_cast<int>(i)) * log_sigma;
-    top = std::max(top, logs[i]);
+    int e = 0;
+    mantissas[i] = std::frexp(q[i], &e);
+    exponents[i] = e + (m - static_cast<int>(i)) * k;
+    if (q[i] != 0.0) top = std::max(top, exponents[i]);
   }
   Poly r(q.size());
-  for (std::size_t i = 0; i < q.size(); ++i) r[i] = q[i] == 0.0 ? 0.0 : std::copysign(std::exp(logs[i] - top), q[i]);
+  for (std::size_t i = 0; i < q.size(); ++i) r[i] = q[i] == 0.0 ? 0.0 : std::ldexp(mantissas[i], exponents[i] - top);
   return r;
 }
 
@@ -163,10 +168,9 @@ std::vector<Complex> roots(const Poly& p0) {
   std::vector<Complex> out(static_cast<std::size_t>(nz), Complex(0.0, 0.0));
   const Poly q = drop_origin(p, nz);
   if (q.size() > 1) {
-    double log_sigma = 0.0;
-    const Poly x = scaled_variable(q, log_sigma);
-    const double sigma = std::exp(log_sigma);
-    for (const Complex& r : companion_roots(x)) out.push_back(r * sigma);
+    int k = 0;
+    const Poly x = scaled_variable(q, k);
+    for (const Complex& r : companion_roots(x)) out.emplace_back(std::ldexp(r.real(), k), std::ldexp(r.imag(), k));
   }
   sort_roots(out);
   return out;
@@ -177,11 +181,9 @@ bool roots_stable(const Poly& p0, bool unit_circle) {
   if (p.size() <= 1) return true;
   if (zeros_at_origin(p) > 0 && !unit_circle) return false;
   // In s a scaled variable keeps the sign of Re; in z the circle fixes the scale.
-  double log_sigma = 0.0;
-  const Poly q = unit_circle ? scale(p, 1.0 / std::abs(p.front())) : scaled_variable(p, log_sigma);
+  int scale_k = 0;
+  const Poly q = unit_circle ? scale(p, 1.0 / std::abs(p.front())) : scaled_variable(p, scale_k);
   const int m = static_cast<int>(q.size()) - 1;
-  Poly dq;
-  for (int i = 0; i < m; ++i) dq.push_back(q[static_cast<std::size_t>(i)] * (m - i));
   Poly abs_q = q;
   for (double& c : abs_q) c = std::abs(c);
   const int nz = unit_circle ? zeros_at_origin(q) : 0;
@@ -191,10 +193,22 @@ bool roots_stable(const Poly& p0, bool unit_circle) {
   Complex worst;
   double worst_bound = 0.0;
   for (Complex x : companion_roots(drop_origin(q, nz))) {
-    // First-order bound of the root's error for a backward error of 4·n·ε in each coefficient.
-    const double slope = std::abs(eval(dq, x));
-    const double bound = 4.0 * m * std::numeric_limits<double>::epsilon() * eval(abs_q, std::abs(x)) /
-                         std::max(slope, std::numeric_limits<double>::min());
+    // Radius of the root's neighbourhood for a backward error E = 4·n·ε in each coefficient:
+    // min over k of (k!·E/|q^(k)(x)|)^(1/k), Taylor's estimate, which a cluster of k roots
+    // needs (a double root's first derivative is 0, its neighbourhood sqrt(E) wide).
+    const double err = 4.0 * m * std::numeric_limits<double>::epsilon() * eval(abs_q, std::abs(x));
+    double bound = std::numeric_limits<double>::infinity();
+    Poly derivative = q;
+    double factorial = 1.0;
+    for (int k = 1; k <= std::min(m, 8); ++k) {
+      Poly next;
+      const int deg = static_cast<int>(derivative.size()) - 1;
+      for (int i = 0; i < deg; ++i) next.push_back(derivative[static_cast<std::size_t>(i)] * (deg - i));
+      derivative = next;
+      factorial *= k;
+      const double slope = std::abs(eval(derivative, x));
+      if (slope > 0.0) bound = std::min(bound, std::pow(factorial * err / slope, 1.0 / k));
+    }
     // Distance inside the boundary: −Re s, or 1 − |z|.
     const double inside = unit_circle ? 1.0 - std::abs(x) : -x.real();
     if (inside < -bound) {
@@ -213,7 +227,7 @@ bool roots_stable(const Poly& p0, bool unit_circle) {
   }
   if (unstable) return false;
   if (undecided) {
-    const double sigma = std::exp(log_sigma);
+    const double sigma = std::ldexp(1.0, scale_k);
     fail("closed-loop stability cannot be decided in double precision: the pole near {} = {:.6g}{:+.6g}j of a "
          "degree-{} characteristic polynomial may be off by {:.2g}, across the {}",
          unit_circle ? "z" : "s", worst.real() * sigma, worst.imag() * sigma, m, worst_bound * sigma,
