@@ -49,8 +49,12 @@ void sort_unique(std::vector<double>& v) {
 
 /// Dense scan grid for crossovers of `le` on [lo, hi].
 std::vector<double> scan_grid(const LoopEval& le, double lo, double hi) {
+  // A corner that underflows (1e308*s/(s+1e-308): a root at 1e-616) or overflows must not make
+  // the range infinite, nor its point count an out-of-range integer.
+  lo = std::max(lo, 1e-300);
+  hi = std::clamp(hi, lo * 10.0, 1e300);
   const double decades = std::log10(hi / lo);
-  std::vector<double> w = log_grid(lo, hi, std::max(200, static_cast<int>(decades * 400.0)));
+  std::vector<double> w = log_grid(lo, hi, static_cast<int>(std::clamp(decades * 400.0, 200.0, 240000.0)));
   // Lightly damped roots turn the phase within a few percent of |root|: sample them finely.
   for (const FreqEval& fe : le.factors()) {
     const Tf& g = fe.tf();
