@@ -282,7 +282,7 @@ namespace {
 
 /// The closed loop's characteristic polynomial den + num; a continuous delay as its [6/6] Padé
 /// approximant in x = s·τ, `tau_s` then the scale back to s (1 without a delay).
-Poly characteristic(const Tf& loop, double& tau_s, bool* padded) {
+Poly characteristic(const Tf& loop, double& tau_s, bool* padded, int* den_degree = nullptr) {
   Tf l = loop;
   tau_s = 1.0;
   if (padded) *padded = false;
@@ -305,6 +305,7 @@ Poly characteristic(const Tf& loop, double& tau_s, bool* padded) {
     l = series(l, pade(1.0, 6));
     if (padded) *padded = true;
   }
+  if (den_degree) *den_degree = degree(l.den);
   return add(l.den, l.num);
 }
 
@@ -319,7 +320,10 @@ std::vector<Complex> closed_loop_poles(const Tf& loop, bool* padded) {
 
 bool closed_loop_stable(const Tf& loop) {
   double tau_s = 1.0;
-  const Poly p = characteristic(loop, tau_s, nullptr);
+  int den_degree = 0;
+  const Poly p = characteristic(loop, tau_s, nullptr, &den_degree);
+  // 1 + L(∞) = 0 (L = −1 − 1/z): a closed-loop pole at infinity, the loop is not well posed.
+  if (degree(p) < den_degree) return false;
   return roots_stable(p, loop.discrete());
 }
 
