@@ -3,13 +3,15 @@
 # libFuzzer, ASan and UBSan in build-fuzz/ and runs each for SECONDS (default 600), at most
 # JOBS at a time (default 2), under nice. New inputs go to build-fuzz/corpus/NAME (seeded from
 # tests/fuzz/corpus/NAME); a crash leaves its input in build-fuzz/findings/NAME/ and fails.
-# Usage: scripts/fuzz.sh [SECONDS] [NAME...]   (names: csv ini_model tf frames firmware serial_inputs margins)
+# Usage: scripts/fuzz.sh [SECONDS] [NAME...]   (names: csv ini_model tf frames firmware serial_inputs margins
+#   capture_meta controller_ini bode_meta excitation csv_roundtrip)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 seconds=${1:-600}
 shift || true
 names=("$@")
-[ ${#names[@]} -gt 0 ] || names=(csv ini_model tf frames firmware serial_inputs margins)
+[ ${#names[@]} -gt 0 ] || names=(csv ini_model tf frames firmware serial_inputs margins capture_meta controller_ini
+  bode_meta excitation csv_roundtrip)
 jobs=${JOBS:-2}
 build=${FUZZ_BUILD_DIR:-$root/build-fuzz}
 "$root/scripts/install-deps.sh" --fuzz

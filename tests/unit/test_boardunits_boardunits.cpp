@@ -65,6 +65,26 @@ TEST(BoardunitsController, OneParserForEveryTool) {
   EXPECT_EQ(back->a, c->a);
 }
 
+// A scale of 0 x inf made the gains nan, and nan cast to a register -2147483648 (kp = 0 ran).
+TEST(BoardunitsController, AScaleThatIsNotFiniteIsRefused) {
+  EXPECT_EQ(error_of("[controller]\nb = 0\na = 1\nduty_full_scale = 1e-308\n"),
+            "c.ini:4: [controller] duty_full_scale: input_scale x (60000/2048) x (1000/duty_full_scale) = "
+            "inf is not "
+            "a finite, nonzero scale");
+  EXPECT_EQ(error_of("[controller]\nb = 1\na = 1\ninput_scale = 1e300\nduty_full_scale = 1e-300\n"),
+            "c.ini:5: [controller] duty_full_scale: input_scale x (60000/2048) x (1000/duty_full_scale) = "
+            "inf is not "
+            "a finite, nonzero scale");
+  EXPECT_EQ(
+      error_of("[controller]\nb = 1\na = 1\ninput_scale = 1e-320\n"),
+      "c.ini:4: [controller] input_scale: input_scale x (60000/2048) x (1000/duty_full_scale) = 2.75e-318 is "
+      "not a finite, nonzero scale");
+  // A finite scale over a tiny a0: b0 = 0 would be 0 x inf on the board.
+  EXPECT_EQ(error_of("[controller]\nb = 0\na = 1e-320\n"),
+            "c.ini:2: [controller] b: fixed point: b0 = 0 is nan on the board (b0 x 0.2711496746 / a0)");
+  EXPECT_EQ(ControllerUnits{}.factor(), 0.25 * 1000.0 / 922.0);
+}
+
 TEST(BoardunitsController, FormsTheBoardCannotRunAreRefusedInOneLine) {
   EXPECT_EQ(error_of("[controller]\ntype = lead\nb = 1 2\na = 1 -0.5\n"),
             fmt::format("c.ini:4: [controller] a: a lead controller; {}", k_board_forms));

@@ -54,6 +54,38 @@ TEST(LinkCapturedBoard, AMalformedConfigIsOneErrorNamingTheCapture) {
   EXPECT_EQ(error_of("kp=1"), "cap.csv: board_config: no mode (the capture does not say what the board ran)");
 }
 
+// What the firmware core would refuse (a read-only register, limits out of order) was an abort
+// (MCG_DEMAND on the core's status) when mcg-sim ran the capture: now one line naming the line.
+TEST(LinkCapturedBoard, EveryBoardItReturnsTheCoreTakes) {
+  EXPECT_EQ(
+      error_of("mode=pi stream_seq=2"),
+      "cap.csv: board_config: 'stream_seq' is not one of the registers a capture states (mode, rpm_cmd, "
+      "clutch, load, coef_frac, kp, b0, b1, b2, duty_bias, duty_min, duty_max)");
+  EXPECT_EQ(error_of("mode=pi duty=5"),
+            "cap.csv: board_config: 'duty' is not one of the registers a capture states (mode, rpm_cmd, "
+            "clutch, load, coef_frac, kp, b0, b1, b2, duty_bias, duty_min, duty_max)");
+  EXPECT_EQ(error_of("mode=pi duty_min=50 duty_max=10"),
+            "cap.csv: board_config: duty_min 50 % is above duty_max 10 %");
+  EXPECT_EQ(error_of("mode=pi duty_max=90 duty_min=95"),
+            "cap.csv: board_config: duty_min 95 % is above duty_max 90 %");
+  EXPECT_EQ(error_of("mode=pi kp=1 b0=1 kp=2"), "cap.csv: board_config: 'kp' is given twice");
+  table::Metadata meta;
+  meta.set("source", "mcg-serial");
+  meta.set("board_config", "mode=p stream_seq=2");
+  meta.note_line("board_config", 7);
+  EXPECT_EQ(
+      test::error_of([&] { captured_board(meta, "cap.csv"); }),
+      "cap.csv:7: board_config: 'stream_seq' is not one of the registers a capture states (mode, rpm_cmd, "
+      "clutch, load, coef_frac, kp, b0, b1, b2, duty_bias, duty_min, duty_max)");
+  // Limits below the power-on floor, in either order: the core takes the floor first.
+  const auto board = captured_board(with_config("mode=p duty_max=-10 kp=1 duty_min=-50"), "cap.csv");
+  ASSERT_TRUE(board.has_value());
+  EXPECT_THAT(board->registers, ElementsAre(Pair(MCG_REG_KP, 256), Pair(MCG_REG_DUTY_MIN, -500),
+                                            Pair(MCG_REG_DUTY_MAX, -100)));
+  const auto loop = sim::board_loop_controller(board->mode, board->registers);
+  EXPECT_DOUBLE_EQ(loop->tick(0.0, 420.0), -100.0 / 1000.0);
+}
+
 // The core on the captured registers holds a speed as it does on the same registers from a
 // design: the same duties tick for tick.
 TEST(LinkCapturedBoard, TheModelRunsTheCapturedRegisters) {

@@ -71,6 +71,24 @@ TEST(TableRead, ErrorsNameLineColumnAndText) {
   EXPECT_EQ(error_of("t,v\n0,1\n# late: meta\n"), "in.csv:3: metadata line after the header");
 }
 
+// A name is written back as read: a control character in it (a CR inside one reached the
+// Writer's MCG_DEMAND, an abort of mcg-sim) is refused where it is read.
+TEST(TableRead, AColumnNameHoldsNoControlCharacter) {
+  EXPECT_EQ(error_of("t,v,x\ry\n0,1,2\n"),
+            "in.csv:1: header: column name 'x\\x0dy' holds a control character");
+  EXPECT_EQ(error_of("# a: b\nt,v\x1b[2J\n"),
+            "in.csv:2: header: column name 'v\\x1b[2J' holds a control character");
+  EXPECT_EQ(parse("t,\xcf\x89\r\n0,1\r\n").names, (std::vector<std::string>{"t", "\xcf\x89"}));
+}
+
+// Where a metadata value came from, for a message about it.
+TEST(TableRead, MetadataKnowsItsLines) {
+  const Table t = parse("# a: 1\n\n# b: 2\n# a: 3\nt\n0\n");
+  EXPECT_EQ(t.meta.where("in.csv", "a"), "in.csv:4");
+  EXPECT_EQ(t.meta.where("in.csv", "b"), "in.csv:3");
+  EXPECT_EQ(t.meta.where("in.csv", "c"), "in.csv");
+}
+
 TEST(TableRead, MissingColumnListsWhatThereIs) {
   const Table t = parse("t,rpm\n0,1\n");
   try {

@@ -16,6 +16,7 @@
 
 #include "board/board.hpp"
 #include "common/error.hpp"   // mcg::fail
+#include "common/quote.hpp"
 #include "config/ini.hpp"     // Ini
 #include "common/tool.hpp"    // stderr_is_terminal
 #include "link/interrupt.hpp" // InterruptGuard
@@ -114,7 +115,8 @@ void serve(const ServeOptions& options) {
   EmulatedBoard board(board_options);
   const link::InterruptGuard guard;
   if (stderr_is_terminal()) {
-    std::fputs(fmt::format("mcg-sim: board at {} ({}); Ctrl-C ends\n", pty.link_path(), pty.slave_path()).c_str(),
+    std::fputs(fmt::format("mcg-sim: board at {} ({}); Ctrl-C ends\n", printable_name(pty.link_path()),
+                           pty.slave_path()).c_str(),
                stderr);
   }
 

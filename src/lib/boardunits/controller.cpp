@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "common/checked.hpp"
 #include "common/error.hpp"
 #include "config/ini.hpp"
 #include "mcg_protocol.h"  // MCG_COEF_FRAC_BITS_MAX
@@ -36,12 +37,12 @@ BoardFixedPoint fixed_point_from_ini(const config::Ini& ini, const Controller& c
   BoardFixedPoint q;
   q.mode = ini.get(k_fixed, "mode").value_or("");
   if (q.mode != "p" && q.mode != "pi" && q.mode != "pid") ini.reject(k_fixed, "mode", "not p, pi or pid");
-  q.coef_frac = static_cast<int>(frac);
+  q.coef_frac = *to_integer(frac, 0, static_cast<int>(MCG_COEF_FRAC_BITS_MAX));
   q.factor = c.units().factor();
   const auto reg = [&](const char* key) {
     const double v = ini.number_or(k_fixed, key, 0.0);
     if (v != std::floor(v) || v < -32768.0 || v > 32767.0) ini.reject(k_fixed, key, "not a 16-bit integer");
-    q.regs.push_back(static_cast<std::int32_t>(v));
+    q.regs.push_back(*to_integer(v, std::int32_t{-32768}, std::int32_t{32767}));
     q.wanted.push_back(std::ldexp(v, -q.coef_frac));
     q.b.push_back(std::ldexp(v, -q.coef_frac) / q.factor);
   };
@@ -99,6 +100,15 @@ std::optional<Controller> controller_from_ini(const config::Ini& ini) {
     if (!(c.duty_full_scale > 0.0) || !std::isfinite(c.duty_full_scale)) {
       ini.reject(k_section, "duty_full_scale", "must be > 0");
     }
+  }
+  // factor() scales every coefficient onto the board (and the equation's output onto duty):
+  // finite both ways, or a gain becomes 0 x inf, a nan that no register can hold.
+  const double factor = c.units().factor();
+  if (!(std::isfinite(factor) && std::isfinite(1.0 / factor))) {
+    ini.reject(
+        k_section, ini.has(k_section, "duty_full_scale") ? "duty_full_scale" : "input_scale",
+        fmt::format("input_scale x (60000/2048) x (1000/duty_full_scale) = {} is not a finite, nonzero scale",
+                    config::format_number(factor)));
   }
   const double round = ini.number_or(k_section, "round_output", c.round_output ? 1.0 : 0.0);
   if (round != 0.0 && round != 1.0) ini.reject(k_section, "round_output", "must be 0 or 1");

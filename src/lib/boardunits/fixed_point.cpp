@@ -1,6 +1,8 @@
 // Quantisation of a designed controller into the board's registers.
 #include "boardunits/fixed_point.hpp"
 
+#include "common/checked.hpp"
+#include "common/demand.hpp"
 #include "common/error.hpp"
 #include "config/ini.hpp"
 #include "mcg_protocol.h"  // MCG_COEF_FRAC_BITS_MAX, MCG_ERR_LIMIT, MCG_ERR_FRAC_BITS
@@ -39,6 +41,10 @@ std::optional<BoardFixedPoint> board_fixed_point(const std::vector<double>& b, c
   std::size_t k_largest = 0;
   for (std::size_t k = 0; k < b.size(); ++k) {
     g.push_back(b[k] * scale);
+    if (std::isnan(g[k])) {
+      fail("fixed point: b{} = {} is {} on the board (b{} x {} / a0)", k, config::format_number(b[k]),
+           config::format_number(g[k]), k, config::format_number(q.factor));
+    }
     if (std::fabs(g[k]) > largest) k_largest = k;
     largest = std::fmax(largest, std::fabs(g[k]));
   }
@@ -56,7 +62,9 @@ std::optional<BoardFixedPoint> board_fixed_point(const std::vector<double>& b, c
       fail("fixed point: b{} = {} rounds to 0 in the board's Q{}.{} (the controller would change structure)", k,
            config::format_number(b[k]), 15 - f, f);
     }
-    q.regs.push_back(static_cast<std::int32_t>(v));
+    const std::optional<std::int32_t> reg = to_integer(v, std::int32_t{-32768}, std::int32_t{32767});
+    MCG_DEMAND(reg.has_value());  // coef_frac was chosen so that the largest fits
+    q.regs.push_back(*reg);
     q.wanted.push_back(g[k]);
     sum += std::fabs(v);
     q.b.push_back(std::ldexp(v, -f) / q.factor);

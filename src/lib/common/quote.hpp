@@ -19,6 +19,10 @@ inline constexpr std::size_t k_quote_max_bytes = 64;
 /// whole message as a last guard.
 std::string printable(std::string_view text, std::size_t max_bytes = k_quote_max_bytes);
 
+/// A file or port name as messages, metadata and written INI comments show it: printable(),
+/// never cut (a newline in a name would start a line of its own in what a tool writes).
+inline std::string printable_name(std::string_view name) { return printable(name, std::string_view::npos); }
+
 /// printable(text) between single quotes: 'text'.
 std::string quote(std::string_view text, std::size_t max_bytes = k_quote_max_bytes);
 /// One byte of input between single quotes ('\x07' for a control character).

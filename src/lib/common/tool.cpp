@@ -2,6 +2,7 @@
 #include "common/tool.hpp"
 
 #include "common/error.hpp"
+#include "common/quote.hpp"
 #include "mcg/version.hpp"
 
 #include <fmt/format.h>
@@ -145,7 +146,7 @@ int tool_main(CLI::App& app, int argc, char** argv, const std::function<void()>&
   });
 }
 
-std::string input_name(const std::string& path) { return path == "-" ? "<stdin>" : path; }
+std::string input_name(const std::string& path) { return path == "-" ? "<stdin>" : printable_name(path); }
 
 std::istream& open_input(const std::string& path) {
   if (path == "-") return std::cin;

@@ -40,7 +40,8 @@ std::string usage_message(const CLI::App& app, const CLI::ParseError& e);
 /// The returned stream stays valid until the next call with the same path or program end.
 std::istream& open_input(const std::string& path);
 
-/// Display name of an input path for error messages: "<stdin>" for "-".
+/// Display name of an input path for messages and written metadata: "<stdin>" for "-", else
+/// printable_name(path).
 std::string input_name(const std::string& path);
 
 /// True when stderr is a terminal: progress reports go there only then.

@@ -3,6 +3,7 @@
 
 #include "common/error.hpp"
 #include "common/line_reader.hpp"
+#include "common/quote.hpp"
 #include "table/table.hpp"
 
 #include <fmt/format.h>
@@ -92,8 +93,8 @@ Ini Ini::parse(std::istream& in, const std::string& source) {
 Ini Ini::load(const std::string& path) {
   if (path == "-") return parse(std::cin, "<stdin>");
   std::ifstream in(path);
-  if (!in) fail("{}: cannot open: {}", path, std::strerror(errno));
-  return parse(in, path);
+  if (!in) fail("{}: cannot open: {}", printable_name(path), std::strerror(errno));
+  return parse(in, printable_name(path));
 }
 
 Ini Ini::load_all(const std::vector<std::string>& paths) {

@@ -1,6 +1,8 @@
 // The catalog-free discrepancy fit (see discrepancy.hpp for the method).
 #include "fit/discrepancy.hpp"
 
+#include "common/checked.hpp"
+
 #include <fmt/format.h>
 
 #include <Eigen/Dense>
@@ -95,8 +97,8 @@ void windows(const model::Compiled& c, const Run& run, std::size_t first,
   const std::size_t rows = in.t_s.size();
   if (rows < 2) return;
   const double dt_typ = (in.t_s.back() - in.t_s.front()) / static_cast<double>(rows - 1);
-  const auto width =
-      std::max<std::size_t>(4, static_cast<std::size_t>(std::llround(k_discrepancy_window_s / dt_typ)));
+  const auto width = clamp_to_integer(std::round(k_discrepancy_window_s / dt_typ), std::size_t{4},
+                                      std::numeric_limits<std::size_t>::max());
   const model::Machine& mm = c.p.motor;
   const model::Machine& mg = c.p.generator;
   const double R = mm.R_ohm + c.R_on2;

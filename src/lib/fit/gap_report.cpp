@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <ostream>
 
+#include "common/checked.hpp"
 #include "common/demand.hpp"
 #include "fit/gap_parts.hpp"
 #include "table/table.hpp"
@@ -104,7 +106,8 @@ void gap_detail::analyse(const GapData& data, const std::vector<std::vector<std:
     band.push_back(band_breakdown(rpm_res[r], dt_s));
     if (run.rpm_estimator) {
       first_lag =
-          std::max(first_lag, static_cast<std::size_t>(std::lround(run.rpm_estimator->window_s / dt_s)) + 1);
+          std::max(first_lag, clamp_to_integer(std::round(run.rpm_estimator->window_s / dt_s), std::size_t{0},
+                                               std::numeric_limits<std::size_t>::max()) + 1);
     }
     joined_r.insert(joined_r.end(), rpm_res[r].begin(), rpm_res[r].end());
     joined_u.insert(joined_u.end(), run.inputs.v_V.begin(), run.inputs.v_V.end());

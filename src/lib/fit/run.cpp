@@ -525,7 +525,7 @@ int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& e
   }
   table::Writer w(out);
   w.meta("source", fmt::format("mcg-fit {} model --batch", k_version));
-  for (std::size_t k = 0; k < count; ++k) w.meta(fmt::format("file.{}", k + 1), options.files[k]);
+  for (std::size_t k = 0; k < count; ++k) w.meta(fmt::format("file.{}", k + 1), input_name(options.files[k]));
   std::vector<std::string> header{"file"};
   for (const auto& name : problem.free) {
     header.push_back(name);
@@ -565,11 +565,13 @@ int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& e
       err << fmt::format("mcg-fit: error: {}\n", o.error);
       status = 1;
     } else if (!o.result->nls.converged) {
-      err << fmt::format("mcg-fit: error: {}: the fit did not converge: {}\n", options.files[k], o.result->nls.reason);
+      err << fmt::format("mcg-fit: error: {}: the fit did not converge: {}\n", input_name(options.files[k]),
+                         o.result->nls.reason);
       if (status == 0) status = 3;
     } else if (!o.result->trustworthy()) {
-      report_untrustworthy(*o.result, options.files[k] + ": ", err);
-      err << fmt::format("mcg-fit: error: {}: the fit converged but its numbers are not trustworthy\n", options.files[k]);
+      report_untrustworthy(*o.result, input_name(options.files[k]) + ": ", err);
+      err << fmt::format("mcg-fit: error: {}: the fit converged but its numbers are not trustworthy\n",
+                         input_name(options.files[k]));
       if (status == 0) status = 3;
     }
   }

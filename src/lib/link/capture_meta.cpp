@@ -3,11 +3,13 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <sstream>
 
 #include "common/error.hpp"
 #include "common/quote.hpp"
+#include "common/tool.hpp"
 #include "config/ini.hpp"       // Ini, format_number
 #include "link/connection.hpp"  // Connection
 #include "link/registers.hpp"
@@ -22,7 +24,9 @@ Rig load_rig(const RigOptions& options) {
   rig.supply_V = model::model_from_ini(config::Ini::load_all(options.configs)).params.supply_V;
   rig.r_load_ohm = options.r_load_ohm;
   rig.supply_source = "model default";
-  if (!options.configs.empty()) rig.supply_source = fmt::format("{}", fmt::join(options.configs, ", "));
+  std::vector<std::string> names;
+  for (const auto& path : options.configs) names.push_back(input_name(path));
+  if (!names.empty()) rig.supply_source = fmt::format("{}", fmt::join(names, ", "));
   return rig;
 }
 
@@ -30,7 +34,7 @@ namespace {
 
 /// The registers a capture's board_config states: the mode, those a capture's rows also carry,
 /// and those that shape the controller's output.
-constexpr std::array<const char*, 12> k_config_registers{"mode",      "rpm_cmd",   "clutch",   "load",
+constexpr std::array<std::string_view, 12> k_config_registers{"mode",      "rpm_cmd",   "clutch",   "load",
                                                          "coef_frac", "kp",        "b0",       "b1",
                                                          "b2",        "duty_bias", "duty_min", "duty_max"};
 
@@ -41,7 +45,7 @@ bool carried_by_rows(std::string_view name) { return name == "rpm_cmd" || name =
 
 std::vector<std::pair<std::string, std::string>> board_config(Connection& c) {
   std::vector<std::pair<std::string, std::string>> out;
-  for (const char* name : k_config_registers) {
+  for (const std::string_view name : k_config_registers) {
     const RegisterInfo& reg = require_register(name);
     const int frac = reg.unit == Unit::Gain ? c.frac_bits() : 0;
     out.emplace_back(name, format_value(reg, c.session->read(reg), frac));
@@ -49,45 +53,65 @@ std::vector<std::pair<std::string, std::string>> board_config(Connection& c) {
   return out;
 }
 
-std::optional<CapturedBoard> captured_board(const table::Metadata& meta, std::string_view where) {
+std::optional<CapturedBoard> captured_board(const table::Metadata& meta, std::string_view source) {
   const std::optional<std::string> text = meta.get("board_config");
   if (!text) return std::nullopt;
+  const std::string at = fmt::format("{}: board_config", meta.where(source, "board_config"));
   CapturedBoard board;
   board.text = *text;
-  std::vector<std::pair<const RegisterInfo*, std::string>> pairs;
+  // The registers board_config writes and nothing else: another one (stream_seq, a read-only
+  // counter; duty, busy outside mode open) is nothing the firmware core could be set to.
+  std::array<std::optional<std::string>, k_config_registers.size()> values;
   std::istringstream words(*text);
   for (std::string word; words >> word;) {
     const auto eq = word.find('=');
     const RegisterInfo* reg = eq == std::string::npos ? nullptr : find_register(std::string_view(word).substr(0, eq));
-    if (reg == nullptr) fail("{}: board_config: {} is not NAME=value of a register", where, quote(word));
-    pairs.emplace_back(reg, word.substr(eq + 1));
+    if (reg == nullptr) fail("{}: {} is not NAME=value of a register", at, quote(word));
+    const auto it = std::find(k_config_registers.begin(), k_config_registers.end(), reg->name);
+    if (it == k_config_registers.end()) {
+      fail("{}: {} is not one of the registers a capture states ({})", at, quote(reg->name),
+           fmt::join(k_config_registers, ", "));
+    }
+    auto& slot = values[static_cast<std::size_t>(it - k_config_registers.begin())];
+    if (slot) fail("{}: {} is given twice", at, quote(reg->name));
+    slot = word.substr(eq + 1);
   }
-  const std::string at = fmt::format("{}: board_config", where);
-  const auto value_of = [&](const RegisterInfo& reg, const std::string& value, int frac) {
-    const double v = parse_value(reg, value, at);
+  const auto index_of = [](std::string_view name) {
+    return static_cast<std::size_t>(std::find(k_config_registers.begin(), k_config_registers.end(), name) -
+                                    k_config_registers.begin());
+  };
+  const auto value_of = [&](std::string_view name, int frac) -> std::int16_t {
+    const RegisterInfo& reg = require_register(name);
+    const std::optional<std::string>& given = values[index_of(name)];
+    if (!given) return reg.raw_default;
+    const double v = parse_value(reg, *given, at);
     try {
       return to_raw(reg, v, frac);
     } catch (const Error& e) {
       fail("{}: {}", at, e.what());
     }
   };
+  if (!values[index_of("mode")]) fail("{}: no mode (the capture does not say what the board ran)", at);
   // The gains are in units of 2^-coef_frac: coef_frac first.
-  int frac = require_register("coef_frac").raw_default;
-  bool has_mode = false;
-  for (const auto& [reg, value] : pairs) {
-    if (reg->name == "coef_frac") frac = value_of(*reg, value, 0);
+  const int frac = value_of("coef_frac", 0);
+  board.mode = value_of("mode", 0);
+  board.mode_name = format_value(require_register("mode"), board.mode, 0);
+  // The firmware checks duty_min <= duty_max at each write: a pair it would refuse is refused
+  // here, and the core takes them in k_config_registers' order (the floor first), which from
+  // the power-on limits every ordered pair passes.
+  const std::int16_t duty_min = value_of("duty_min", 0);
+  const std::int16_t duty_max = value_of("duty_max", 0);
+  if (duty_min > duty_max) {
+    const RegisterInfo& reg = require_register("duty_min");
+    fail("{}: duty_min {} % is above duty_max {} %", at, format_value(reg, duty_min, 0),
+         format_value(reg, duty_max, 0));
   }
-  for (const auto& [reg, value] : pairs) {
-    const std::int16_t raw = value_of(*reg, value, reg->unit == Unit::Gain ? frac : 0);
-    if (reg->id == MCG_REG_MODE) {
-      board.mode = raw;
-      board.mode_name = value;
-      has_mode = true;
-    } else if (!carried_by_rows(reg->name)) {
-      board.registers.emplace_back(reg->id, raw);
-    }
+  for (std::size_t i = 0; i < k_config_registers.size(); ++i) {
+    const std::string_view name = k_config_registers[i];
+    if (!values[i] || name == "mode" || carried_by_rows(name)) continue;
+    const RegisterInfo& reg = require_register(name);
+    board.registers.emplace_back(reg.id, value_of(name, reg.unit == Unit::Gain ? frac : 0));
   }
-  if (!has_mode) fail("{}: board_config: no mode (the capture does not say what the board ran)", where);
   return board;
 }
 

@@ -58,9 +58,11 @@ struct CapturedBoard {
 };
 
 /// Reads `# board_config` (written by write_rig_meta); nullopt when the metadata has none.
-/// Throws mcg::Error "<where>: board_config: ..." for a pair that is not NAME=value of a
-/// register, or a value outside it.
-std::optional<CapturedBoard> captured_board(const table::Metadata& meta, std::string_view where);
+/// Throws mcg::Error "<source>:<line>: board_config: ..." for a pair that is not NAME=value of
+/// one of the registers write_rig_meta writes, a register given twice, a value outside its
+/// register or limits the firmware would refuse (duty_min above duty_max): every board it
+/// returns, the firmware core takes.
+std::optional<CapturedBoard> captured_board(const table::Metadata& meta, std::string_view source);
 
 /// `# supply_V`, `# r_load_relay_ohm` and `# board_config` metadata lines.
 void write_rig_meta(table::Writer& w, const Rig& rig,

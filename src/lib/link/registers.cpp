@@ -8,6 +8,7 @@
 #include <cmath>
 #include <string>
 
+#include "common/checked.hpp"
 #include "common/error.hpp"  // mcg::fail
 #include "config/ini.hpp"    // format_number
 #include "mcg_protocol.h"    // MCG_REG_*, MCG_ST_*
@@ -105,15 +106,16 @@ double to_engineering(const RegisterInfo& reg, std::int16_t raw, int frac_bits) 
 }
 
 std::int16_t to_raw(const RegisterInfo& reg, double value, int frac_bits) {
-  const double scaled = std::round(value * steps_per_unit(reg, frac_bits));
-  if (!std::isfinite(value) || scaled < reg.raw_min || scaled > reg.raw_max) {
+  const std::optional<std::int32_t> raw =
+      to_integer(std::round(value * steps_per_unit(reg, frac_bits)), reg.raw_min, reg.raw_max);
+  if (!raw) {
     const double lo = reg.raw_min / steps_per_unit(reg, frac_bits);
     const double hi = reg.raw_max / steps_per_unit(reg, frac_bits);
     const std::string_view unit = unit_suffix(reg.unit);
     fail("{}: {}{}{} is outside {}..{}{}{}", reg.name, config::format_number(value), unit.empty() ? "" : " ",
          unit, config::format_number(lo), config::format_number(hi), unit.empty() ? "" : " ", unit);
   }
-  return static_cast<std::int16_t>(scaled);
+  return static_cast<std::int16_t>(*raw);
 }
 
 double parse_value(const RegisterInfo& reg, std::string_view text, std::string_view where) {

@@ -11,6 +11,8 @@
 #include <fmt/format.h>
 
 #include "common/error.hpp"     // mcg::fail
+#include "common/quote.hpp"
+#include "common/tool.hpp"
 #include "config/ini.hpp"       // Ini
 #include "mcg_protocol.h"       // MCG_MODE_OPEN
 #include "link/capture_meta.hpp"  // board_config, k_encoder_text
@@ -158,7 +160,7 @@ void run_get(const LinkOptions& link, const std::vector<std::string>& names, std
   auto c = connect(link);
   if (names.empty()) {
     for (const auto& reg : registers()) regs.push_back(&reg);
-    out << fmt::format("; mcg-serial get: {} on {}\n", c->board_text(), link.port);
+    out << fmt::format("; mcg-serial get: {} on {}\n", c->board_text(), printable_name(link.port));
     print_board_section(*c, regs, out);
     return;
   }
@@ -239,7 +241,7 @@ LoadPlan load_plan(const config::Ini& ini, const std::string& path) {
 }
 
 void run_load(const LinkOptions& link, const std::string& path, std::ostream& out, std::ostream& err) {
-  const LoadPlan plan = load_plan(config::Ini::load(path), path);
+  const LoadPlan plan = load_plan(config::Ini::load(path), input_name(path));
   auto c = connect(link);
   // The controller's set is staged whole and committed once: the loop runs the old controller up
   // to one tick and the new one, bumpless, from the next; the board checks the set as a whole
@@ -257,7 +259,8 @@ void run_load(const LinkOptions& link, const std::string& path, std::ostream& ou
 
   std::vector<const RegisterInfo*> regs;
   for (const LoadWrite& w : plan) regs.push_back(w.reg);
-  out << fmt::format("; mcg-serial load {}: {} on {}, every register read back\n", path, c->board_text(), link.port);
+  out << fmt::format("; mcg-serial load {}: {} on {}, every register read back\n", input_name(path),
+                     c->board_text(), printable_name(link.port));
   print_board_section(*c, regs, out);
 }
 
@@ -292,7 +295,7 @@ void run_dump(const LinkOptions& link, const DumpOptions& options, std::ostream&
   table::Writer w(out);
   w.meta("source", fmt::format("mcg-serial {} dump", k_version));
   w.meta("board", c->board_text());
-  w.meta("port", link.port);
+  w.meta("port", printable_name(link.port));
   w.meta("sample_period", config::format_number(interval_s));
   measurement::CountEstimator est;
   est.window_s = interval_s;

@@ -6,6 +6,7 @@
 #include <ostream>
 
 #include "common/error.hpp"       // mcg::fail
+#include "common/quote.hpp"
 #include "config/ini.hpp"         // format_number
 #include "link/capture_meta.hpp"  // load_rig, board_config
 #include "link/connection.hpp"    // connect
@@ -34,7 +35,7 @@ void write_stream_header(table::Writer& w, const Connection& c, const LinkOption
   constexpr double k_sample_s = MCG_STREAM_PERIOD_MS * 1e-3;
   w.meta("source", fmt::format("mcg-serial {} stream", k_version));
   w.meta("board", c.board_text());
-  w.meta("port", link.port);
+  w.meta("port", printable_name(link.port));
   w.meta("sample_period", config::format_number(k_sample_s));
   measurement::CountEstimator est;
   est.window_s = window_samples * k_sample_s;

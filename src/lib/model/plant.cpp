@@ -10,9 +10,13 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <numbers>
+#include <optional>
 
+#include "common/checked.hpp"
 #include "common/demand.hpp"
+#include "common/error.hpp"
 #include "model/effects/compiled.hpp"
 #include "model/model.hpp"
 
@@ -328,7 +332,11 @@ class PlantImpl {
   void integrate(double len) {
     const double h_lim = step_limit();
     if (m_c.V_b <= 0.0 || (m_motor_quasi && !(gen_circuit() && !gen_quasi_static()))) {
-      const auto n = static_cast<long>(std::ceil(len / h_lim - 1e-9));
+      const std::optional<long> steps =
+          to_integer(std::ceil(len / h_lim - 1e-9), 0L, std::numeric_limits<long>::max());
+      if (!steps)
+        fail("an interval of {} s between rows is more steps of {} s than the integrator counts", len, h_lim);
+      const long n = *steps;
       const double h = len / static_cast<double>(std::max(1L, n));
       double t = m_t;
       for (long k = 0; k < std::max(1L, n); ++k) {

@@ -214,7 +214,7 @@ std::string window_terminal(const std::string& program) {
   return found;
 }
 
-std::string display_label(const std::string& path) { return path == "-" ? "stdin" : path; }
+std::string display_label(const std::string& path) { return path == "-" ? "stdin" : printable_name(path); }
 
 /// Seconds gnuplot may take for one frame before the tool gives up on it.
 constexpr int k_frame_timeout_ms = 20000;

@@ -1,6 +1,7 @@
 // Excitation generators: piecewise-constant schedules, sweeps, multisines, shift registers.
 #include "signal/excitation.hpp"
 
+#include "common/checked.hpp"
 #include "common/error.hpp"
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 #include "common/demand.hpp"
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <string>
 
@@ -80,11 +82,16 @@ double schedule_value(double initial, std::span<const Change> changes, double t_
   return value;
 }
 
-std::vector<double> time_grid(double dt_s, double duration_s) {
+std::optional<std::size_t> grid_samples(double dt_s, double duration_s) {
   MCG_DEMAND(dt_s > 0 && duration_s > 0);
-  const auto n = static_cast<std::size_t>(std::floor(duration_s / dt_s + 1e-9));
-  std::vector<double> t(n);
-  for (std::size_t k = 0; k < n; ++k) t[k] = static_cast<double>(k) * dt_s;
+  return to_integer(std::floor(duration_s / dt_s + 1e-9), std::size_t{0}, k_max_rows);
+}
+
+std::vector<double> time_grid(double dt_s, double duration_s) {
+  const std::optional<std::size_t> n = grid_samples(dt_s, duration_s);
+  MCG_DEMAND(n.has_value());
+  std::vector<double> t(*n);
+  for (std::size_t k = 0; k < *n; ++k) t[k] = static_cast<double>(k) * dt_s;
   return t;
 }
 
@@ -122,8 +129,8 @@ std::vector<double> staircase_signal(std::span<const double> t_s, double amp, in
   const std::vector<double> levels = staircase_levels(amp, steps);
   std::vector<double> x(t_s.size());
   for (std::size_t k = 0; k < t_s.size(); ++k) {
-    const double j = std::floor(t_s[k] / hold_s + 1e-9);
-    const auto index = static_cast<std::size_t>(std::clamp(j, 0.0, static_cast<double>(levels.size() - 1)));
+    const auto index =
+        clamp_to_integer(std::floor(t_s[k] / hold_s + 1e-9), std::size_t{0}, levels.size() - 1);
     x[k] = levels[index];
   }
   return x;
@@ -153,8 +160,15 @@ std::vector<int> multisine_harmonics(double f0_hz, double f1_hz, int lines, doub
   if (h0 < 1.0 - 1e-9) {
     fail("--f0 {} Hz is below the base frequency 1/period = {} Hz", f0_hz, 1.0 / period_s);
   }
-  const auto lowest = static_cast<int>(std::lround(h0));
-  const auto highest = static_cast<int>(std::floor(h1 + 1e-9));
+  // Harmonics are ints: a band beyond them is refused (the caller bounds the period's samples).
+  const std::optional<int> lowest_h = to_integer(std::round(h0), 1, std::numeric_limits<int>::max());
+  const std::optional<int> highest_h = to_integer(std::floor(h1 + 1e-9), 1, std::numeric_limits<int>::max());
+  if (!lowest_h || !highest_h) {
+    fail("--f0 {} Hz, --f1 {} Hz: more harmonics of 1/period = {} Hz than a multisine numbers", f0_hz, f1_hz,
+         1.0 / period_s);
+  }
+  const int lowest = *lowest_h;
+  const int highest = *highest_h;
   if (highest - lowest + 1 < lines) {
     fail("--lines {}: the band {}..{} Hz holds only {} harmonics of 1/period = {} Hz", lines, f0_hz, f1_hz,
          std::max(0, highest - lowest + 1), 1.0 / period_s);
@@ -163,7 +177,7 @@ std::vector<int> multisine_harmonics(double f0_hz, double f1_hz, int lines, doub
   for (int j = 0; j < lines; ++j) {
     const double u = lines == 1 ? 0.0 : static_cast<double>(j) / (lines - 1);
     const double target = spacing == ChirpSpacing::log ? h0 * std::pow(h1 / h0, u) : h0 + (h1 - h0) * u;
-    int harmonic = std::clamp(static_cast<int>(std::lround(target)), lowest, highest);
+    int harmonic = clamp_to_integer(std::round(target), lowest, highest);
     if (!h.empty() && harmonic <= h.back()) harmonic = h.back() + 1;
     h.push_back(harmonic);
   }
@@ -191,10 +205,14 @@ std::vector<double> multisine_signal(std::size_t samples, double amp, std::size_
   const double np = static_cast<double>(period_samples);
   std::vector<double> period(period_samples, 0.0);
   for (std::size_t j = 0; j < harmonics.size(); ++j) {
+    MCG_DEMAND(harmonics[j] > 0);
+    const std::size_t h = static_cast<std::size_t>(harmonics[j]) % period_samples;
+    // h k modulo the period, kept by adding h, so the argument stays small and exact.
+    std::size_t hk = 0;
     for (std::size_t k = 0; k < period_samples; ++k) {
-      // Reduce h k modulo the period first so the argument stays small and exact.
-      const auto hk = (static_cast<std::uint64_t>(harmonics[j]) * k) % period_samples;
       period[k] += std::cos(2.0 * k_pi * static_cast<double>(hk) / np + phases_rad[j]);
+      hk += h;
+      if (hk >= period_samples) hk -= period_samples;
     }
   }
   double peak = 0.0;

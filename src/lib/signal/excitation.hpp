@@ -5,12 +5,21 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <random>
 #include <span>
 #include <string_view>
 #include <vector>
 
 namespace mcg::signal {
+
+/// The most rows mcg-sweep writes for an excitation, or resamples a measured table to (a day
+/// at 10 ms is 8.64e6 rows; each row costs about 32 bytes while the table is built). Options
+/// whose product asks for more are refused, naming them, before anything is allocated.
+inline constexpr std::size_t k_max_rows = 10'000'000;
+
+/// The most cosine terms (lines x samples of one period) a multisine computes: about 2 s.
+inline constexpr double k_max_multisine_terms = 2e8;
 
 /// One change of a piecewise-constant value: from `time_s` on, the value is `value`.
 struct Change {
@@ -25,8 +34,12 @@ std::vector<Change> parse_schedule(std::string_view text, std::string_view optio
 /// Value at `t_s` of a schedule that holds `initial` until its first change.
 double schedule_value(double initial, std::span<const Change> changes, double t_s);
 
-/// The sample grid t_k = k dt_s for k = 0 .. n-1, n = floor(duration_s / dt_s) (a duration
-/// within 1e-9 of a whole number of steps counts as whole). Rows cover [0, duration).
+/// Samples of dt_s in [0, duration): floor(duration_s / dt_s) (a duration within 1e-9 of a
+/// whole number of steps counts as whole), nullopt when more than k_max_rows.
+std::optional<std::size_t> grid_samples(double dt_s, double duration_s);
+
+/// The sample grid t_k = k dt_s for k = 0 .. n-1, n = grid_samples() (at most k_max_rows:
+/// the caller has checked, MCG_DEMAND). Rows cover [0, duration).
 std::vector<double> time_grid(double dt_s, double duration_s);
 
 /// Step sequence: 0 before `at_s`, `level` from `at_s`, then each further change of `then`

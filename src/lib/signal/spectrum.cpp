@@ -3,6 +3,7 @@
 // (one million samples in well under the 0.5 s goal; see bench/bench_bode.cpp).
 #include "signal/spectrum.hpp"
 
+#include "common/checked.hpp"
 #include "common/error.hpp"
 
 #include <unsupported/Eigen/FFT>
@@ -40,8 +41,9 @@ Response welch_h1(std::span<const double> x, std::span<const double> y, double d
   const std::size_t n = x.size();
   if (segment < 16) fail("--segment {}: needs at least 16 samples", segment);
   if (n < segment) fail("record too short: {} samples, one segment needs {}", n, segment);
-  const auto step = std::max<std::size_t>(
-      1, segment - static_cast<std::size_t>(std::lround(overlap * static_cast<double>(segment))));
+  const auto step =
+      std::max<std::size_t>(1, segment - clamp_to_integer(std::round(overlap * static_cast<double>(segment)),
+                                                          std::size_t{0}, segment));
   const double seg = static_cast<double>(segment);
 
   std::vector<double> window(segment);
@@ -188,7 +190,11 @@ Spacing spacing_of(std::span<const double> t_s) {
 std::vector<double> resample_linear(std::span<const double> t_s, std::span<const double> y, double dt_s) {
   MCG_DEMAND(t_s.size() == y.size() && t_s.size() >= 2 && dt_s > 0);
   const double t0 = t_s.front();
-  const auto n = static_cast<std::size_t>(std::floor((t_s.back() - t0) / dt_s + 1e-9)) + 1;
+  // The caller has bounded the grid (it sizes the allocation).
+  const std::optional<std::size_t> intervals =
+      to_integer(std::floor((t_s.back() - t0) / dt_s + 1e-9), std::size_t{0}, std::size_t{1} << 40);
+  MCG_DEMAND(intervals.has_value());
+  const std::size_t n = *intervals + 1;
   std::vector<double> out(n);
   std::size_t j = 0;
   for (std::size_t k = 0; k < n; ++k) {

@@ -1,7 +1,9 @@
 // mcg-sweep's two halves: excitation tables out, frequency responses of measured tables.
 #include "signal/sweep.hpp"
 
+#include "common/checked.hpp"
 #include "common/error.hpp"
+#include "common/quote.hpp"
 #include "config/ini.hpp"
 #include "mcg/version.hpp"
 #include "signal/excitation.hpp"
@@ -37,15 +39,42 @@ std::string join_numbers(const std::vector<double>& values) {
   return text;
 }
 
-// Whole number of samples of dt in `seconds`, or an error naming the option.
-std::size_t whole_samples(double seconds, double dt_s, const char* option) {
+// Whole number of samples of dt in `seconds`, at most `max`, or an error naming the option.
+// `dt_name` names the step: "--dt", or a measured table's sample period.
+std::size_t whole_samples(double seconds, double dt_s, std::string_view option, std::size_t max = k_max_rows,
+                          std::string_view dt_name = "--dt") {
   const double n = seconds / dt_s;
   const double rounded = std::round(n);
-  if (rounded < 1 || std::abs(n - rounded) > 1e-6 * rounded) {
-    fail("{} {} s is not a whole number of --dt {} s samples", option, format_number(seconds),
+  if (!(rounded >= 1) || std::abs(n - rounded) > 1e-6 * rounded) {
+    fail("{} {} s is not a whole number of {} {} s samples", option, format_number(seconds), dt_name,
          format_number(dt_s));
   }
-  return static_cast<std::size_t>(rounded);
+  const std::optional<std::size_t> count = to_integer(rounded, std::size_t{1}, max);
+  if (!count) {
+    fail("{} {} s is {} samples of {} {} s, more than the {} it may span", option, format_number(seconds),
+         format_number(rounded), dt_name, format_number(dt_s), max);
+  }
+  return *count;
+}
+
+// What sets the table's length, for a message about it.
+std::string duration_text(Generator g, const GeneratorOptions& o, double duration_s) {
+  const std::string d = format_number(duration_s);
+  if (o.duration_s) return fmt::format("--duration {} s", d);
+  switch (g) {
+    case Generator::step:
+      return fmt::format("the default --duration {} s (1 s past the last step, --at or --then)", d);
+    case Generator::staircase:
+      return fmt::format("the default --duration {} s ((4 --steps + 1) x --hold)", d);
+    case Generator::chirp:
+      break;
+    case Generator::multisine:
+      return fmt::format("the default --duration {} s (three periods: --period, else 1/--f0)", d);
+    case Generator::prbs:
+    case Generator::aprbs:
+      return fmt::format("the default --duration {} s (two periods of --order {} at --clock)", d, o.order);
+  }
+  return fmt::format("the default --duration {} s", d);
 }
 
 void check_band(const GeneratorOptions& o) {
@@ -129,10 +158,17 @@ Excitation excite(Generator g, const GeneratorOptions& o, const std::vector<doub
       check_band(o);
       const ChirpSpacing spacing = spacing_of_option(o.spacing, ChirpSpacing::log);
       // The period is a whole number of samples, so every line is an exact DFT bin.
-      const double wanted_period = o.period_s.value_or(1.0 / o.f0_hz);
       const std::size_t period_samples =
           o.period_s ? whole_samples(*o.period_s, o.dt_s, "--period")
-                     : static_cast<std::size_t>(std::max(1.0, std::ceil(wanted_period / o.dt_s - 1e-9)));
+                     : whole_samples(std::max(1.0, std::ceil(1.0 / o.f0_hz / o.dt_s - 1e-9)) * o.dt_s, o.dt_s,
+                                     "the period 1/--f0");
+      // Each line costs one cosine per sample of the period.
+      const double terms = static_cast<double>(o.lines) * static_cast<double>(period_samples);
+      if (terms > k_max_multisine_terms) {
+        fail("--lines {} over a period of {} samples is {} terms, more than the {} a multisine computes "
+             "(fewer --lines, a shorter --period or higher --f0, a larger --dt)",
+             o.lines, period_samples, format_number(terms), format_number(k_max_multisine_terms));
+      }
       const double period = static_cast<double>(period_samples) * o.dt_s;
       const auto harmonics = multisine_harmonics(o.f0_hz, o.f1_hz, o.lines, period, spacing);
       std::vector<double> phases;
@@ -223,7 +259,7 @@ std::vector<double> numbers_in(const std::string& text) {
   std::string item;
   while (in >> item) {
     double v = 0;
-    if (table::parse_number(item, v)) values.push_back(v);
+    if (table::parse_number(item, v) && std::isfinite(v)) values.push_back(v);
   }
   return values;
 }
@@ -240,16 +276,28 @@ void generate(Generator generator, const GeneratorOptions& o, std::ostream& out)
   check_values(r_load, "--r-load-schedule", false);
 
   const double duration = o.duration_s.value_or(default_duration_s(generator, o, then));
-  const std::vector<double> t_excitation = time_grid(o.dt_s, duration);
-  if (t_excitation.size() < 2) {
+  // The table's size is checked before anything is allocated: its rows, and a chirp's frame.
+  const std::optional<std::size_t> samples = grid_samples(o.dt_s, duration);
+  if (!samples) {
+    fail("{} at --dt {} s is {} rows, more than the {} mcg-sweep writes",
+         duration_text(generator, o, duration), format_number(o.dt_s),
+         format_number(std::floor(duration / o.dt_s)), k_max_rows);
+  }
+  if (*samples < 2) {
     fail("--duration {} s holds fewer than two samples of --dt {} s", format_number(duration),
          format_number(o.dt_s));
   }
-  Excitation e = excite(generator, o, t_excitation, then, duration);
   // A chirp is framed by the bias alone, so that the plant is settled when the sweep starts
   // and every Welch segment that holds part of the sweep lies inside the record.
   const std::size_t lead =
       generator == Generator::chirp && o.settle_s > 0 ? whole_samples(o.settle_s, o.dt_s, "--settle") : 0;
+  if (2 * lead + *samples > k_max_rows) {
+    fail("--settle {} s twice and {} at --dt {} s is {} rows, more than the {} mcg-sweep writes",
+         format_number(o.settle_s), duration_text(generator, o, duration), format_number(o.dt_s),
+         2 * lead + *samples, k_max_rows);
+  }
+  const std::vector<double> t_excitation = time_grid(o.dt_s, duration);
+  Excitation e = excite(generator, o, t_excitation, then, duration);
   if (lead > 0) {
     std::vector<double> framed(lead, 0.0);
     framed.insert(framed.end(), e.x.begin(), e.x.end());
@@ -259,8 +307,6 @@ void generate(Generator generator, const GeneratorOptions& o, std::ostream& out)
     e.meta.set("excitation_start_s", format_number(start));
     e.meta.set("excitation_end_s", format_number(start + static_cast<double>(t_excitation.size()) * o.dt_s));
   }
-  std::vector<double> t(e.x.size());
-  for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<double>(k) * o.dt_s;
 
   table::Writer w(out);
   w.meta("source", fmt::format("mcg-sweep {}", k_version));
@@ -272,20 +318,25 @@ void generate(Generator generator, const GeneratorOptions& o, std::ostream& out)
   std::size_t next_r_load = 0;
   double clutch_now = o.clutch;
   double r_load_now = o.r_load_ohm;
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    while (next_clutch < clutch.size() && clutch[next_clutch].time_s <= t[k] + 5e-10) {
+  for (std::size_t k = 0; k < e.x.size(); ++k) {
+    const double t = static_cast<double>(k) * o.dt_s;
+    while (next_clutch < clutch.size() && clutch[next_clutch].time_s <= t + 5e-10) {
       clutch_now = clutch[next_clutch++].value;
     }
-    while (next_r_load < r_load.size() && r_load[next_r_load].time_s <= t[k] + 5e-10) {
+    while (next_r_load < r_load.size() && r_load[next_r_load].time_s <= t + 5e-10) {
       r_load_now = r_load[next_r_load++].value;
     }
-    w.row({t[k], o.bias + e.x[k], clutch_now, r_load_now});
+    w.row({t, o.bias + e.x[k], clutch_now, r_load_now});
   }
   w.finish();
 }
 
 void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
-  table::Table tbl = table::read_path(o.input);
+  bode(table::read_path(o.input), o, out, warn);
+}
+
+void bode(const table::Table& input, const BodeOptions& o, std::ostream& out, std::ostream& warn) {
+  table::Table tbl = input;
   // A capture starts with rows the speed estimator has not filled yet: skipped, and said so.
   if (const auto skipped = table::leading_unmeasured(tbl, {o.in_column, o.out_column}); skipped.rows > 0) {
     warn << "mcg-sweep: note: " << table::skipped_note(tbl, skipped) << '\n';
@@ -309,9 +360,29 @@ void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
   std::span<const double> y = y_in;
   if (!spacing.uniform) {
     double nominal = spacing.median_dt_s;
+    std::string nominal_from = fmt::format("the median step {} s", format_number(nominal));
     if (const auto period = tbl.meta.get("sample_period")) {
       double v = 0;
-      if (table::parse_number(*period, v) && v > 0 && std::isfinite(v)) nominal = v;
+      if (table::parse_number(*period, v) && v > 0 && std::isfinite(v)) {
+        nominal = v;
+        nominal_from = fmt::format("{}: sample_period {} s", tbl.meta.where(tbl.source, "sample_period"),
+                                   format_number(v));
+      }
+    }
+    // The resampled grid is allocated twice (input and output): its size is checked first.
+    const double span_s = t_in.back() - t_in.front();
+    const std::optional<std::size_t> samples =
+        to_integer(std::floor(span_s / nominal + 1e-9) + 1.0, std::size_t{0}, k_max_rows);
+    if (!samples) {
+      fail("{} resamples the {} s of uneven rows to {} samples, more than the {} mcg-sweep resamples to",
+           nominal_from, format_number(span_s), format_number(std::floor(span_s / nominal) + 1.0),
+           k_max_rows);
+    }
+    if (*samples < 32) {
+      fail(
+          "{} resamples the {} s of uneven rows to {} samples, too short for a frequency response (at least "
+          "32)",
+          nominal_from, format_number(span_s), *samples);
     }
     dt = nominal;
     x_even = resample_linear(t_in, x_in, dt);
@@ -326,15 +397,23 @@ void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
   // Lines come from --lines/--period, else from the multisine generator's metadata.
   std::vector<double> lines;
   std::optional<double> period = o.period_s;
+  std::string period_name = "--period";
+  std::string lines_name = "--lines";
   if (!o.lines_hz.empty()) {
     lines = parse_list(o.lines_hz, "--lines");
   } else if (o.method != BodeMethod::welch) {
-    if (const auto meta_lines = tbl.meta.get("multisine_lines_hz")) lines = numbers_in(*meta_lines);
+    if (const auto meta_lines = tbl.meta.get("multisine_lines_hz")) {
+      lines = numbers_in(*meta_lines);
+      lines_name = fmt::format("{}: multisine_lines_hz", tbl.meta.where(tbl.source, "multisine_lines_hz"));
+    }
   }
   if (!period && !lines.empty()) {
     if (const auto meta_period = tbl.meta.get("multisine_period_s")) {
       const auto values = numbers_in(*meta_period);
-      if (values.size() == 1 && values[0] > 0) period = values[0];
+      if (values.size() == 1 && values[0] > 0) {
+        period = values[0];
+        period_name = fmt::format("{}: multisine_period_s", tbl.meta.where(tbl.source, "multisine_period_s"));
+      }
     }
   }
   const bool use_lines = o.method == BodeMethod::lines || (o.method == BodeMethod::automatic && !lines.empty());
@@ -348,16 +427,23 @@ void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
   meta.set("source", fmt::format("mcg-sweep {} bode", k_version));
   meta.set("response", fmt::format("{} -> {}", o.in_column, o.out_column));
   if (use_lines) {
-    const std::size_t period_samples = whole_samples(*period, dt, "--period");
+    // One period at least must fit the record (line_response says so for a shorter one).
+    const std::size_t period_samples =
+        whole_samples(*period, dt, period_name, std::max<std::size_t>(x.size(), 1), "the sample period");
     const double exact_period = static_cast<double>(period_samples) * dt;
     std::vector<int> harmonics;
     for (double f : lines) {
       const double h = f * exact_period;
       if (h < 0.5 || std::abs(h - std::round(h)) > 1e-6 * std::max(1.0, h)) {
-        fail("--lines: {} Hz is not a multiple of 1/period = {} Hz", format_number(f),
+        fail("{}: {} Hz is not a multiple of 1/period = {} Hz", lines_name, format_number(f),
              format_number(1.0 / exact_period));
       }
-      harmonics.push_back(static_cast<int>(std::lround(h)));
+      const std::optional<int> harmonic = to_integer(std::round(h), 1, std::numeric_limits<int>::max());
+      if (!harmonic || 2 * static_cast<double>(*harmonic) >= static_cast<double>(period_samples)) {
+        fail("{}: {} Hz is not below the Nyquist frequency {} Hz", lines_name, format_number(f),
+             format_number(0.5 / dt));
+      }
+      harmonics.push_back(*harmonic);
     }
     r = line_response(x, y, dt, period_samples, harmonics);
     const std::size_t periods = x.size() / period_samples;
@@ -371,8 +457,9 @@ void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
     const auto end = meta_number(tbl.meta, "excitation_end_s");
     std::size_t segment = o.segment;
     if (start && end && *end > *start) {
-      const auto first = static_cast<std::size_t>(std::max(0.0, std::round((*start - t_in.front()) / dt)));
-      const auto last = std::min(x.size(), static_cast<std::size_t>(std::max(0.0, std::round((*end - t_in.front()) / dt))));
+      // Metadata beyond the record means its ends.
+      const auto first = clamp_to_integer(std::round((*start - t_in.front()) / dt), std::size_t{0}, x.size());
+      const auto last = clamp_to_integer(std::round((*end - t_in.front()) / dt), std::size_t{0}, x.size());
       if (segment == 0) segment = default_segment(last > first ? last - first : x.size());
       const std::size_t from = first > segment / 2 ? first - segment / 2 : 0;
       const std::size_t to = std::min(x.size(), last + segment / 2);
@@ -384,7 +471,8 @@ void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
     if (segment == 0) segment = default_segment(x.size());
     r = welch_h1(x, y, dt, segment, o.overlap);
     const auto step = std::max<std::size_t>(
-        1, segment - static_cast<std::size_t>(std::lround(o.overlap * static_cast<double>(segment))));
+        1, segment - clamp_to_integer(std::round(o.overlap * static_cast<double>(segment)), std::size_t{0},
+                                      segment));
     meta.set("estimator",
              fmt::format("Welch H1, Hann window, segment {} samples ({} Hz resolution), overlap {}, {} averages",
                          segment, format_number(1.0 / (static_cast<double>(segment) * dt)),

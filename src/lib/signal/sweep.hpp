@@ -8,6 +8,10 @@
 #include <string>
 #include <vector>
 
+namespace mcg::table {
+struct Table;
+}
+
 namespace mcg::signal {
 
 enum class Generator { step, staircase, chirp, multisine, prbs, aprbs };
@@ -68,5 +72,7 @@ struct BodeOptions {
 /// f_hz, mag_db, phase_deg, coherence. Uneven sampling is resampled by linear interpolation
 /// with one warning line on `warn` ("mcg-sweep: warning: ...").
 void bode(const BodeOptions& options, std::ostream& out, std::ostream& warn);
+/// bode() of a table already read (options.input unused).
+void bode(const table::Table& table, const BodeOptions& options, std::ostream& out, std::ostream& warn);
 
 }  // namespace mcg::signal

@@ -2,6 +2,7 @@
 #include "sim/controller.hpp"
 
 #include <algorithm>
+#include "common/checked.hpp"
 #include "common/demand.hpp"
 #include <cmath>
 
@@ -98,10 +99,11 @@ class BoardController final : public LoopController {
     // The duty set in open mode, then three ticks at the speed's pulses (the PID's history):
     // the first tick with a command switches the mode, bumpless from that duty.
     const double per_tick = std::fabs(omega_rad_s) * dt_s() * boardunits::k_board_counts_per_rev / (2.0 * std::numbers::pi);
-    const auto pulses = static_cast<std::uint16_t>(std::lround(std::fmin(per_tick, std::numeric_limits<std::uint16_t>::max())));
-    const long raw = std::clamp(std::lround(duty * boardunits::k_board_duty_full), static_cast<long>(m_core.read(MCG_REG_DUTY_MIN)),
-                                static_cast<long>(m_core.read(MCG_REG_DUTY_MAX)));
-    m_core.write(MCG_REG_DUTY, static_cast<std::int16_t>(raw));
+    const auto pulses =
+        clamp_to_integer(std::round(per_tick), std::uint16_t{0}, std::numeric_limits<std::uint16_t>::max());
+    const auto raw = clamp_to_integer(std::round(duty * boardunits::k_board_duty_full),
+                                      m_core.read(MCG_REG_DUTY_MIN), m_core.read(MCG_REG_DUTY_MAX));
+    m_core.write(MCG_REG_DUTY, raw);
     for (int k = 0; k < 3; ++k) m_core.tick(pulses);
     m_started = true;
     m_count = count_a_tick_before(omega_rad_s, dt_s());

@@ -17,6 +17,7 @@
 #include "common/demand.hpp"
 #include "common/error.hpp"
 #include "common/fd_input.hpp"
+#include "common/tool.hpp"
 #include "config/ini.hpp"
 #include "link/capture_meta.hpp"
 #include "mcg/version.hpp"
@@ -38,6 +39,13 @@ std::string join(const std::vector<std::string>& parts, std::string_view sep) {
     out += p;
   }
   return out;
+}
+
+/// The names of `paths` as metadata shows them (printable_name()).
+std::vector<std::string> printable_names(const std::vector<std::string>& paths) {
+  std::vector<std::string> names;
+  for (const auto& p : paths) names.push_back(input_name(p));
+  return names;
 }
 
 std::string coefficient_list(const std::vector<double>& v) {
@@ -259,7 +267,7 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   const measurement::CurrentChain adc = measurement::board_current_chain();
   meta.set("source", fmt::format("mcg-sim {}", k_version));
   meta.set("model", opt.configs.empty() ? std::string("built-in rig (the report's, tuned friction)")
-                                        : join(opt.configs, " + "));
+                                        : join(printable_names(opt.configs), " + "));
   std::vector<std::string> effect_texts;
   for (const auto& e : model.effects) effect_texts.push_back(model::format_effect(e));
   meta.set("effects", effect_texts.empty() ? std::string("none") : join(effect_texts, "; "));

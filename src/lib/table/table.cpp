@@ -133,6 +133,7 @@ void Metadata::set(std::string_view key, std::string_view value) {
 }
 
 void Metadata::erase(std::string_view key) {
+  if (const auto line = m_lines.find(key); line != m_lines.end()) m_lines.erase(line);
   const auto it = m_index.find(key);
   if (it == m_index.end()) return;
   const std::size_t at = it->second;
@@ -141,6 +142,19 @@ void Metadata::erase(std::string_view key) {
   for (auto& entry : m_index) {
     if (entry.second > at) --entry.second;
   }
+}
+
+void Metadata::note_line(std::string_view key, std::size_t line) {
+  if (const auto it = m_lines.find(key); it != m_lines.end()) {
+    it->second = line;
+  } else {
+    m_lines.emplace(key, line);
+  }
+}
+
+std::string Metadata::where(std::string_view source, std::string_view key) const {
+  const auto it = m_lines.find(key);
+  return it == m_lines.end() ? std::string(source) : fmt::format("{}:{}", source, it->second);
 }
 
 bool parse_number(std::string_view text, double& value) {
@@ -249,11 +263,9 @@ Reader::Reader(std::istream& in, std::string source) : m_lines(in, std::move(sou
     if (t.front() != '#') break;
     std::string_view body = trim(t.substr(1));
     const auto colon = body.find(':');
-    if (colon == std::string_view::npos) {
-      m_meta.set(body, "");
-    } else {
-      m_meta.set(trim(body.substr(0, colon)), trim(body.substr(colon + 1)));
-    }
+    const std::string_view key = colon == std::string_view::npos ? body : trim(body.substr(0, colon));
+    m_meta.set(key, colon == std::string_view::npos ? std::string_view() : trim(body.substr(colon + 1)));
+    m_meta.note_line(key, m_lines.line());
   }
   const std::size_t at = m_lines.line();
   // The names seen, as views into the header line (it stays put until the next read).
@@ -266,6 +278,11 @@ Reader::Reader(std::istream& in, std::string source) : m_lines(in, std::move(sou
       fail("{}:{}: header: more than {} columns", src, at, k_max_columns);
     }
     if (name.empty()) fail("{}:{}: header: empty column name (column {})", src, at, m_columns.size() + 1);
+    // A name is written back as it is read (Writer::header): no control character fits a line.
+    if (std::any_of(name.begin(), name.end(),
+                    [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; })) {
+      fail("{}:{}: header: column name {} holds a control character", src, at, quote(name));
+    }
     if (!seen.insert(name).second) fail("{}:{}: header: duplicate column {}", src, at, quote(name));
     double probe = 0;
     if (parse_number(name, probe)) {
@@ -438,6 +455,8 @@ void Writer::metadata(const Metadata& meta) {
 }
 
 void Writer::meta(std::string_view key, std::string_view value) {
+  // One line each: a value that names a file quotes it (printable()), input cannot hold a newline.
+  MCG_DEMAND(key.find('\n') == std::string_view::npos && value.find('\n') == std::string_view::npos);
   m_buffer += "# ";
   m_buffer += key;
   if (!value.empty()) {

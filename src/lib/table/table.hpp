@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <iosfwd>
 #include <optional>
 #include <span>
@@ -32,6 +33,10 @@ class Metadata {
   void erase(std::string_view key);
   const std::vector<Entry>& entries() const { return m_entries; }
   bool empty() const { return m_entries.empty(); }
+  /// Notes that `key` was read from line `line` of its source (the Reader does).
+  void note_line(std::string_view key, std::size_t line);
+  /// "<source>:<line>" of `key` when read from a source, else "<source>" (for messages).
+  std::string where(std::string_view source, std::string_view key) const;
 
  private:
   struct Hash {
@@ -42,6 +47,8 @@ class Metadata {
   /// Position of each key in m_entries (keys are unique there): a lookup costs the same for
   /// the 100000th line of metadata as for the first.
   std::unordered_map<std::string, std::size_t, Hash, std::equal_to<>> m_index;
+  /// The line each key was read from (note_line()), for where().
+  std::unordered_map<std::string, std::size_t, Hash, std::equal_to<>> m_lines;
 };
 
 /// Parses one field: decimal or exponent form, inf, -inf, nan (any case); an empty field
