@@ -18,7 +18,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::string text(mcg::fuzz::text_of(data + 1, size - 1));
   if (!text.empty() && text.back() != '\n') text += '\n';
   // Without a header of its own the input's last line is metadata: the fixed header follows.
-  if (text.find("t,") == std::string::npos) text += "t,v,omega\n";
+  if (!text.starts_with("t,") && text.find("\nt,") == std::string::npos) text += "t,v,omega\n";
   for (int k = 0; k < 64; ++k) {
     const double t = uneven ? 0.001 * k + 0.0004 * (k % 3) : 0.001 * k;
     text += std::to_string(t) + "," + std::to_string(std::sin(0.7 * k)) + "," +

@@ -77,11 +77,11 @@ TEST(BoardunitsController, AScaleThatIsNotFiniteIsRefused) {
             "a finite, nonzero scale");
   EXPECT_EQ(
       error_of("[controller]\nb = 1\na = 1\ninput_scale = 1e-320\n"),
-      "c.ini:4: [controller] input_scale: input_scale x (60000/2048) x (1000/duty_full_scale) = 2.75e-318 is "
+      "c.ini:4: [controller] input_scale: input_scale x (60000/2048) x (1000/duty_full_scale) = 3.1775e-319 is "
       "not a finite, nonzero scale");
   // A finite scale over a tiny a0: b0 = 0 would be 0 x inf on the board.
   EXPECT_EQ(error_of("[controller]\nb = 0\na = 1e-320\n"),
-            "c.ini:2: [controller] b: fixed point: b0 = 0 is nan on the board (b0 x 0.2711496746 / a0)");
+            "c.ini:2: [controller] b: fixed point: b0 = 0 is nan on the board (b0 x 0.27114967462039047 / a0)");
   EXPECT_EQ(ControllerUnits{}.factor(), 0.25 * 1000.0 / 922.0);
 }
 

@@ -177,7 +177,9 @@ std::vector<std::string> render_console(const ConsoleState& state, int width, in
   } else {
     title += "   waiting for the stream";
   }
-  if (state.recording) title += fmt::format("   REC {} ({} rows)", state.recording_path, state.recorded_rows);
+  if (state.recording) {
+    title += fmt::format("   REC {} ({} rows)", printable_name(state.recording_path), state.recorded_rows);
+  }
   if (state.lost_samples > 0) title += fmt::format("   lost {}", state.lost_samples);
   grid[0] = fit(title, width);
 
@@ -433,7 +435,7 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
     rec.writer->finish();
     rec.writer.reset();
     rec.file.close();
-    state.status = fmt::format("recorded {} rows to {}", recorded, state.recording_path);
+    state.status = fmt::format("recorded {} rows to {}", recorded, printable_name(state.recording_path));
     state.recording = false;
   };
   const auto start = std::chrono::steady_clock::now();
@@ -531,7 +533,7 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
     fail("{}: the port vanished{}", link.port,
          state.recording_path.empty()
              ? ""
-             : fmt::format(" ({} rows recorded to {})", recorded, state.recording_path));
+             : fmt::format(" ({} rows recorded to {})", recorded, printable_name(state.recording_path)));
   }
   try {
     s.write(require_register("stream"), 0);

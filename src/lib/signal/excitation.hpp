@@ -14,11 +14,12 @@
 namespace mcg::signal {
 
 /// The most rows mcg-sweep writes for an excitation, or resamples a measured table to (a day
-/// at 10 ms is 8.64e6 rows; each row costs about 32 bytes while the table is built). Options
+/// at 10 ms is 8.64e6 rows; the largest table takes about 160 MB while it is built). Options
 /// whose product asks for more are refused, naming them, before anything is allocated.
 inline constexpr std::size_t k_max_rows = 10'000'000;
 
-/// The most cosine terms (lines x samples of one period) a multisine computes: about 2 s.
+/// The most cosine terms (lines x samples of one period) a multisine computes: about 2.5 s of
+/// one core.
 inline constexpr double k_max_multisine_terms = 2e8;
 
 /// One change of a piecewise-constant value: from `time_s` on, the value is `value`.
