@@ -379,10 +379,9 @@ void bode(const table::Table& input, const BodeOptions& o, std::ostream& out, st
            k_max_rows);
     }
     if (*samples < 32) {
-      fail(
-          "{} resamples the {} s of uneven rows to {} samples, too short for a frequency response (at least "
-          "32)",
-          nominal_from, format_number(span_s), *samples);
+      fail("{} resamples the {} s of uneven rows to {} samples, too short for a frequency response "
+           "(at least 32)",
+           nominal_from, format_number(span_s), *samples);
     }
     dt = nominal;
     x_even = resample_linear(t_in, x_in, dt);
