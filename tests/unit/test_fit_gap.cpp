@@ -4,6 +4,7 @@
 #include "common/error.hpp"
 #include "fit/diag_residual.hpp"
 #include "fit/gap.hpp"
+#include "fit/gap_parts.hpp"
 #include "sim/encoder.hpp"
 #include "sim/run.hpp"
 #include "table/table.hpp"
@@ -308,6 +309,66 @@ TEST(GapCogging, OrderIsTheStrongestLineOverTheShaftAngle) {
   const table::Table plain = measure(p, {"cogging:T_c_Nm=0.0015,N_per_rev=23,phase_rad=0.7"}, 41, "cog23.csv");
   const GapData data23 = prepare_gap_data({plain}, {plain}, model::builtin_rig(), 0.6);
   EXPECT_EQ(angle_orders(model::Model{}, data23.train, 2).front(), 23.0);
+}
+
+/// A candidate as the search leaves it: fitted, scored (one output, rpm), ranked.
+GapCandidate scored(const std::string& name, double score, std::vector<std::string> free) {
+  GapCandidate c;
+  c.name = name;
+  if (name != "none" && name != "param_mismatch") c.effects = {name};
+  c.status = "fitted";
+  c.free = std::move(free);
+  c.values.assign(c.free.size(), 1.0);
+  c.std_errors.assign(c.free.size(), 0.1);
+  c.score = score;
+  c.fpe = score;
+  c.rms = {2.0 * std::sqrt(score)};
+  c.evaluated = true;
+  return c;
+}
+
+// A candidate whose parameters the data do not determine (here a pair correlated beyond
+// 0.99) cannot be the diagnosis, however well it scores: the next determined one is, the reason
+// says why the better score was set aside, and its CSV row carries the flag.
+TEST(GapDecision, AnUndeterminedCandidateIsNeverTheDiagnosis) {
+  gap_detail::Candidates cands;
+  cands.none = scored("none", 20.0, {});
+  cands.none.status = "as given";
+  cands.pm = scored("param_mismatch", 15.0, {"param_mismatch.Kt_scale", "param_mismatch.J_scale"});
+  GapCandidate hbridge = scored("hbridge", 1.1, {"hbridge.R_on_ohm", "hbridge.deadband", "param_mismatch.J_scale"});
+  hbridge.significant = true;
+  hbridge.flags = {{FitFlag::Kind::correlated, {"hbridge.R_on_ohm", "param_mismatch.J_scale"}}};
+  hbridge.warnings = {"hbridge.R_on_ohm and param_mismatch.J_scale are correlated 0.9990: the data do not tell them apart"};
+  GapCandidate friction = scored("friction_levels", 1.3, {"friction_levels.Tc_Nm", "param_mismatch.J_scale"});
+  friction.significant = true;
+  friction.flags = {{FitFlag::Kind::at_bound, {"param_mismatch.J_scale"}}};
+  cands.singles = {hbridge, friction};
+  cands.best_single = "hbridge";  // what a search without the rule would pick
+  GapReport report;
+  report.floors = {OutputFloor{"rpm", {}, 2.0}};
+  gap_detail::decide(cands, true, 1, report);
+  EXPECT_EQ(report.diagnosis, "friction_levels");
+  EXPECT_NE(report.reason.find("hbridge scores better but was set aside: the data do not determine its parameters"),
+            std::string::npos)
+      << report.reason;
+  const auto row = std::find_if(report.candidates.begin(), report.candidates.end(),
+                                [](const GapCandidate& c) { return c.name == "hbridge"; });
+  ASSERT_NE(row, report.candidates.end());
+  EXPECT_FALSE(row->significant);
+  std::ostringstream csv;
+  write_gap_csv(csv, report);
+  EXPECT_NE(csv.str().find(",significant,status,flags\n"), std::string::npos);
+  EXPECT_NE(csv.str().find(",0,fitted,hbridge.R_on_ohm and param_mismatch.J_scale correlated beyond 0.99\n"),
+            std::string::npos)
+      << csv.str();
+  // A bound is flagged on the row but does not disqualify.
+  EXPECT_NE(csv.str().find(",1,fitted,param_mismatch.J_scale at a bound\n"), std::string::npos) << csv.str();
+  // The parameters the refit is degenerate in are not freed without a current.
+  const auto speed_only = gap_detail::mismatch_free({}, model::builtin_rig(), false);
+  EXPECT_EQ(std::count(speed_only.begin(), speed_only.end(), "param_mismatch.R_scale"), 0);
+  const auto with_current = gap_detail::mismatch_free({}, model::builtin_rig(), true);
+  EXPECT_EQ(std::count(with_current.begin(), with_current.end(), "param_mismatch.R_scale"), 1);
+  EXPECT_EQ(with_current.size(), speed_only.size() + 1);
 }
 
 }  // namespace

@@ -187,6 +187,28 @@ TEST(FitGreybox, DegenerateFreeSetIsFlagged) {
     return w.find("correlated") != std::string::npos || w.find("not determined") != std::string::npos;
   });
   EXPECT_TRUE(correlated) << r.warnings[0];
+  ASSERT_EQ(r.flags.size(), r.warnings.size());
+  EXPECT_TRUE(std::any_of(r.flags.begin(), r.flags.end(), [](const FitFlag& f) { return f.undetermined(); }));
+}
+
+// A viscous coefficient the fit drives below zero (a friction that would push the shaft) is
+// physically impossible: flagged whatever its bounds allow, and the fit is not trustworthy.
+TEST(FitGreybox, ANegativeViscousCoefficientIsFlagged) {
+  model::Model truth;
+  truth.params.motor.friction.viscous[0] = -4e-6;
+  FitProblem problem;
+  problem.runs.push_back(make_run(measure(truth, speed_only_run(), 35, false), {}, problem.model.params));
+  problem.free = {"motor.visc1_Nm_s_rad"};
+  const FitResult r = fit_model(problem);
+  EXPECT_NEAR(r.model.params.motor.friction.viscous[0], -4e-6, 1e-6);
+  EXPECT_FALSE(r.trustworthy());
+  ASSERT_EQ(r.flags.size(), 1U) << r.warnings[0];
+  EXPECT_EQ(r.flags[0].kind, FitFlag::Kind::impossible);
+  EXPECT_EQ(r.flags[0].names, (std::vector<std::string>{"motor.visc1_Nm_s_rad"}));
+  EXPECT_TRUE(r.flags[0].undetermined());
+  EXPECT_NE(r.warnings[0].find("is a negative viscous friction (it would drive the shaft): physically impossible"),
+            std::string::npos)
+      << r.warnings[0];
 }
 
 TEST(FitGreybox, AParameterAtItsBoundIsFlagged) {
@@ -199,6 +221,9 @@ TEST(FitGreybox, AParameterAtItsBoundIsFlagged) {
   const FitResult r = fit_model(problem);
   ASSERT_EQ(r.warnings.size(), 1U) << r.warnings[1];
   EXPECT_EQ(r.warnings[0], "motor.J_kg_m2 = 1.2e-05 kg m^2 is at its upper bound");
+  ASSERT_EQ(r.flags.size(), 1U);
+  EXPECT_EQ(r.flags[0].kind, FitFlag::Kind::at_bound);
+  EXPECT_FALSE(r.flags[0].undetermined());
 }
 
 // Bounds follow the given model: a motor 1000 times the rig's inertia can be fitted.

@@ -34,6 +34,7 @@
 #include "fit/greybox.hpp"
 #include "model/model.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <functional>
 #include <iosfwd>
@@ -137,6 +138,16 @@ struct GapCandidate {
   double train_rms_rpm = 0.0;
   bool significant = false;
   bool evaluated = false;             ///< false when skipped (not excited)
+  /// The fit's honest-numbers findings (FitResult::warnings and ::flags): a parameter at a
+  /// bound, not determined, with a standard error too small to be true, correlated beyond
+  /// k_max_correlation with another, or physically impossible.
+  std::vector<std::string> warnings;
+  std::vector<FitFlag> flags;
+  /// False when the data do not determine the fitted parameters (any flag but at_bound):
+  /// such a candidate is never significant, so it cannot be the diagnosis.
+  bool determined() const {
+    return std::none_of(flags.begin(), flags.end(), [](const FitFlag& f) { return f.undetermined(); });
+  }
 };
 
 /// One term of the catalog-free discrepancy fit (fit/discrepancy.hpp).
@@ -198,7 +209,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
 
 /// The CSV result, one row per candidate, diagnosis first: effect, rms_before_rpm,
 /// rms_after_rpm, shrink_pct, gap_shrink_pct, rms_before_i_A, rms_after_i_A, score, fpe,
-/// n_params, params, significant, status.
+/// n_params, params, significant, status, flags.
 void write_gap_csv(std::ostream& out, const GapReport& report);
 /// The human summary (the same content with the regime tables and residual checks).
 void write_gap_text(std::ostream& out, const GapReport& report);

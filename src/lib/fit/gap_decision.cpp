@@ -28,9 +28,20 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
   std::vector<GapCandidate>& singles = candidates.singles;
   std::vector<GapCandidate>& mixtures = candidates.mixtures;
   std::vector<GapCandidate>& skipped = candidates.skipped;
+  // A candidate whose parameters the data do not determine cannot be the diagnosis: the
+  // search does not call it significant, and the choice here skips it all the same.
   const GapCandidate* best_single = nullptr;
   for (const auto& c : singles) {
-    if (c.name == candidates.best_single) best_single = &c;
+    if (c.name == candidates.best_single && c.determined()) best_single = &c;
+  }
+  if (best_single == nullptr) {
+    for (const auto& c : singles) {
+      if (c.significant && c.determined() && (best_single == nullptr || c.fpe < best_single->fpe)) best_single = &c;
+    }
+  }
+  const GapCandidate* best_mixture = nullptr;
+  for (const auto& c : mixtures) {
+    if (c.name == candidates.best_mixture && c.determined() && best_single != nullptr) best_mixture = &c;
   }
   const double before_score = none.score;
   const double excess = before_score - static_cast<double>(outputs);
@@ -38,8 +49,11 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
   auto removed = [&](const GapCandidate& c) {
     return excess > 0.0 ? (before_score - c.score) / excess : 0.0;
   };
+  for (std::vector<GapCandidate>* group : {&singles, &mixtures}) {
+    for (auto& c : *group) c.significant = c.significant && c.determined();
+  }
   // The decision.
-  pm.significant = gap && improves(pm.score, before_score, outputs);
+  pm.significant = gap && pm.determined() && improves(pm.score, before_score, outputs);
   std::string diagnosis = "none";
   const GapCandidate* chosen = nullptr;
   if (!gap) {
@@ -47,11 +61,8 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
         "the model as given matches the validation runs within the noise (score {:.2f} for "
         "{} output{}, noise alone gives about {})",
         before_score, outputs, outputs > 1 ? "s" : "", outputs);
-  } else if (!candidates.best_mixture.empty()) {
-    for (const auto& c : mixtures) {
-      if (c.name == candidates.best_mixture) chosen = &c;
-    }
-    MCG_DEMAND(chosen != nullptr);
+  } else if (best_mixture != nullptr) {
+    chosen = best_mixture;
     report.reason = fmt::format(
         "the {} effects together close significantly more of the gap than {} alone, each "
         "added one significant against the model it extends",
@@ -95,6 +106,29 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
     report.candidates.push_back(std::move(u));
   }
   none.significant = false;
+  // A candidate that would have scored better than the verdict but whose parameters the data
+  // do not determine was set aside: say so, it is what a user would otherwise read as the answer.
+  {
+    const GapCandidate* verdict = diagnosis == "unexplained" ? nullptr : chosen;
+    const GapCandidate* aside = nullptr;
+    for (const std::vector<GapCandidate>* group : {&singles, &mixtures}) {
+      for (const auto& c : *group) {
+        if (c.evaluated && !c.determined() && std::isfinite(c.fpe) &&
+            (verdict == nullptr || c.fpe < verdict->fpe) && (aside == nullptr || c.fpe < aside->fpe)) {
+          aside = &c;
+        }
+      }
+    }
+    if (!pm.determined() && pm.evaluated && std::isfinite(pm.fpe) && (verdict == nullptr || pm.fpe < verdict->fpe) &&
+        (aside == nullptr || pm.fpe < aside->fpe)) {
+      aside = &pm;
+    }
+    if (aside != nullptr) {
+      report.reason += fmt::format(
+          "; {} scores better but was set aside: the data do not determine its parameters (see its flags)",
+          aside->name);
+    }
+  }
 
   const auto cut = [](const GapCandidate& c) { return c.status.starts_with(k_out_of_time); };
   report.partial = cut(pm) || std::any_of(singles.begin(), singles.end(), cut) ||

@@ -43,6 +43,20 @@ struct Evaluation {
 };
 Evaluation evaluate(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors);
 
+/// True when some run measures the motor current (the only output that tells R from Kt).
+bool measures_current(const std::vector<Run>& runs);
+
+/// The nominal scales of param_mismatch a refit moves ("param_mismatch.Kt_scale", ...): those
+/// --fix does not pin (`fixed`), that multiply something in `p` (a model without friction has
+/// no Coulomb level to scale: its scale is undetermined) and that none of `effects`
+/// supersedes (friction_levels adds to the levels they scale). Without a measured current
+/// (`current` false) R_scale is left at 1: speed alone fixes only Kt and the ratios R Tc/Kt,
+/// R c/Kt and R J/Kt (the motor equation divided by Kt/R), so R_scale with the inertia and
+/// friction scales is a degenerate set (mcg-fit model leaves R alone likewise). Throws when
+/// --fix pins them all.
+std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, const model::Params& p, bool current,
+                                       const std::vector<std::string>& effects = {});
+
 /// Throws unless every name is a candidate effect of the catalog (--exclude).
 void check_excluded(const std::vector<std::string>& excluded);
 

@@ -163,6 +163,33 @@ std::string params_text(const GapCandidate& c) {
   return out;
 }
 
+/// The fit's flags in a few words each, "; " between them (the CSV's flags column).
+std::string flags_text(const GapCandidate& c) {
+  std::string out;
+  for (const FitFlag& f : c.flags) {
+    std::string item;
+    switch (f.kind) {
+      case FitFlag::Kind::at_bound:
+        item = f.names.front() + " at a bound";
+        break;
+      case FitFlag::Kind::undetermined:
+        item = f.names.front() + " not determined";
+        break;
+      case FitFlag::Kind::too_precise:
+        item = f.names.front() + " error too small to be true";
+        break;
+      case FitFlag::Kind::correlated:
+        item = fmt::format("{} and {} correlated beyond {}", f.names.front(), f.names.back(), k_max_correlation);
+        break;
+      case FitFlag::Kind::impossible:
+        item = f.names.front() + " physically impossible";
+        break;
+    }
+    out += (out.empty() ? "" : "; ") + item;
+  }
+  return out;
+}
+
 struct Summary {
   std::size_t rpm = std::string::npos;
   std::size_t i = std::string::npos;
@@ -222,18 +249,19 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
     }
   }
   out << "effect,rms_before_rpm,rms_after_rpm,shrink_pct,gap_before_rpm,gap_after_rpm,gap_shrink_pct,"
-         "rms_before_i_A,rms_after_i_A,train_rms_rpm,score,fpe,n_params,n_added,params,significant,status\n";
+         "rms_before_i_A,rms_after_i_A,train_rms_rpm,score,fpe,n_params,n_added,params,significant,status,"
+         "flags\n";
   for (const auto& c : report.candidates) {
     const double after_rpm = at_or_nan(c.rms, s.rpm);
     const double gap_before = above_noise(before_rpm, s.floor_rpm);
     const double gap_after = above_noise(after_rpm, s.floor_rpm);
     const double shrink = 100.0 * (before_rpm - after_rpm) / before_rpm;
     const double gap_shrink = gap_before > 0.0 ? 100.0 * (gap_before - gap_after) / gap_before : k_nan;
-    out << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", c.name, number(before_rpm, 6),
+    out << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", c.name, number(before_rpm, 6),
                        number(after_rpm, 6), number(shrink, 4), number(gap_before, 6), number(gap_after, 6),
                        number(gap_shrink, 4), number(before_i, 6), number(at_or_nan(c.rms, s.i), 6),
                        number(c.train_rms_rpm, 6), number(c.score, 6), number(c.fpe, 6), c.free.size(),
-                       c.added_parameters, params_text(c), c.significant ? 1 : 0, c.status);
+                       c.added_parameters, params_text(c), c.significant ? 1 : 0, c.status, flags_text(c));
   }
 }
 
@@ -263,6 +291,7 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
     out << (report.diagnosis == "unexplained" ? "best candidate's fitted parameters" : "fitted parameters")
         << " (+- one standard error): " << params_text(diag) << "\n";
   }
+  for (const auto& w : diag.warnings) out << "warning: " << w << "\n";
   if (report.discrepancy) {
     const DiscrepancyResult& d = *report.discrepancy;
     if (d.terms.empty()) {
@@ -286,8 +315,9 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
   out << fmt::format("  {:<32} {:>10} {:>10} {:>9} {:>3}  {}\n", "effect", "rms rpm", "score", "fpe", "sig",
                      "status");
   for (const auto& c : report.candidates) {
-    out << fmt::format("  {:<32} {:>10} {:>10} {:>9} {:>3}  {}\n", c.name, number(at_or_nan(c.rms, s.rpm)),
-                       number(c.score), number(c.fpe), c.significant ? "yes" : "no", c.status);
+    out << fmt::format("  {:<32} {:>10} {:>10} {:>9} {:>3}  {}{}\n", c.name, number(at_or_nan(c.rms, s.rpm)),
+                       number(c.score), number(c.fpe), c.significant ? "yes" : "no", c.status,
+                       c.flags.empty() ? "" : ", flagged: " + flags_text(c));
   }
   out << "\n";
   if (s.rpm != std::string::npos) {

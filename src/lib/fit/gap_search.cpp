@@ -104,39 +104,6 @@ std::string scale_of(std::string_view name) {
   return {};
 }
 
-/// The nominal scales a refit moves: those --fix does not pin, that multiply something in
-/// `p` (a model without friction has no Coulomb level to scale: its scale is undetermined)
-/// and that none of `effects` supersedes (friction_levels adds to the levels they scale).
-std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, const model::Params& p,
-                                       const std::vector<std::string>& effects = {}) {
-  const model::Friction* all[] = {&p.motor.friction, &p.generator.friction, &p.clutch_disengaged,
-                                  &p.clutch_engaged};
-  auto any = [&](auto level) { return std::any_of(std::begin(all), std::end(all), level); };
-  const bool coulomb = any([](const model::Friction* f) { return f->Tc_Nm != 0.0; });
-  const bool statics = any([](const model::Friction* f) { return f->Ts_Nm != 0.0; });
-  const bool viscous = any([](const model::Friction* f) {
-    return std::any_of(f->viscous.begin(), f->viscous.end(), [](double c) { return c != 0.0; });
-  });
-  std::vector<std::string> free;
-  for (const auto& s : mismatch_scales()) {
-    if ((s == "coulomb_scale" && !coulomb) || (s == "static_scale" && !statics) ||
-        (s == "viscous_scale" && !viscous)) {
-      continue;
-    }
-    const bool superseded = std::any_of(effects.begin(), effects.end(), [&](const std::string& e) {
-      const model::EffectSpec* spec = model::find_effect(e);
-      return spec != nullptr && std::find(spec->plan.supersedes.begin(), spec->plan.supersedes.end(), s) !=
-                                    spec->plan.supersedes.end();
-    });
-    if (superseded) continue;
-    if (std::none_of(fixed.begin(), fixed.end(), [&](const std::string& f) { return scale_of(f) == s; })) {
-      free.push_back("param_mismatch." + s);
-    }
-  }
-  if (free.empty()) fail("--fix pins every parameter the refit moves");
-  return free;
-}
-
 /// Searches the effect's grid (the cartesian product of its starting values, on each of the
 /// `bases`) on the training cost and returns the best point.
 model::Model grid_start(const std::vector<model::Model>& bases, const model::EffectSpec& effect,
@@ -248,6 +215,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   c.status = out_of_time         ? std::string(k_out_of_time) + ", fit stopped early"
              : fit.nls.converged ? "fitted"
                                  : "fitted, budget spent";
+  c.warnings = fit.warnings;
+  c.flags = fit.flags;
   c.evaluated = true;
   const Evaluation ev = evaluate(c.model, data, floors);
   c.score = ev.score;
@@ -309,6 +278,42 @@ std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& 
 }  // namespace
 
 namespace gap_detail {
+
+bool measures_current(const std::vector<Run>& runs) {
+  return std::any_of(runs.begin(), runs.end(), [](const Run& r) {
+    return std::find(r.outputs.begin(), r.outputs.end(), "i") != r.outputs.end();
+  });
+}
+
+std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, const model::Params& p, bool current,
+                                       const std::vector<std::string>& effects) {
+  const model::Friction* all[] = {&p.motor.friction, &p.generator.friction, &p.clutch_disengaged,
+                                  &p.clutch_engaged};
+  auto any = [&](auto level) { return std::any_of(std::begin(all), std::end(all), level); };
+  const bool coulomb = any([](const model::Friction* f) { return f->Tc_Nm != 0.0; });
+  const bool statics = any([](const model::Friction* f) { return f->Ts_Nm != 0.0; });
+  const bool viscous = any([](const model::Friction* f) {
+    return std::any_of(f->viscous.begin(), f->viscous.end(), [](double c) { return c != 0.0; });
+  });
+  std::vector<std::string> free;
+  for (const auto& s : mismatch_scales()) {
+    if ((s == "coulomb_scale" && !coulomb) || (s == "static_scale" && !statics) ||
+        (s == "viscous_scale" && !viscous) || (s == "R_scale" && !current)) {
+      continue;
+    }
+    const bool superseded = std::any_of(effects.begin(), effects.end(), [&](const std::string& e) {
+      const model::EffectSpec* spec = model::find_effect(e);
+      return spec != nullptr && std::find(spec->plan.supersedes.begin(), spec->plan.supersedes.end(), s) !=
+                                    spec->plan.supersedes.end();
+    });
+    if (superseded) continue;
+    if (std::none_of(fixed.begin(), fixed.end(), [&](const std::string& f) { return scale_of(f) == s; })) {
+      free.push_back("param_mismatch." + s);
+    }
+  }
+  if (free.empty()) fail("--fix pins every parameter the refit moves");
+  return free;
+}
 
 void check_excluded(const std::vector<std::string>& excluded) {
   for (const auto& e : excluded) {
@@ -400,6 +405,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
                              const GapSettings& settings) {
   const unsigned threads = parallel::worker_count(settings.threads, std::numeric_limits<std::size_t>::max());
   const std::size_t outputs = floors.size();
+  const bool has_current = measures_current(data.train);
   const auto n_val = static_cast<double>(validation_count(data) * outputs);
   auto fpe = [&](double score, std::size_t k) { return gap_detail::fpe(score, k, n_val); };
 
@@ -420,7 +426,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   // The refit of the nominal parameters, warm start of every effect candidate.
   model::Model base = model;
   add_effect(base, "param_mismatch");
-  Job pm_job{"param_mismatch", {}, base, mismatch_free(settings.fixed, model.params), {}, 20, {}, {}};
+  Job pm_job{"param_mismatch", {}, base, mismatch_free(settings.fixed, model.params, has_current), {}, 20, {}, {}};
   if (settings.progress) settings.progress("fitting param_mismatch (nominal parameters)");
   std::vector<GapCandidate> pm_result = run_jobs({pm_job}, data, floors, settings, threads, {}, done, total);
   GapCandidate pm = std::move(pm_result.front());
@@ -449,7 +455,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       ++done;
       continue;
     }
-    Job job{plan.name,   {plan.name}, pm.model, mismatch_free(settings.fixed, model.params, {plan.name}),
+    Job job{plan.name,   {plan.name}, pm.model, mismatch_free(settings.fixed, model.params, has_current, {plan.name}),
             {plan.name}, 15,          {},       {base}};
     add_effect(job.start, plan.name);
     for (const auto& key : plan.plan.free) {
@@ -481,7 +487,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
     if (best < pm_cost) {
       if (settings.progress) settings.progress("refitting param_mismatch from a better start");
       ++total;
-      Job again{"param_mismatch", {}, start, mismatch_free(settings.fixed, model.params), {}, 10, {}, {}};
+      Job again{"param_mismatch", {}, start, mismatch_free(settings.fixed, model.params, has_current), {}, 10, {}, {}};
       GapCandidate refit =
           std::move(run_jobs({again}, data, floors, settings, threads, {}, done, total).front());
       refit.fpe = fpe(refit.score, refit.free.size());
@@ -491,7 +497,8 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   const double ref_score = std::min(before.score, pm.score);
   for (auto& c : singles) {
     c.fpe = fpe(c.score, c.free.size());
-    c.significant = gap && improves(c.score, ref_score, outputs) && carries_weight(c, c.name, data, floors, outputs);
+    c.significant = gap && c.determined() && improves(c.score, ref_score, outputs) &&
+                    carries_weight(c, c.name, data, floors, outputs);
   }
   std::sort(singles.begin(), singles.end(), [](const auto& a, const auto& b) { return a.fpe < b.fpe; });
 
@@ -533,7 +540,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         for (const auto& m : members) name += (name.empty() ? "" : "+") + m;
         // Started from the current model with the added effect at its single-fit values, or
         // from the model as given with every member at its single-fit values.
-        Job job{name, members, current.model, mismatch_free(settings.fixed, model.params, members), {},
+        Job job{name, members, current.model, mismatch_free(settings.fixed, model.params, has_current, members), {},
                 10,   {},      {base}};
         for (const auto& f : current.free) {
           if (!f.starts_with("param_mismatch.")) job.free.push_back(f);
@@ -557,8 +564,8 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       for (auto& c : fitted) c.fpe = fpe(c.score, c.free.size());
       std::sort(fitted.begin(), fitted.end(), [](const auto& x, const auto& y) { return x.fpe < y.fpe; });
       for (auto& c : fitted) {
-        c.significant =
-            c.evaluated && improves(c.score, current.score, outputs) && improves(c.score, ref_score, outputs);
+        c.significant = c.evaluated && c.determined() && improves(c.score, current.score, outputs) &&
+                        improves(c.score, ref_score, outputs);
       }
       // The best extension's gain must come from the effect it adds, not from the nominal
       // values refitted beside it.

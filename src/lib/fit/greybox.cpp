@@ -10,6 +10,7 @@
 #include <limits>
 #include <numbers>
 #include <set>
+#include <string_view>
 #include <tuple>
 
 namespace mcg::fit {
@@ -285,16 +286,43 @@ std::vector<RunFit> evaluate_model(const model::Model& model, const std::vector<
 
 namespace {
 
-/// The honest-numbers checks of FitResult::warnings.
-std::vector<std::string> fit_warnings(const NlsResult& n, const std::vector<std::pair<double, double>>& bounds,
-                                      const std::vector<std::string>& units) {
-  std::vector<std::string> out;
+/// Why a fitted value is physically impossible, empty when it is not: a machine constant or
+/// scale that is not positive, a friction level or a viscous coefficient below zero (a
+/// friction that drives the shaft). [bounds] may let a fit reach such values; the check holds
+/// whatever the bounds.
+std::string impossible(std::string_view name, double v) {
+  const auto key = name.substr(name.rfind('.') + 1);
+  for (const std::string_view k : {"R_ohm", "L_H", "Kt_Nm_A", "Ke_V_s_rad", "J_kg_m2", "supply_V", "Kt_scale",
+                                   "J_scale", "R_scale", "L_scale"}) {
+    if (key == k && !(v > 0.0)) return "is not positive: physically impossible";
+  }
+  for (const std::string_view k : {"Tc_Nm", "Ts_Nm", "coulomb_scale", "static_scale"}) {
+    if (key == k && v < 0.0) return "is a negative friction level: physically impossible";
+  }
+  for (const std::string_view k : {"visc1_Nm_s_rad", "c1_Nm_s_rad", "viscous_scale"}) {
+    if (key == k && v < 0.0) return "is a negative viscous friction (it would drive the shaft): physically impossible";
+  }
+  return {};
+}
+
+/// The honest-numbers checks of FitResult::warnings and ::flags.
+void fit_warnings(const NlsResult& n, const std::vector<std::pair<double, double>>& bounds,
+                  const std::vector<std::string>& units, FitResult& result) {
+  auto add = [&](FitFlag::Kind kind, std::vector<std::string> names, std::string text) {
+    result.flags.push_back({kind, std::move(names)});
+    result.warnings.push_back(std::move(text));
+  };
+  using Kind = FitFlag::Kind;
   const auto count = static_cast<Eigen::Index>(n.names.size());
   for (Eigen::Index i = 0; i < count; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const double v = n.values[i];
     const auto [lo, hi] = bounds[k];
     const std::string unit = units[k].empty() ? "" : " " + units[k];
+    if (const std::string why = impossible(n.names[k], v); !why.empty()) {
+      add(Kind::impossible, {n.names[k]}, fmt::format("{} = {:.6g}{} {}", n.names[k], v, unit, why));
+      continue;
+    }
     const bool logs = lo > 0.0 && std::isfinite(hi);
     const double span = logs ? std::log(hi / lo) : hi - lo;
     const double from_lo = logs ? std::log(v / lo) : v - lo;
@@ -304,32 +332,35 @@ std::vector<std::string> fit_warnings(const NlsResult& n, const std::vector<std:
     // by orders of magnitude, so only a value that is 0 in all but name is at it.
     const double lo_margin = lo == 0.0 && v > 0.0 ? 1e-6 * span : k_at_bound * span;
     if (std::isfinite(span) && from_lo <= lo_margin) {
-      out.push_back(fmt::format("{} = {:.6g}{} is at its lower bound", n.names[k], v, unit));
+      add(Kind::at_bound, {n.names[k]}, fmt::format("{} = {:.6g}{} is at its lower bound", n.names[k], v, unit));
       continue;
     }
     if (std::isfinite(span) && from_hi <= k_at_bound * span) {
-      out.push_back(fmt::format("{} = {:.6g}{} is at its upper bound", n.names[k], v, unit));
+      add(Kind::at_bound, {n.names[k]}, fmt::format("{} = {:.6g}{} is at its upper bound", n.names[k], v, unit));
       continue;
     }
     const double se = n.std_errors[i];
     if (!std::isfinite(se)) {
-      out.push_back(fmt::format("{}: not determined by the data (infinite standard error)", n.names[k]));
+      add(Kind::undetermined, {n.names[k]},
+          fmt::format("{}: not determined by the data (infinite standard error)", n.names[k]));
     } else if ((k < n.rough.size() && n.rough[k]) || se <= 1e-9 * std::abs(v)) {
-      out.push_back(fmt::format("{}: standard error {:.3g}{} is too small to be true: the residual is not smooth "
-                                "in it (it sits on a discontinuity of the data)",
-                                n.names[k], se, unit));
+      add(Kind::too_precise, {n.names[k]},
+          fmt::format("{}: standard error {:.3g}{} is too small to be true: the residual is not smooth "
+                      "in it (it sits on a discontinuity of the data)",
+                      n.names[k], se, unit));
     }
   }
   for (Eigen::Index i = 0; i < count; ++i) {
     for (Eigen::Index j = i + 1; j < count; ++j) {
       const double c = n.correlation(i, j);
       if (std::isfinite(c) && std::abs(c) > k_max_correlation) {
-        out.push_back(fmt::format("{} and {} are correlated {:.4f}: the data do not tell them apart",
-                                  n.names[static_cast<std::size_t>(i)], n.names[static_cast<std::size_t>(j)], c));
+        const std::string& a = n.names[static_cast<std::size_t>(i)];
+        const std::string& b = n.names[static_cast<std::size_t>(j)];
+        add(Kind::correlated, {a, b},
+            fmt::format("{} and {} are correlated {:.4f}: the data do not tell them apart", a, b, c));
       }
     }
   }
-  return out;
 }
 
 void apply_ties(model::Model& m, const std::vector<std::pair<std::string, std::string>>& ties) {
@@ -433,7 +464,7 @@ FitResult fit_model(const FitProblem& problem) {
   }
   apply_ties(result.model, problem.ties);
   result.runs = evaluate_model(result.model, problem.runs, problem.sim);
-  result.warnings = fit_warnings(result.nls, bounds, units);
+  fit_warnings(result.nls, bounds, units, result);
   return result;
 }
 

@@ -129,6 +129,21 @@ struct RunFit {
   std::vector<double> rms;          ///< per output, RMS of measured - simulated, output units
 };
 
+/// One finding of the honest-numbers checks (FitResult::warnings says it in words).
+struct FitFlag {
+  enum class Kind {
+    at_bound,      ///< the value sits at (within k_at_bound of) a bound of its range
+    undetermined,  ///< infinite standard error: the data do not determine it
+    too_precise,   ///< a standard error too small to be true (the residual is not smooth in it)
+    correlated,    ///< two parameters correlated beyond k_max_correlation
+    impossible,    ///< a physically impossible value (negative viscous, inertia, resistance, ...)
+  } kind;
+  std::vector<std::string> names;  ///< the parameters involved (two for `correlated`)
+  /// The data do not determine the parameters (every kind but at_bound): a fit carrying such a
+  /// flag cannot stand as a result.
+  bool undetermined() const { return kind != Kind::at_bound; }
+};
+
 /// The outcome: the fitted model (free parameters replaced) and the solver's statistics
 /// (nls.names = free parameter names, values, std_errors, correlation, converged, reason,
 /// iterations, evaluations).
@@ -139,8 +154,10 @@ struct FitResult {
   /// What makes the numbers untrustworthy, one sentence each: a parameter at a bound, a
   /// correlation beyond k_max_correlation, a standard error that is infinite or too small to
   /// be true (the residual is not smooth in the parameter: it sits on a discontinuity of the
-  /// data, e.g. a static friction level at a breakaway).
+  /// data, e.g. a static friction level at a breakaway), a physically impossible value.
   std::vector<std::string> warnings;
+  /// The same findings, one per warning (same order), for code that decides on them.
+  std::vector<FitFlag> flags;
   /// The solver met a convergence test and nothing above was found.
   bool trustworthy() const { return nls.converged && warnings.empty(); }
 };
