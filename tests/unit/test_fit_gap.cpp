@@ -337,6 +337,7 @@ TEST(GapDecision, AnUndeterminedCandidateIsNeverTheDiagnosis) {
   cands.pm = scored("param_mismatch", 15.0, {"param_mismatch.Kt_scale", "param_mismatch.J_scale"});
   GapCandidate hbridge = scored("hbridge", 1.1, {"hbridge.R_on_ohm", "hbridge.deadband", "param_mismatch.J_scale"});
   hbridge.significant = true;
+  hbridge.std_errors[0] = 3.0;  // the pair's correlation leaves R_on to within three times its value
   hbridge.flags = {{FitFlag::Kind::correlated, {"hbridge.R_on_ohm", "param_mismatch.J_scale"}}};
   hbridge.warnings = {"hbridge.R_on_ohm and param_mismatch.J_scale are correlated 0.9990: the data do not tell them apart"};
   GapCandidate friction = scored("friction_levels", 1.3, {"friction_levels.Tc_Nm", "param_mismatch.J_scale"});
@@ -361,6 +362,19 @@ TEST(GapDecision, AnUndeterminedCandidateIsNeverTheDiagnosis) {
   EXPECT_NE(csv.str().find(",0,fitted,hbridge.R_on_ohm and param_mismatch.J_scale correlated beyond 0.99\n"),
             std::string::npos)
       << csv.str();
+  // A correlated pair whose errors are both small is determined: the errors carry the correlation.
+  hbridge.std_errors[0] = 0.1;
+  EXPECT_TRUE(hbridge.determined());
+  hbridge.flags.push_back({FitFlag::Kind::too_precise, {"hbridge.deadband"}});
+  EXPECT_FALSE(hbridge.determined());
+  // Nominal scales correlated among themselves are a nuisance, flagged but not disqualifying;
+  // a physically impossible value disqualifies wherever it is.
+  GapCandidate pm = cands.pm;
+  pm.flags = {{FitFlag::Kind::correlated, {"param_mismatch.Kt_scale", "param_mismatch.J_scale"}}};
+  pm.std_errors = {5.0, 5.0};
+  EXPECT_TRUE(pm.determined());
+  pm.flags.push_back({FitFlag::Kind::impossible, {"param_mismatch.J_scale"}});
+  EXPECT_FALSE(pm.determined());
   // A bound is flagged on the row but does not disqualify.
   EXPECT_NE(csv.str().find(",1,fitted,param_mismatch.J_scale at a bound\n"), std::string::npos) << csv.str();
   // The parameters the refit is degenerate in are not freed without a current.
@@ -369,6 +383,30 @@ TEST(GapDecision, AnUndeterminedCandidateIsNeverTheDiagnosis) {
   const auto with_current = gap_detail::mismatch_free({}, model::builtin_rig(), true);
   EXPECT_EQ(std::count(with_current.begin(), with_current.end(), "param_mismatch.R_scale"), 1);
   EXPECT_EQ(with_current.size(), speed_only.size() + 1);
+}
+
+// The friction candidates start where the data put them: the levels a model lacks are read off
+// the quasi-steady stretches and starts from rest of the training runs, net of what the model's
+// own friction shows through the same estimate.
+TEST(GapFrictionStart, LevelsAndAsymmetryComeFromTheData) {
+  const Program p = steps(8.0, -10.0, 10.0, 5, 0, false);
+  const table::Table t = measure(
+      p, {"friction_levels:Tc_Nm=0.003,Ts_excess_Nm=0.001,c1_Nm_s_rad=1e-5", "friction_asymmetry:dT_Nm=0.0008"}, 5,
+      "friction.csv");
+  const GapData data = prepare_gap_data({t}, {t}, model::builtin_rig(), 0.6);
+  const auto starts = gap_detail::data_friction_starts(model::Model{}, data.train);
+  ASSERT_EQ(starts.count("friction_levels"), 1U);
+  ASSERT_EQ(starts.count("friction_asymmetry"), 1U);
+  const auto& levels = starts.at("friction_levels");
+  EXPECT_NEAR(levels[0], 0.003, 0.0006);
+  EXPECT_NEAR(levels[2], 1e-5, 5e-6);
+  EXPECT_NEAR(starts.at("friction_asymmetry")[0], 0.0008, 0.0003);
+  // The model's own runs show nothing beyond the model: the levels start at their floor.
+  const table::Table plain = measure(p, {}, 5, "plain.csv");
+  const auto none = gap_detail::data_friction_starts(model::Model{}, prepare_gap_data({plain}, {plain},
+                                                                                      model::builtin_rig(), 0.6).train);
+  ASSERT_EQ(none.count("friction_levels"), 1U);
+  EXPECT_LT(none.at("friction_levels")[0], 3e-4);
 }
 
 }  // namespace

@@ -34,7 +34,6 @@
 #include "fit/greybox.hpp"
 #include "model/model.hpp"
 
-#include <algorithm>
 #include <chrono>
 #include <functional>
 #include <iosfwd>
@@ -63,6 +62,10 @@ inline constexpr double k_gap_explained_share = 0.75;
 /// by more than this factor (the second-difference estimate carries some of a fast
 /// excitation's signal, so a smaller excess is not trusted over the chain).
 inline constexpr double k_gap_data_floor_factor = 2.0;
+
+/// A correlated pair leaves a parameter undetermined when its standard error exceeds this
+/// share of its value.
+inline constexpr double k_gap_max_relative_error = 0.5;
 
 /// Most effects named together (A+B+C).
 inline constexpr std::size_t k_gap_max_mixture = 3;
@@ -143,11 +146,16 @@ struct GapCandidate {
   /// k_max_correlation with another, or physically impossible.
   std::vector<std::string> warnings;
   std::vector<FitFlag> flags;
-  /// False when the data do not determine the fitted parameters (any flag but at_bound):
-  /// such a candidate is never significant, so it cannot be the diagnosis.
-  bool determined() const {
-    return std::none_of(flags.begin(), flags.end(), [](const FitFlag& f) { return f.undetermined(); });
-  }
+  /// False when the data do not determine what the candidate claims: a physically impossible
+  /// value anywhere; on a parameter of an added effect, an infinite or too small standard
+  /// error; a correlation beyond k_max_correlation that involves an added effect's parameter
+  /// and leaves one of the pair with a standard error above k_gap_max_relative_error of its
+  /// value (a correlated pair whose errors are both small is determined all the same: the
+  /// errors already carry the correlation). Such a candidate is never significant, so it
+  /// cannot be the diagnosis. Nominal scales correlated only among themselves (Coulomb,
+  /// static and viscous on runs that do not separate them) are flagged on the row but
+  /// disqualify nothing: the refit beside an effect is a nuisance, not the finding.
+  bool determined() const;
 };
 
 /// One term of the catalog-free discrepancy fit (fit/discrepancy.hpp).

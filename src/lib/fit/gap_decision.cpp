@@ -9,6 +9,37 @@
 #include "common/demand.hpp"
 #include "fit/gap_parts.hpp"
 
+namespace mcg::fit {
+
+bool GapCandidate::determined() const {
+  const auto loose = [&](const std::string& key) {
+    const auto it = std::find(free.begin(), free.end(), key);
+    if (it == free.end()) return true;
+    const auto k = static_cast<std::size_t>(it - free.begin());
+    return k >= std::min(values.size(), std::min(std_errors.size(), free.size())) ||
+           !(std_errors[k] <= k_gap_max_relative_error * std::abs(values[k]));
+  };
+  return std::none_of(flags.begin(), flags.end(), [&](const FitFlag& f) {
+    const bool effect = std::any_of(f.names.begin(), f.names.end(), [](const std::string& n) {
+      return !n.starts_with("param_mismatch.");
+    });
+    switch (f.kind) {
+      case FitFlag::Kind::impossible:
+        return true;
+      case FitFlag::Kind::at_bound:
+        return false;
+      case FitFlag::Kind::correlated:
+        return effect && std::any_of(f.names.begin(), f.names.end(), loose);
+      case FitFlag::Kind::undetermined:
+      case FitFlag::Kind::too_precise:
+        return effect;
+    }
+    return true;
+  });
+}
+
+}  // namespace mcg::fit
+
 namespace mcg::fit::gap_detail {
 
 bool improves(double score, double score_ref, std::size_t outputs) {

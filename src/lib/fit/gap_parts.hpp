@@ -10,6 +10,7 @@
 #include "fit/gap.hpp"
 
 #include <limits>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -56,6 +57,15 @@ bool measures_current(const std::vector<Run>& runs);
 /// --fix pins them all.
 std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, const model::Params& p, bool current,
                                        const std::vector<std::string>& effects = {});
+
+/// Starting points of the friction candidates from the training runs themselves: the friction
+/// that mcg-fit friction's quasi-steady windows and starts from rest (order 1, a constant bias
+/// when the shaft turns both ways) find in the measured runs, minus what they find in the
+/// model's own simulation of the same runs. friction_levels gets {Tc, Ts excess, c1} (kept
+/// positive and in range), friction_asymmetry {dT} from the bias when the shaft turns both
+/// ways. Empty when the runs hold no quasi-steady stretch.
+std::map<std::string, std::vector<double>> data_friction_starts(const model::Model& model,
+                                                                const std::vector<Run>& runs);
 
 /// Throws unless every name is a candidate effect of the catalog (--exclude).
 void check_excluded(const std::vector<std::string>& excluded);

@@ -3,16 +3,20 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <numbers>
+#include <optional>
 
 #include "common/demand.hpp"
 #include "common/error.hpp"
 #include "common/parallel.hpp"
+#include "fit/friction.hpp"
 #include "fit/gap_parts.hpp"
 
 namespace mcg::fit {
@@ -36,6 +40,11 @@ std::vector<const model::EffectSpec*> candidate_effects() {
     if (spec.plan.candidate) out.push_back(&spec);
   }
   return out;
+}
+
+/// A friction effect of the catalog: levels, their asymmetry, the Stribeck curve.
+bool is_friction(std::string_view name) {
+  return name.starts_with("friction_") || name == "stribeck";
 }
 
 /// The candidate effect `name`, or nullptr.
@@ -87,6 +96,9 @@ struct Job {
   int evaluations_per_parameter = 10;      ///< simulation budget per free parameter (and one)
   std::vector<std::string> stage1_free;    ///< fitted alone first (the added effect's parameters)
   std::vector<model::Model> other_starts;  ///< further nominal models the grid is searched on
+  /// Per effect, a starting point from the data (values of its plan's free keys), tried before
+  /// its grid.
+  std::map<std::string, std::vector<double>> data_starts;
 };
 
 void add_effect(model::Model& m, std::string_view name) {
@@ -104,11 +116,59 @@ std::string scale_of(std::string_view name) {
   return {};
 }
 
+/// A run as mcg-fit friction reads it: t, v, clutch, r_load, the motor shaft's speed in rpm
+/// (`speed`: per output of the run, as measured, times the gear ratio) and the current.
+table::Table friction_table(const Run& run, const std::vector<std::vector<double>>& series) {
+  table::Table t;
+  t.source = run.source;
+  t.set("t", run.inputs.t_s);
+  t.set("v", run.inputs.v_V);
+  t.set("clutch", run.inputs.clutch);
+  t.set("r_load", run.inputs.r_load_ohm);
+  for (std::size_t o = 0; o < run.outputs.size(); ++o) {
+    if (run.outputs[o] == "rpm" || run.outputs[o] == "omega") {
+      std::vector<double> rpm = series[o];
+      const double factor = run.gear_ratio * (run.outputs[o] == "omega" ? 30.0 / std::numbers::pi : 1.0);
+      for (double& x : rpm) x *= factor;
+      t.set("rpm", std::move(rpm));
+    } else if (run.outputs[o] == "i") {
+      t.set("i", series[o]);
+    }
+  }
+  return t;
+}
+
+/// The friction mcg-fit friction sees in `tables` (order 1, with a constant bias when the
+/// shaft turns both ways): Tc, Ts, c1 and the bias, in the clutch state with most windows; or
+/// nothing when the runs hold no quasi-steady stretch.
+std::optional<std::array<double, 4>> seen_friction(const std::vector<table::Table>& tables, const model::Params& p,
+                                                   bool both_directions) {
+  FrictionOptions options;
+  options.order = 1;
+  options.offset = both_directions;
+  for (const bool statics : {true, false}) {
+    options.static_friction = statics;
+    try {
+      const FrictionResult r = fit_friction(tables, p, options);
+      const StateFriction* best = nullptr;
+      for (const auto& s : r.states) {
+        if (best == nullptr || s.windows > best->windows) best = &s;
+      }
+      if (best == nullptr || best->windows < 3) return std::nullopt;
+      const model::Friction& f = best->total.value;
+      return std::array<double, 4>{f.Tc_Nm, f.Ts_Nm, f.viscous[0], both_directions ? best->offset : 0.0};
+    } catch (const Error&) {
+      // No start from rest: the static level is left to the grid; no quasi-steady windows: nothing.
+    }
+  }
+  return std::nullopt;
+}
+
 /// Searches the effect's grid (the cartesian product of its starting values, on each of the
 /// `bases`) on the training cost and returns the best point.
 model::Model grid_start(const std::vector<model::Model>& bases, const model::EffectSpec& effect,
                         const std::vector<Run>& runs, const std::vector<double>& orders,
-                        std::chrono::steady_clock::time_point deadline) {
+                        std::chrono::steady_clock::time_point deadline, const std::vector<double>* data_point) {
   const model::EffectPlan& plan = effect.plan;
   std::vector<std::vector<double>> axes = plan.grid;
   std::vector<std::string> keys = plan.free;
@@ -127,6 +187,20 @@ model::Model grid_start(const std::vector<model::Model>& bases, const model::Eff
   for (const auto& a : axes) points *= a.size();
   double best = std::numeric_limits<double>::infinity();
   model::Model best_model = bases.front();
+  // The point the data put the effect at (data_friction_starts) is tried first, on each base.
+  if (data_point != nullptr) {
+    MCG_DEMAND(data_point->size() == plan.free.size());
+    for (const model::Model& base : bases) {
+      model::Model trial = base;
+      for (std::size_t k = 0; k < plan.free.size(); ++k)
+        model::set_parameter(trial, effect.name + "." + plan.free[k], (*data_point)[k]);
+      const double cost = training_cost(trial, runs);
+      if (cost < best) {
+        best = cost;
+        best_model = std::move(trial);
+      }
+    }
+  }
   for (const model::Model& base : bases) {
     for (std::size_t p = 0; p < points; ++p) {
       if (std::chrono::steady_clock::now() >= deadline) return best_model;
@@ -170,7 +244,9 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
         add_effect(other, e);
         bases.push_back(std::move(other));
       }
-      start = grid_start(bases, *plan, data.train, orders, settings.deadline);
+      const auto point = job.data_starts.find(e);
+      start = grid_start(bases, *plan, data.train, orders, settings.deadline,
+                         point == job.data_starts.end() ? nullptr : &point->second);
     }
   }
   FitProblem problem;
@@ -278,6 +354,54 @@ std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& 
 }  // namespace
 
 namespace gap_detail {
+
+std::map<std::string, std::vector<double>> data_friction_starts(const model::Model& model,
+                                                                const std::vector<Run>& runs) {
+  std::map<std::string, std::vector<double>> out;
+  bool forward = false;
+  bool reverse = false;
+  std::vector<table::Table> measured;
+  std::vector<table::Table> simulated;
+  try {
+    for (const Run& run : runs) {
+      measured.push_back(friction_table(run, run.measured));
+      simulated.push_back(friction_table(run, simulate_as_measured(model, run)));
+      if (measured.back().has("rpm")) {
+        for (double x : measured.back().col("rpm")) {
+          forward = forward || x > 0.0;
+          reverse = reverse || x < 0.0;
+        }
+      }
+    }
+  } catch (const Error&) {
+    return out;  // a run without a speed: no friction from steady states
+  }
+  const bool both = forward && reverse;
+  const auto seen = seen_friction(measured, model.params, both);
+  const auto own = seen_friction(simulated, model.params, both);
+  if (!seen || !own) return out;
+  // What the data show beyond what the model's own friction shows through the same estimate
+  // (so that the estimate's biases cancel), kept inside the effects' ranges and positive (the
+  // fit moves the levels in log coordinates).
+  const model::Params& p = model.params;
+  const double stall_Nm = p.motor.Kt_Nm_A * p.supply_V / p.motor.R_ohm;
+  const double no_load_rad_s = p.supply_V / p.motor.Ke_V_s_rad;
+  const auto within = [](std::string_view effect, std::string_view key, double v, double floor) {
+    const model::EffectSpec* spec = model::find_effect(effect);
+    MCG_DEMAND(spec != nullptr);
+    const auto it = std::find_if(spec->params.begin(), spec->params.end(), [&](const auto& q) { return q.name == key; });
+    MCG_DEMAND(it != spec->params.end());
+    return std::clamp(std::max(v, floor), it->lower, it->upper);
+  };
+  const double tc = within("friction_levels", "Tc_Nm", (*seen)[0] - (*own)[0], 1e-4 * stall_Nm);
+  out["friction_levels"] = {tc, within("friction_levels", "Ts_excess_Nm", (*seen)[1] - (*own)[1] - tc, 1e-4 * stall_Nm),
+                            within("friction_levels", "c1_Nm_s_rad", (*seen)[2] - (*own)[2],
+                                   1e-4 * stall_Nm / no_load_rad_s)};
+  if (both) {
+    out["friction_asymmetry"] = {within("friction_asymmetry", "dT_Nm", (*seen)[3] - (*own)[3], -1e300)};
+  }
+  return out;
+}
 
 bool measures_current(const std::vector<Run>& runs) {
   return std::any_of(runs.begin(), runs.end(), [](const Run& r) {
@@ -426,7 +550,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   // The refit of the nominal parameters, warm start of every effect candidate.
   model::Model base = model;
   add_effect(base, "param_mismatch");
-  Job pm_job{"param_mismatch", {}, base, mismatch_free(settings.fixed, model.params, has_current), {}, 20, {}, {}};
+  Job pm_job{"param_mismatch", {}, base, mismatch_free(settings.fixed, model.params, has_current), {}, 20, {}, {}, {}};
   if (settings.progress) settings.progress("fitting param_mismatch (nominal parameters)");
   std::vector<GapCandidate> pm_result = run_jobs({pm_job}, data, floors, settings, threads, {}, done, total);
   GapCandidate pm = std::move(pm_result.front());
@@ -436,6 +560,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   std::vector<Job> jobs;
   std::vector<GapCandidate> skipped;
   const std::vector<double> orders = angle_orders(pm.model, data.train, 2);
+  const std::map<std::string, std::vector<double>> friction_starts = data_friction_starts(model, data.train);
   for (const model::EffectSpec* spec : candidate_effects()) {
     const model::EffectSpec& plan = *spec;
     if (model.effect(plan.name) != nullptr) continue;
@@ -456,14 +581,18 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       continue;
     }
     Job job{plan.name,   {plan.name}, pm.model, mismatch_free(settings.fixed, model.params, has_current, {plan.name}),
-            {plan.name}, 15,          {},       {base}};
+            {plan.name}, 15,          {},       {base}, {}};
     add_effect(job.start, plan.name);
     for (const auto& key : plan.plan.free) {
       job.free.push_back(plan.name + "." + key);
       job.stage1_free.push_back(plan.name + "." + key);
     }
+    job.data_starts = friction_starts;
     jobs.push_back(std::move(job));
   }
+  // Friction is what every real motor has and what a model made from a datasheet lacks: its
+  // candidates are fitted first, so that a time budget never leaves them unfitted.
+  std::stable_partition(jobs.begin(), jobs.end(), [](const Job& j) { return is_friction(j.name); });
   std::vector<GapCandidate> singles = run_jobs(jobs, data, floors, settings, threads, orders, done, total);
 
   // The refit must not lose to an effect fit that merely found better nominal values: when
@@ -487,7 +616,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
     if (best < pm_cost) {
       if (settings.progress) settings.progress("refitting param_mismatch from a better start");
       ++total;
-      Job again{"param_mismatch", {}, start, mismatch_free(settings.fixed, model.params, has_current), {}, 10, {}, {}};
+      Job again{"param_mismatch", {}, start, mismatch_free(settings.fixed, model.params, has_current), {}, 10, {}, {}, {}};
       GapCandidate refit =
           std::move(run_jobs({again}, data, floors, settings, threads, {}, done, total).front());
       refit.fpe = fpe(refit.score, refit.free.size());
@@ -541,7 +670,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         // Started from the current model with the added effect at its single-fit values, or
         // from the model as given with every member at its single-fit values.
         Job job{name, members, current.model, mismatch_free(settings.fixed, model.params, has_current, members), {},
-                10,   {},      {base}};
+                10,   {},      {base}, {}};
         for (const auto& f : current.free) {
           if (!f.starts_with("param_mismatch.")) job.free.push_back(f);
         }
