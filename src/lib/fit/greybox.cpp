@@ -79,8 +79,12 @@ Run make_run(const table::Table& table, const std::vector<std::string>& outputs,
   } else {
     run.inputs.v_V = table.col("v");
   }
-  run.inputs.clutch = table.col("clutch");
-  run.inputs.r_load_ohm = table.col("r_load");
+  // A motor alone has no clutch and no load relay to log: without those columns the run is the
+  // motor alone (clutch 0, relay open), as mcg-fit friction reads it.
+  const std::size_t rows = table.rows();
+  run.inputs.clutch = table.has("clutch") ? table.col("clutch") : std::vector<double>(rows, 0.0);
+  run.inputs.r_load_ohm =
+      table.has("r_load") ? table.col("r_load") : std::vector<double>(rows, model::k_open_circuit);
   model::validate_inputs(run.inputs, table.source, table.first_line);
   if (table.rows() < min_rows) {
     fail("{}: too short: {} rows (at least {} needed)", table.source, table.rows(), min_rows);

@@ -49,7 +49,8 @@ struct Run {
 };
 
 /// Builds a run from a table with columns t, v (or duty, then v = duty * supply_V), clutch,
-/// r_load and the measured `outputs` (empty: rpm, or omega when there is no rpm, and each of
+/// r_load (both optional: without them the run is the motor alone, clutch 0 and relay open)
+/// and the measured `outputs` (empty: rpm, or omega when there is no rpm, and each of
 /// i, i_gen, v_gen that is present and not constant, the generator's two only when the
 /// clutch is not 0 throughout). When the
 /// `# i_measurement:` metadata (mcg-csv(5)) names the ADC range, current samples

@@ -249,8 +249,35 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
       result.rough[static_cast<std::size_t>(j)] = std::isfinite(a) && std::isfinite(b) && d > 0.5 * std::max(a, b);
     }
   }
-  const Eigen::MatrixXd jac_p = jac_u * coords.derivative(result.values).cwiseInverse().asDiagonal();
-  covariance_statistics(jac_p, result.residuals, result.std_errors, result.correlation, result.sigma);
+  const Eigen::VectorXd dp_du = coords.derivative(result.values);
+  const Eigen::MatrixXd jac_p = jac_u * dp_du.cwiseInverse().asDiagonal();
+  // A log parameter driven to its zero bound (many orders of magnitude below its start) has a
+  // Jacobian column of rounding noise divided by almost nothing: it is held where it is for the
+  // statistics (infinite error: the bound, not the data, fixes it), so that it does not make
+  // every other parameter look undetermined.
+  std::vector<Eigen::Index> kept;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const auto& spec = specs[static_cast<std::size_t>(j)];
+    const bool collapsed = spec.transform == Transform::log && std::abs(dp_du[j]) < 1e-9 * std::abs(spec.initial);
+    if (!collapsed && jac_p.col(j).allFinite()) kept.push_back(j);
+  }
+  if (static_cast<Eigen::Index>(kept.size()) == n || kept.empty()) {
+    covariance_statistics(jac_p, result.residuals, result.std_errors, result.correlation, result.sigma);
+    return result;
+  }
+  Eigen::MatrixXd jac_kept(m, static_cast<Eigen::Index>(kept.size()));
+  for (std::size_t k = 0; k < kept.size(); ++k) jac_kept.col(static_cast<Eigen::Index>(k)) = jac_p.col(kept[k]);
+  Eigen::VectorXd se_kept;
+  Eigen::MatrixXd corr_kept;
+  covariance_statistics(jac_kept, result.residuals, se_kept, corr_kept, result.sigma);
+  result.std_errors = Eigen::VectorXd::Constant(n, std::numeric_limits<double>::infinity());
+  result.correlation = Eigen::MatrixXd::Constant(n, n, std::numeric_limits<double>::quiet_NaN());
+  for (Eigen::Index j = 0; j < n; ++j) result.correlation(j, j) = 1.0;
+  for (std::size_t a = 0; a < kept.size(); ++a) {
+    result.std_errors[kept[a]] = se_kept[static_cast<Eigen::Index>(a)];
+    for (std::size_t b = 0; b < kept.size(); ++b)
+      result.correlation(kept[a], kept[b]) = corr_kept(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
+  }
   return result;
 }
 
