@@ -3,22 +3,20 @@
 # moves; Janot, Gautier, Brunot 2019). mcg-fit friction on the estimation run, from the
 # logged force and the motor encoder's position only, must give the Coulomb and viscous
 # friction within two of its standard errors of the published IDIM-LS values
-# (Fc = 20.3935 N, Fv = 203.5034 N s/m), in SI units. Skipped when the data is absent.
+# (Fc = 20.3935 N, Fv = 203.5034 N s/m), in SI units. The data ship in tests/data/real/emps
+# (Apache-2.0, see PROVENANCE.md there).
 # Args: TOOL_DIR SOURCE_DIR.
 set -euo pipefail
 tools=$1
 src=$2
-data="$src/../shared/data/real/emps/emps_estimation_DATA_EMPS.csv"
-[[ -r "$data" ]] || { echo "skipped: EMPS data not present"; exit 125; }
+data="$src/tests/data/real/emps/emps_estimation.csv"
 [[ -x "$tools/mcg-fit" ]] || { echo "skipped: mcg-fit not built"; exit 125; }
 export PATH="$tools:$PATH"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-# The benchmark names its time column t_s; the CSV contract calls it t.
-sed '1s/^t_s,/t,/' "$data" >"$work/emps.csv"
 mcg-fit friction --linear --torque force_N --position qm_m --fit-inertia --offset --no-static --order 1 \
-  "$work/emps.csv" >"$work/fit.ini"
+  "$data" >"$work/fit.ini"
 
 failures=0
 # check KEY PUBLISHED: value and standard error from "KEY = value  ; +- se UNIT"

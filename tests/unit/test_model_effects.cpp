@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 #include "common/error.hpp"
+#include "config/ini.hpp"
 #include "model/model.hpp"
 #include "test_support_error.hpp"
 
@@ -78,6 +80,30 @@ TEST(ModelEffects, ParseFillsDefaultsAndRoundTrips) {
   const Effect back = parse_effect(format_effect(e));
   EXPECT_EQ(back.params, e.params);
   EXPECT_EQ(parse_effect("dead_time").get("tau_d_s"), 0.002);
+}
+
+// Another motor's size: an effect value beyond its default range is written with the [bounds]
+// that hold it and reads back; without them it is refused, naming the range.
+TEST(ModelEffects, ValuesBeyondTheDefaultRangeReadBackWithTheirBounds) {
+  Model m;
+  m.effects.push_back(default_effect("friction_asymmetry"));
+  m.effects.back().set("dT_Nm", -3.2);  // as a fit with [bounds] leaves it
+  config::Ini ini;
+  model_to_ini(m, ini);
+  std::ostringstream text;
+  ini.write(text);
+  EXPECT_NE(text.str().find("friction_asymmetry.dT_Nm = -3.2 0.05"), std::string::npos) << text.str();
+  std::istringstream back(text.str());
+  const Model read = model_from_ini(config::Ini::parse(back, "fit.ini"));
+  ASSERT_NE(read.effect("friction_asymmetry"), nullptr);
+  EXPECT_EQ(read.effect("friction_asymmetry")->get("dT_Nm"), -3.2);
+  std::istringstream plain("[effect.friction_asymmetry]\ndT_Nm = -3.2\n");
+  try {
+    model_from_ini(config::Ini::parse(plain, "m.ini"));
+    FAIL() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "m.ini:2: [effect.friction_asymmetry] dT_Nm: out of range [-0.05, 0.05]");
+  }
 }
 
 TEST(ModelEffects, ParseErrorsNameTheBadText) {

@@ -469,6 +469,23 @@ FitResult fit_model(const FitProblem& problem) {
   apply_ties(result.model, problem.ties);
   result.runs = evaluate_model(result.model, problem.runs, problem.sim);
   fit_warnings(result.nls, bounds, units, result);
+  // Lag-1 autocorrelation of the residuals within each (run, output) block.
+  double lag0 = 0.0;
+  double lag1 = 0.0;
+  Eigen::Index at = 0;
+  for (const Run& run : problem.runs) {
+    for (const auto& y : run.measured) {
+      const auto len = static_cast<Eigen::Index>(y.size());
+      for (Eigen::Index k = 0; k < len && at + k < result.nls.residuals.size(); ++k) {
+        const double r = result.nls.residuals[at + k];
+        lag0 += r * r;
+        if (k > 0) lag1 += r * result.nls.residuals[at + k - 1];
+      }
+      at += len;
+    }
+  }
+  const double rho = lag0 > 0.0 ? std::clamp(lag1 / lag0, 0.0, 0.9999) : 0.0;
+  result.se_widening = std::sqrt((1.0 + rho) / (1.0 - rho));
   return result;
 }
 

@@ -161,6 +161,14 @@ struct FitResult {
   std::vector<FitFlag> flags;
   /// The solver met a convergence test and nothing above was found.
   bool trustworthy() const { return nls.converged && warnings.empty(); }
+  /// Factor the solver's standard errors are widened by in the reports of mcg-fit model: a
+  /// simulation error is strongly autocorrelated, so the samples are far fewer independent
+  /// errors than rows. With rho the lag-1 autocorrelation of the residuals (pooled over the
+  /// runs and outputs), the AR(1) variance inflation sqrt((1 + rho) / (1 - rho)) (1 for
+  /// white residuals).
+  double se_widening = 1.0;
+  /// nls.std_errors times se_widening.
+  double reported_se(std::size_t k) const { return se_widening * nls.std_errors[static_cast<Eigen::Index>(k)]; }
 };
 
 /// |correlation| beyond which two parameters are reported as not told apart by the data.

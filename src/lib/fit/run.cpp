@@ -85,7 +85,7 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, std::ostream
   for (std::size_t i = 0; i < n.names.size(); ++i) {
     const auto place = ini_place(ini, n.names[i]);
     const auto k = static_cast<Eigen::Index>(i);
-    if (place) ini.set(place->first, place->second, num6(n.values[k]), "fitted, " + se_comment(n.std_errors[k], unit_of(infos, n.names[i])));
+    if (place) ini.set(place->first, place->second, num6(n.values[k]), "fitted, " + se_comment(r.reported_se(i), unit_of(infos, n.names[i])));
   }
   for (const auto& [follower, leader] : problem.ties) {
     if (const auto place = ini_place(ini, follower)) {
@@ -99,6 +99,8 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, std::ostream
                              ? fmt::format("{}, but the numbers are not trustworthy (see the warnings)", n.reason)
                              : n.reason);
   for (std::size_t w = 0; w < r.warnings.size(); ++w) ini.set(sec, fmt::format("warning{}", w + 1), r.warnings[w]);
+  ini.set(sec, "se_widening", num6(r.se_widening),
+          "standard errors times this for the residuals' autocorrelation: sqrt((1 + rho) / (1 - rho))");
   ini.set(sec, "iterations", static_cast<double>(n.iterations));
   ini.set(sec, "evaluations", static_cast<double>(n.evaluations));
   std::string free;
@@ -108,7 +110,7 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, std::ostream
   for (std::size_t i = 0; i < n.names.size(); ++i) {
     const auto k = static_cast<Eigen::Index>(i);
     ini.set(sec, n.names[i], num6(n.values[k]));
-    ini.set(sec, n.names[i] + ".se", num6(n.std_errors[k]));
+    ini.set(sec, n.names[i] + ".se", num6(r.reported_se(i)));
   }
   for (std::size_t i = 0; i < n.names.size(); ++i) {
     std::string row;
@@ -543,7 +545,7 @@ int run_model(const ModelRunOptions& options, std::ostream& out, std::ostream& e
     for (std::size_t i = 0; i < problem.free.size(); ++i) {
       const auto idx = static_cast<Eigen::Index>(i);
       row.push_back(o.result ? o.result->nls.values[idx] : nan);
-      row.push_back(o.result ? o.result->nls.std_errors[idx] : nan);
+      row.push_back(o.result ? o.result->reported_se(static_cast<std::size_t>(idx)) : nan);
     }
     for (const auto& name : outputs) {
       double fit = nan;

@@ -236,7 +236,16 @@ Model model_from_ini(const config::Ini& ini, Model base) {
       }();
       if (ps == nullptr) ini.reject(section, entry->key, "unknown parameter of effect '" + name + "'");
       const double v = *ini.number(section, entry->key);
-      if (const auto problem = effect_value_problem(*ps, v)) ini.reject(section, entry->key, *problem);
+      // A value beyond the effect's default range (another motor's size) stands when the
+      // INI's [bounds] widens that range to hold it, as a fit's own output does.
+      EffectParamSpec range = *ps;
+      if (const auto b = ini.numbers("bounds", name + "." + entry->key); b && b->size() == 2) {
+        range.lower = std::min(range.lower, (*b)[0]);
+        range.upper = std::max(range.upper, (*b)[1]);
+      }
+      if (const auto problem = effect_value_problem(range, v)) {
+        ini.reject(section, entry->key, *effect_value_problem(*ps, v));
+      }
       effect.set(entry->key, v);
     }
     bool replaced = false;
@@ -264,6 +273,15 @@ void model_to_ini(const Model& model, config::Ini& ini) {
         }
       }
       ini.set(section, key, value, unit);
+      if (spec == nullptr) continue;
+      const auto ps = std::find_if(spec->params.begin(), spec->params.end(),
+                                   [&](const auto& p) { return p.name == key; });
+      if (ps != spec->params.end() && !(value >= ps->lower && value <= ps->upper)) {
+        // Beyond the default range: the bounds that let it be read back.
+        ini.set("bounds", effect.name + "." + key,
+                config::format_number(std::min(ps->lower, value)) + " " +
+                    config::format_number(std::max(ps->upper, value)));
+      }
     }
   }
 }
