@@ -44,7 +44,7 @@ class Draws {
   double unit() {
     std::uint16_t v = 0;
     for (int k = 0; k < 2; ++k)
-      v = static_cast<std::uint16_t>((v << 8) | (m_pos < m_size ? m_data[m_pos++] : 0u));
+      v = static_cast<std::uint16_t>((unsigned{v} << 8u) | (m_pos < m_size ? m_data[m_pos++] : 0u));
     return static_cast<double>(v) / 65535.0;
   }
   double log_range(double lo, double hi) { return lo * std::pow(hi / lo, unit()); }
