@@ -79,6 +79,13 @@ int main(int argc, char** argv) {
       ->add_option("--idle-timeout", stream_opt.idle_timeout_s, "no stream data for this long is an error, s")
       ->check(CLI::Range(0.05, 60.0))
       ->capture_default_str();
+  bool reconnect = false;
+  double reconnect_wait_s = 60.0;
+  stream->add_flag("--reconnect", reconnect,
+                   "when the port vanishes or the stream stops, wait for it and go on after a break row");
+  stream->add_option("--reconnect-wait", reconnect_wait_s, "with --reconnect: wait this long at most, s")
+      ->check(CLI::Range(0.1, 1e6))
+      ->capture_default_str();
 
   mcg::link::DumpOptions dump_opt;
   auto* dump = app.add_subcommand("dump", "read the RAM log as CSV (t, rpm, counts)");
@@ -152,7 +159,10 @@ int main(int argc, char** argv) {
     if (*get) mcg::link::run_get(link, get_names, std::cout);
     if (*set) mcg::link::run_set(link, set_name, set_value, std::cerr);
     if (*load) mcg::link::run_load(link, load_path, std::cout, std::cerr);
-    if (*stream) return mcg::link::run_stream(link, stream_opt, std::cout, std::cerr);
+    if (*stream) {
+      if (reconnect) stream_opt.reconnect_wait_s = reconnect_wait_s;
+      return mcg::link::run_stream(link, stream_opt, std::cout, std::cerr);
+    }
     if (*dump) mcg::link::run_dump(link, dump_opt, std::cout, std::cerr);
     if (*send) mcg::link::run_send(link, send_opt, std::cout);
     if (*monitor) mcg::link::run_monitor(link, monitor_opt, std::cout);

@@ -123,13 +123,47 @@ TEST(LinkStreamBlock, SequenceGapsAreLostSamplesAndTimeSkips) {
   EXPECT_FALSE(std::isnan(rows[4].rpm));  // the window holds the block's first 4 samples
 }
 
-TEST(LinkStreamBlock, LongSilenceUnwrapsByArrivalTime) {
+TEST(LinkStreamBlock, LongSilenceUnwrapsByArrivalTimeIntoABreak) {
   StreamAssembler a(4);
   a.push(steady(10, 0, 10), 0.0);
-  // 18 s without data: 281 blocks, sequence 10 + 281 = 291 = 35 mod 256.
+  // 18 s without data: 281 blocks, sequence 10 + 281 = 291 = 35 mod 256. Past the sequence
+  // number's range the gap is one break row, not 4480 rows of NaN.
   a.push(steady(35, 0, 10), 18.0);
   EXPECT_EQ(a.lost_samples(), 280u * 16u);
-  EXPECT_DOUBLE_EQ(a.rows()[280u * 16u].t_s, 281 * 0.064);
+  EXPECT_EQ(a.breaks(), 1u);
+  ASSERT_EQ(a.rows().size(), 17u);
+  EXPECT_DOUBLE_EQ(a.rows()[0].t_s, 16 * 0.004);  // the first missing sample
+  EXPECT_TRUE(std::isnan(a.rows()[0].duty) && std::isnan(a.rows()[0].rpm) && std::isnan(a.rows()[0].counts));
+  EXPECT_DOUBLE_EQ(a.rows()[1].t_s, 281 * 0.064);
+}
+
+TEST(LinkStreamBlock, ADayBetweenBlocksIsOneBreakRow) {
+  StreamAssembler a(4);
+  a.push(steady(0, 0, 10), 0.0);
+  a.push(steady(1, 0, 10), k_block_s);
+  a.push(steady(77, 0, 10), 86400.0);  // a laptop suspended for a day
+  ASSERT_EQ(a.rows().size(), 17u);
+  EXPECT_EQ(a.breaks(), 1u);
+  EXPECT_TRUE(std::isnan(a.rows()[0].duty));
+  EXPECT_NEAR(a.rows()[1].t_s, 86400.0 + k_block_s, 0.064 * 128);
+  EXPECT_DOUBLE_EQ(std::fmod(std::round(a.rows()[1].t_s / 0.004), 256.0 * 16.0), (77.0 - 0.0) * 16.0)
+      << "the block keeps its sequence number's place";
+  a.push(steady(78, 0, 10), k_block_s);
+  EXPECT_EQ(a.rows().size(), 16u) << "after the break, rows as usual";
+}
+
+TEST(LinkStreamBlock, ARestartIsABreakPlacedByTheSilence) {
+  StreamAssembler a(4);
+  a.push(steady(200, 0, 10), 0.0);
+  a.restart();  // the port came back; the board restarted its sequence numbers at 0
+  a.push(steady(0, 0, 10), 2.0);
+  EXPECT_EQ(a.breaks(), 1u);
+  ASSERT_EQ(a.rows().size(), 17u);
+  EXPECT_DOUBLE_EQ(a.rows()[0].t_s, 16 * 0.004);
+  EXPECT_NEAR(a.rows()[1].t_s, 2.0, 0.064);
+  a.push(steady(1, 0, 10), k_block_s);
+  EXPECT_EQ(a.rows().size(), 16u);
+  EXPECT_EQ(a.breaks(), 1u);
 }
 
 TEST(LinkStreamBlock, SaturatedSamplesLeaveRpmUnmeasured) {

@@ -7,9 +7,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
+#include <ctime>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <mutex>
@@ -19,6 +22,7 @@
 #include <thread>
 
 #include "common/error.hpp"
+#include "common/quote.hpp"
 #include "config/ini.hpp"
 #include "link/capture_meta.hpp"
 #include "link/connection.hpp"
@@ -110,6 +114,17 @@ ConsoleAction ConsoleState::key(int key) {
     case 'w':
       if (recording) return {Kind::record_csv, "", ""};
       return ask("record the stream to: ", Kind::record_csv, "");
+    case 'L':
+      if (logging) return {Kind::session_log, "", ""};
+      return ask("session log to: ", Kind::session_log, "");
+    case 'p':
+      paused = !paused;
+      if (paused) m_frozen = m_samples;
+      status = paused ? "view paused (p resumes; the stream and any recording go on)" : "view resumed";
+      return {};
+    case '?':
+      show_help = !show_help;
+      return {};
     case 'q':
       return {Kind::quit, "", ""};
     default:
@@ -160,6 +175,55 @@ std::string reg(const ConsoleState& s, const std::string& name) {
 
 }  // namespace
 
+std::string closed_loop_warning(const std::map<std::string, std::string>& registers) {
+  const auto it = registers.find("mode");
+  if (it == registers.end() || (it->second != "p" && it->second != "pi" && it->second != "pid")) return {};
+  const std::string& mode = it->second;
+  const auto gain = [&](const char* name) -> std::optional<double> {
+    const auto g = registers.find(name);
+    if (g == registers.end()) return std::nullopt;
+    double v = 0.0;
+    const auto [ptr, ec] = std::from_chars(g->second.data(), g->second.data() + g->second.size(), v);
+    if (ec != std::errc() || ptr != g->second.data() + g->second.size()) return std::nullopt;
+    return v;
+  };
+  const auto b0 = gain("b0"), b1 = gain("b1"), b2 = gain("b2"), kp = gain("kp");
+  if (mode == "p") {
+    if (!kp) return {};
+    if (*kp == 0.0) return "WARNING: mode p with kp = 0: the controller outputs nothing";
+    if (*kp < 0.0) return fmt::format("WARNING: mode p with kp = {}: positive feedback, the speed runs away", *kp);
+    return {};
+  }
+  if (!b0 || !b1 || (mode == "pid" && !b2)) return {};
+  const double integral = *b0 + *b1 + (mode == "pid" ? *b2 : 0.0);
+  const std::string gains = mode == "pid" ? fmt::format("b0 = {}, b1 = {}, b2 = {}", *b0, *b1, *b2)
+                                          : fmt::format("b0 = {}, b1 = {}", *b0, *b1);
+  if (*b0 == 0.0 && *b1 == 0.0 && (mode != "pid" || *b2 == 0.0)) {
+    return fmt::format("WARNING: mode {} with every gain zero: the controller outputs nothing", mode);
+  }
+  if (*b0 <= 0.0) return fmt::format("WARNING: mode {} with {}: b0 <= 0 acts against the error", mode, gains);
+  if (integral < 0.0) {
+    return fmt::format("WARNING: mode {} with {}: the integral gain (their sum) is negative, the speed runs away",
+                       mode, gains);
+  }
+  return {};
+}
+
+const std::vector<std::string>& console_key_help() {
+  static const std::vector<std::string> k_help = {
+      "keys (? closes this list):",
+      "  r  speed command (rpm_cmd)          d  duty, % (mode open)",
+      "  m  mode (open, p, pi, pid)          k  kp",
+      "  s  set any register: NAME VALUE     c  clutch on/off    l  load on/off",
+      "  g  record the RAM log and dump it   D  dump the RAM log",
+      "  o  load a design INI                w  record the stream to CSV (w again stops)",
+      "  p  pause/resume the view            L  session log to a file (L again stops)",
+      "  ?  this list                        q  quit",
+      "  Enter confirms a prompt, Esc cancels it",
+  };
+  return k_help;
+}
+
 std::vector<std::string> render_console(const ConsoleState& state, int width, int height) {
   std::vector<std::string> grid(static_cast<std::size_t>(std::max(height, 0)),
                                 std::string(static_cast<std::size_t>(std::max(width, 0)), ' '));
@@ -167,8 +231,9 @@ std::vector<std::string> render_console(const ConsoleState& state, int width, in
     if (height > 0) grid[0] = fit("too small: 40x12 at least", width);
     return grid;
   }
-  const auto& samples = state.samples();
+  const auto& samples = state.view();
   std::string title = "mcg-serial console";
+  if (state.paused) title += "   PAUSED";
   if (!samples.empty()) {
     const ConsoleSample& last = samples.back();
     title += fmt::format(
@@ -181,11 +246,14 @@ std::vector<std::string> render_console(const ConsoleState& state, int width, in
     title += fmt::format("   REC {} ({} rows)", printable_name(state.recording_path), state.recorded_rows);
   }
   if (state.lost_samples > 0) title += fmt::format("   lost {}", state.lost_samples);
+  if (state.logging) title += "   LOG";
+  if (!state.link_note.empty()) title = state.link_note + "   " + title;
   grid[0] = fit(title, width);
 
   const int duty_rows = 4;
+  const int residual_rows = height >= 20 ? 3 : 0;
   const int speed_top = 2;
-  const int speed_rows = height - speed_top - duty_rows - 5;
+  const int speed_rows = height - speed_top - duty_rows - 5 - (residual_rows > 0 ? residual_rows + 1 : 0);
   const int left = 7;
   double lo = 0.0, hi = 0.0;
   bool any = false;
@@ -207,7 +275,18 @@ std::vector<std::string> render_console(const ConsoleState& state, int width, in
         {{[](const ConsoleSample& s) { return s.rpm_cmd; }, '-'},
          {[](const ConsoleSample& s) { return s.rpm_model; }, 'o'},
          {[](const ConsoleSample& s) { return s.rpm; }, '*'}});
-  const int duty_top = speed_top + speed_rows + 1;
+  int duty_top = speed_top + speed_rows + 1;
+  if (residual_rows > 0) {
+    double r_max = 5.0;
+    for (const auto& s : samples) {
+      if (std::isfinite(s.rpm - s.rpm_model)) r_max = std::max(r_max, std::abs(s.rpm - s.rpm_model));
+    }
+    grid[static_cast<std::size_t>(duty_top - 1)] =
+        fit(fmt::format("{:>{}}residual, rpm: x measured - model", "", left), width);
+    chart(grid, duty_top, residual_rows, left, width, samples, -r_max, r_max,
+          {{[](const ConsoleSample& s) { return s.rpm - s.rpm_model; }, 'x'}});
+    duty_top += residual_rows + 1;
+  }
   grid[static_cast<std::size_t>(duty_top - 1)] = fit(fmt::format("{:>{}}duty, %", "", left), width);
   chart(grid, duty_top, duty_rows, left, width, samples, -100.0, 100.0,
         {{[](const ConsoleSample& s) { return 100.0 * s.duty; }, '#'}});
@@ -219,9 +298,17 @@ std::vector<std::string> render_console(const ConsoleState& state, int width, in
                   reg(state, "flags")),
       width);
   grid[static_cast<std::size_t>(bottom + 1)] = fit(
-      "keys: r rpm_cmd  d duty  m mode  k kp  s set any  c clutch  l load  g record+dump log  D dump log  "
-      "o load INI  w record CSV  q quit",
+      "keys: r rpm_cmd  d duty  m mode  k kp  s set  c clutch  l load  g/D RAM log  o load INI  w record  "
+      "p pause  L log  ? help  q quit",
       width);
+  grid[static_cast<std::size_t>(bottom + 2)] = fit(closed_loop_warning(state.registers), width);
+  if (state.show_help) {
+    const auto& help = console_key_help();
+    for (int r = 1; r < bottom; ++r) grid[static_cast<std::size_t>(r)] = std::string(static_cast<std::size_t>(width), ' ');
+    for (std::size_t k = 0; k < help.size() && static_cast<int>(k) + 2 < bottom; ++k) {
+      grid[k + 2] = fit(help[k], width);
+    }
+  }
   grid[static_cast<std::size_t>(height - 1)] =
       fit(state.prompting() ? "> " + state.prompt_line() + "_" : state.status, width);
   return grid;
@@ -275,11 +362,20 @@ class Worker {
     }
     m_wake.notify_all();
   }
-  /// Moves the news (status, register values) into `state`.
-  void collect(ConsoleState& state) {
+  /// Moves the news (status, register values) into `state`; returns the status, if new.
+  std::string collect(ConsoleState& state) {
     const std::lock_guard lock(m_mutex);
-    if (!m_status.empty()) state.status = std::exchange(m_status, {});
     for (auto& [k, v] : m_registers) state.registers[k] = v;
+    if (m_status.empty()) return {};
+    state.status = std::exchange(m_status, {});
+    return state.status;
+  }
+  /// The board's configuration a record_csv action read (nullopt until it did, or when it
+  /// failed: the reason is the status).
+  std::optional<std::vector<std::pair<std::string, std::string>>> take_config(bool& failed) {
+    const std::lock_guard lock(m_mutex);
+    failed = std::exchange(m_config_failed, false);
+    return std::exchange(m_config, std::nullopt);
   }
 
  private:
@@ -321,8 +417,14 @@ class Worker {
   }
 
   void poll() {
-    static const std::vector<std::string> names = {"mode", "rpm_cmd", "duty", "kp",   "b0",
-                                                   "b1",   "clutch",  "load", "flags"};
+    // board_config's registers (the port owner answers those from what it holds while the
+    // stream runs) and the duty and flags.
+    static const std::vector<std::string> names = [] {
+      std::vector<std::string> n(config_register_names().begin(), config_register_names().end());
+      n.emplace_back("duty");
+      n.emplace_back("flags");
+      return n;
+    }();
     std::map<std::string, std::string> values;
     try {
       std::ostringstream out;
@@ -379,12 +481,24 @@ class Worker {
           if (a.value.empty()) return "load: give an INI file";
           run_load(m_link, a.value, out, err);
           return fmt::format("loaded {}", a.value);
+        case Kind::record_csv: {
+          auto conn = connect(m_link);
+          auto config = board_config(*conn);
+          const std::lock_guard lock(m_mutex);
+          m_config = std::move(config);
+          return fmt::format("recording to {}", a.value);
+        }
         case Kind::none:
-        case Kind::record_csv:
+        case Kind::session_log:
         case Kind::quit:
           return {};
       }
     } catch (const Error& e) {
+      if (a.kind == Kind::record_csv) {
+        const std::lock_guard lock(m_mutex);
+        m_config_failed = true;
+        return fmt::format("record: reading the board's configuration: {}", e.what());
+      }
       return fmt::format("refused: {}", e.what());
     }
     return {};
@@ -399,17 +513,35 @@ class Worker {
   std::deque<ConsoleAction> m_queue;
   std::string m_status;
   std::map<std::string, std::string> m_registers;
+  std::optional<std::vector<std::pair<std::string, std::string>>> m_config;
+  bool m_config_failed = false;
   bool m_stop = false;
   std::thread m_thread;
 };
 
-/// The stream recording to a CSV file, in mcg-serial stream's format.
+/// The stream recording to a CSV file, in mcg-serial stream's format. Its header waits for
+/// the board's configuration (read by the worker); the rows in between wait in `pending`.
 struct Recording {
   std::ofstream file;
   std::optional<table::Writer> writer;
+  bool header_written = false;
+  std::vector<StreamRow> pending;
 };
 
+double unix_now_s() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
 }  // namespace
+
+std::string session_log_line(double unix_s, std::string_view text) {
+  const auto whole = static_cast<std::time_t>(std::floor(unix_s));
+  const auto ms = std::clamp(static_cast<int>(std::floor((unix_s - std::floor(unix_s)) * 1e3)), 0, 999);
+  std::tm utc{};
+  gmtime_r(&whole, &utc);
+  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{:03}Z {}", utc.tm_year + 1900, utc.tm_mon + 1, utc.tm_mday,
+                     utc.tm_hour, utc.tm_min, utc.tm_sec, ms, text);
+}
 
 int run_console(const LinkOptions& link, const ConsoleOptions& options) {
   if (::isatty(STDIN_FILENO) != 1 || ::isatty(STDOUT_FILENO) != 1) {
@@ -417,19 +549,47 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
   }
   constexpr int k_window_samples = 4;  // the board's 16 ms rpm window
   constexpr double k_sample_s = MCG_STREAM_PERIOD_MS * 1e-3;
+  /// No stream block for this long is a stall the screen reports (blocks come every 64 ms).
+  constexpr double k_stall_s = 2.0;
+  /// While the port is gone or silent, the console tries to reach it again this often.
+  constexpr double k_retry_s = 0.5;
   const Rig rig = load_rig(options.rig);
   model::Model model;
   if (!options.rig.configs.empty()) model = model::model_from_ini(config::Ini::load_all(options.rig.configs));
-  auto c = connect(link, Hold::Serve);
-  Session& s = *c->session;
-  const InterruptGuard guard;
-  s.write(require_register("stream"), 1);
-
+  std::ofstream session_log;
   ConsoleState state(options.span_s);
+  const auto log = [&](std::string_view text) {
+    if (!session_log.is_open() || text.empty()) return;
+    session_log << session_log_line(unix_now_s(), text) << '\n' << std::flush;
+  };
+  const auto open_log = [&](const std::string& path) {
+    session_log.open(path, std::ios::app);
+    if (!session_log) return false;
+    state.logging = true;
+    log(fmt::format("session log of mcg-serial console on {}", link.port));
+    return true;
+  };
+  if (!options.log_path.empty() && !open_log(options.log_path)) {
+    fail("console: --log: cannot open {}", quote(options.log_path));
+  }
+  auto c = connect(link, Hold::Serve);
+  const InterruptGuard guard;
+  c->session->write(require_register("stream"), 1);
+  log(fmt::format("connected: {}", c->board_text()));
+
   StreamAssembler assembler(k_window_samples);
   std::optional<model::Plant> plant;
   Recording rec;
   std::size_t recorded = 0;
+  const auto write_row = [&](const StreamRow& r) {
+    if (!rec.writer) return;
+    if (!rec.header_written) {
+      rec.pending.push_back(r);
+      return;
+    }
+    write_stream_row(*rec.writer, r, rig);
+    ++recorded;
+  };
   auto stop_recording = [&] {
     if (!rec.writer) return;
     rec.writer->finish();
@@ -437,108 +597,182 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
     rec.file.close();
     state.status = fmt::format("recorded {} rows to {}", recorded, printable_name(state.recording_path));
     state.recording = false;
+    log(state.status);
   };
-  const auto start = std::chrono::steady_clock::now();
+  using Clock = std::chrono::steady_clock;
+  const auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+  const auto start = Clock::now();
   auto last_block = start;
   auto next_draw = start;
+  auto next_retry = start;
   std::string ended_by;
+  std::string last_warning;
   {
     Worker worker(link, options.poll_s);
     Screen screen;
-    try {
-      for (;;) {
-        // The stream first: every block that has arrived, then the keys, then the screen.
-        while (auto f = s.receive(0.01)) {
-          if (f->cmd != MCG_MSG_STREAM) continue;
-          const double gap =
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - last_block).count();
-          last_block = std::chrono::steady_clock::now();
-          if (!assembler.push(f->payload, gap)) continue;
-          for (const StreamRow& r : assembler.rows()) {
-            model::Drive drive;
-            drive.v_V = std::isfinite(r.duty) ? r.duty * rig.supply_V : 0.0;
-            drive.clutch = std::isfinite(r.clutch) ? static_cast<int>(r.clutch) : 2;
-            drive.r_load_ohm = r.load == 1.0 ? rig.r_load_ohm : model::k_open_circuit;
-            // The model starts as the console found the rig: at the first measured speed.
-            if (!plant && std::isfinite(r.rpm)) {
-              plant.emplace(model, model::SimOptions{}, drive.clutch);
-              plant->start_at(r.rpm * std::numbers::pi / 30.0);
-            }
-            double rpm_model = std::numeric_limits<double>::quiet_NaN();
-            if (plant) {
-              plant->step(k_sample_s, drive);
-              rpm_model = plant->state().omega_rad_s * 30.0 / std::numbers::pi;
-            }
-            state.add({r.t_s, r.rpm, rpm_model, r.rpm_cmd, r.duty});
-            if (rec.writer) {
-              write_stream_row(*rec.writer, r, rig);
-              ++recorded;
-            }
-          }
-          if (rec.writer) rec.writer->finish();
-          state.recorded_rows = recorded;
-          state.lost_samples = assembler.lost_samples();
-          if (std::chrono::steady_clock::now() >= next_draw) break;
-        }
-        for (int ch = getch(); ch != ERR; ch = getch()) {
-          const ConsoleAction a = state.key(ch);
-          if (a.kind == ConsoleAction::Kind::quit) {
-            ended_by = "quit";
-            break;
-          }
-          if (a.kind == ConsoleAction::Kind::record_csv) {
-            if (rec.writer) {
-              stop_recording();
-            } else if (a.value.empty()) {
-              state.status = "record: give a file";
-            } else {
-              rec.file.open(a.value);
-              if (!rec.file) {
-                state.status = fmt::format("record: cannot open {}", a.value);
-              } else {
-                rec.writer.emplace(rec.file);
-                // The registers as they are now: the recording states what the board ran.
-                write_stream_header(*rec.writer, *c, link, k_window_samples, rig, board_config(*c));
-                recorded = 0;
-                state.recording = true;
-                state.recording_path = a.value;
-                state.status = fmt::format("recording to {}", a.value);
+    for (;;) {
+      // The stream first: every block that has arrived, then the keys, then the screen.
+      try {
+        if (c) {
+          while (auto f = c->session->receive(0.01)) {
+            if (f->cmd != MCG_MSG_STREAM) continue;
+            const double gap = since(last_block);
+            last_block = Clock::now();
+            if (!assembler.push(f->payload, gap)) continue;
+            for (const StreamRow& r : assembler.rows()) {
+              model::Drive drive;
+              drive.v_V = std::isfinite(r.duty) ? r.duty * rig.supply_V : 0.0;
+              drive.clutch = std::isfinite(r.clutch) ? static_cast<int>(r.clutch) : 2;
+              drive.r_load_ohm = r.load == 1.0 ? rig.r_load_ohm : model::k_open_circuit;
+              // The model starts as the console found the rig (and again after a break): at
+              // the first measured speed.
+              if (!std::isfinite(r.duty)) plant.reset();
+              if (!plant && std::isfinite(r.rpm)) {
+                plant.emplace(model, model::SimOptions{}, drive.clutch);
+                plant->start_at(r.rpm * std::numbers::pi / 30.0);
               }
+              double rpm_model = std::numeric_limits<double>::quiet_NaN();
+              if (plant) {
+                plant->step(k_sample_s, drive);
+                rpm_model = plant->state().omega_rad_s * 30.0 / std::numbers::pi;
+              }
+              state.add({r.t_s, r.rpm, rpm_model, r.rpm_cmd, r.duty});
+              write_row(r);
             }
-          } else if (a.kind != ConsoleAction::Kind::none) {
-            state.status = "...";
-            worker.post(a);
+            if (rec.writer && rec.header_written) rec.writer->finish();
+            state.recorded_rows = recorded;
+            state.lost_samples = assembler.lost_samples();
+            if (!state.link_note.empty()) {
+              state.link_note.clear();
+              state.status = "stream data again";
+              log(state.status);
+            }
+            if (Clock::now() >= next_draw) break;
+          }
+        } else if (Clock::now() >= next_retry) {
+          // The port vanished: reach it again (as its owner, or through a new one).
+          next_retry = Clock::now() + std::chrono::milliseconds(static_cast<int>(k_retry_s * 1e3));
+          try {
+            auto again = connect(link, Hold::Serve);
+            again->session->write(require_register("stream"), 1);
+            c = std::move(again);
+            assembler.restart();
+            state.link_note = "PORT BACK";
+            log(fmt::format("{}: the port is back", link.port));
+          } catch (const Error&) {
+            // Not back yet.
           }
         }
-        if (!ended_by.empty() || InterruptGuard::interrupted()) break;
-        const auto now = std::chrono::steady_clock::now();
-        if (std::chrono::duration<double>(now - last_block).count() > 2.0) {
-          state.status = fmt::format("{}: no stream data for {:.0f} s", link.port,
-                                     std::chrono::duration<double>(now - last_block).count());
+        if (c && since(last_block) > k_stall_s && Clock::now() >= next_retry) {
+          // A board that reset stops its stream: ask for it again now and then.
+          next_retry = Clock::now() + std::chrono::milliseconds(static_cast<int>(k_retry_s * 1e3));
+          const std::string note = fmt::format("{}: no stream data for {:.0f} s", link.port, since(last_block));
+          if (state.link_note != note) {
+            if (state.link_note.empty()) log(note);
+            state.link_note = note;
+          }
+          try {
+            c->session->write(require_register("stream"), 1);
+            assembler.restart();
+          } catch (const PortVanished&) {
+            throw;
+          } catch (const Error&) {
+            // Still silent.
+          }
         }
-        if (options.seconds > 0.0 && std::chrono::duration<double>(now - start).count() >= options.seconds)
-          break;
-        if (now >= next_draw) {
-          worker.collect(state);
-          screen.draw(render_console(state, COLS, LINES));
-          next_draw = now + std::chrono::milliseconds(100);
+      } catch (const PortVanished&) {
+        c.reset();
+        state.link_note = fmt::format("{}: THE PORT VANISHED, waiting for it (q quits)", link.port);
+        log(state.link_note);
+      }
+      if (rec.writer && !rec.header_written && c) {
+        bool failed = false;
+        if (auto config = worker.take_config(failed)) {
+          write_stream_header(*rec.writer, *c, link, k_window_samples, rig, *config);
+          rec.header_written = true;
+          for (const StreamRow& r : rec.pending) write_row(r);
+          rec.pending.clear();
+          rec.writer->finish();
+        } else if (failed) {
+          rec.writer.reset();
+          rec.file.close();
+          std::remove(state.recording_path.c_str());
+          state.recording = false;
         }
       }
-    } catch (const PortVanished&) {
-      ended_by = "vanished";
+      for (int ch = getch(); ch != ERR; ch = getch()) {
+        const bool was_prompting = state.prompting();
+        const ConsoleAction a = state.key(ch);
+        if (!was_prompting && (ch == 'p' || ch == '?')) log(ch == 'p' ? state.status : "key ?");
+        if (a.kind == ConsoleAction::Kind::quit) {
+          ended_by = "quit";
+          break;
+        }
+        if (a.kind == ConsoleAction::Kind::session_log) {
+          if (state.logging) {
+            log("session log ends");
+            session_log.close();
+            state.logging = false;
+            state.status = "session log closed";
+          } else if (a.value.empty()) {
+            state.status = "session log: give a file";
+          } else if (!open_log(a.value)) {
+            state.status = fmt::format("session log: cannot open {}", a.value);
+          } else {
+            state.status = fmt::format("session log to {}", a.value);
+          }
+        } else if (a.kind == ConsoleAction::Kind::record_csv) {
+          if (rec.writer) {
+            stop_recording();
+          } else if (a.value.empty()) {
+            state.status = "record: give a file";
+          } else if (!c) {
+            state.status = "record: the port is gone";
+          } else {
+            rec.file.open(a.value);
+            if (!rec.file) {
+              state.status = fmt::format("record: cannot open {}", a.value);
+            } else {
+              // The header states the registers as they are now: the worker reads them while
+              // the rows wait, so neither the stream nor the screen waits for the board.
+              rec.writer.emplace(rec.file);
+              rec.header_written = false;
+              rec.pending.clear();
+              recorded = 0;
+              state.recording = true;
+              state.recording_path = a.value;
+              state.status = fmt::format("recording to {}", a.value);
+              worker.post(a);
+              log(fmt::format("recording to {}", a.value));
+            }
+          }
+        } else if (a.kind != ConsoleAction::Kind::none) {
+          state.status = "...";
+          worker.post(a);
+          log(fmt::format("key {}: {}{}{}", static_cast<char>(ch), a.name, a.name.empty() ? "" : " ", a.value));
+        }
+      }
+      if (!ended_by.empty() || InterruptGuard::interrupted()) break;
+      if (options.seconds > 0.0 && since(start) >= options.seconds) break;
+      if (Clock::now() >= next_draw) {
+        log(worker.collect(state));
+        const std::string warning = closed_loop_warning(state.registers);
+        if (warning != last_warning) log(warning);
+        last_warning = warning;
+        screen.draw(render_console(state, COLS, LINES));
+        next_draw = Clock::now() + std::chrono::milliseconds(100);
+      }
+      if (!c) ::usleep(10000);
     }
   }
   stop_recording();
-  if (ended_by == "vanished") {
-    fail("{}: the port vanished{}", link.port,
-         state.recording_path.empty()
-             ? ""
-             : fmt::format(" ({} rows recorded to {})", recorded, printable_name(state.recording_path)));
-  }
-  try {
-    s.write(require_register("stream"), 0);
-  } catch (const Error&) {
-    // Leaving: a board that does not confirm the stop changes nothing here.
+  log("session ends");
+  if (c) {
+    try {
+      c->session->write(require_register("stream"), 0);
+    } catch (const Error&) {
+      // Leaving: a board that does not confirm the stop changes nothing here.
+    }
   }
   return 0;
 }

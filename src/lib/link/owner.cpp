@@ -22,6 +22,7 @@
 #include <fmt/format.h>
 
 #include "common/error.hpp"    // mcg::fail
+#include "link/capture_meta.hpp"  // config_register_names
 #include "link/frame.hpp"      // Decoder, encode
 #include "link/registers.hpp"  // require_register
 #include "mcg_protocol.h"      // MCG_CMD_*, MCG_MSG_*
@@ -45,6 +46,16 @@ constexpr double k_forget_s = 10.0;
 /// A client that does not read what it is sent is dropped beyond this backlog.
 constexpr std::size_t k_max_backlog = 1u << 20;
 constexpr double k_port_write_timeout_s = 2.0;
+/// Stream blocks come every 64 ms: none for this long means the board's stream is off.
+constexpr double k_stream_silent_s = 0.5;
+/// While the stream is on, a read of a configuration register (board_config's) is answered
+/// from the value the board gave for it at most this long ago: the line has room for one
+/// answer per k_stream_pace_s, so twelve reads from the board would hold a capture's first
+/// row back 1.5 s. Any other request (a write, a sequence, a log) forgets every such value.
+constexpr double k_held_s = 3.0;
+/// The owner reads a configuration register again in the line's spare room (no request
+/// queued) once its value is this old, so the values stay within k_held_s.
+constexpr double k_refresh_s = 1.5;
 
 int poll_ms(double timeout_s) { return static_cast<int>(std::clamp(std::ceil(timeout_s * 1e3), 0.0, 3.6e6)); }
 
@@ -115,6 +126,7 @@ struct Expect {
   std::uint8_t answer = 0;
   int reg = -1;
   double sent_s = 0.0;
+  std::uint64_t generation = 0;  ///< of the held values when it was sent
 };
 
 Expect expectation(int client, const Frame& request) {
@@ -205,9 +217,88 @@ struct PortOwner::Impl {
   std::deque<std::pair<int, Frame>> queue;   ///< requests not sent yet (client -1: the owner's own)
   std::vector<Expect> expected;              ///< sent, not answered
   double last_sent_s = -1e9;
+  double last_block_s = -1e9;                ///< when the last stream block arrived
   bool waiting = false;                      ///< the last request sent has no answer yet
   int log_client = -1;                       ///< who asked for the log dump
   std::uint8_t stream_reg = 0;
+  std::uint8_t seq_state_reg = 0;
+  bool finishing = false;                    ///< the owner's process is done: serve the rest, then end
+
+  /// A configuration register's value as the board last answered a read of it.
+  struct Held {
+    std::uint8_t reg = 0;
+    std::optional<std::int16_t> raw;
+    double at_s = 0.0;
+  };
+  std::vector<Held> held;
+  std::uint64_t generation = 0;      ///< bumped whenever the held values are forgotten
+  bool sequence_may_play = true;     ///< until a read of seq_state says it stopped
+  std::optional<Frame> version;      ///< the board's answer to MCG_CMD_VERSION (it never changes)
+
+  Held* held_for(int reg) {
+    for (auto& h : held) {
+      if (h.reg == reg) return &h;
+    }
+    return nullptr;
+  }
+
+  void forget_held() {
+    ++generation;
+    for (auto& h : held) h.raw.reset();
+  }
+
+  /// The answer to `f` from what the owner holds, if it may give one: the version always, a
+  /// configuration register while the stream is on and no sequence may be writing registers.
+  std::optional<Frame> answer_here(const Frame& f) {
+    if (f.cmd == MCG_CMD_VERSION && f.payload.empty()) return version;
+    if (f.cmd != MCG_CMD_READ || f.payload.size() != 1 || !anyone_streams(-1) || sequence_may_play) return {};
+    const Held* h = held_for(f.payload[0]);
+    if (h == nullptr || !h->raw || now_s() - h->at_s > k_held_s) return {};
+    Frame reply;
+    reply.cmd = static_cast<std::uint8_t>(MCG_CMD_READ | MCG_REPLY_BIT);
+    reply.payload = {MCG_ST_OK, h->reg};
+    put_i16(reply.payload, *h->raw);
+    return reply;
+  }
+
+  /// What an answer from the board tells the owner about the values it holds.
+  void learn(const Expect& e, const Frame& f) {
+    if (f.payload.empty() || f.payload[0] != MCG_ST_OK) return;
+    const auto cmd = static_cast<std::uint8_t>(f.cmd & ~MCG_REPLY_BIT);
+    if (cmd == MCG_CMD_VERSION) {
+      version = f;
+      return;
+    }
+    if (cmd != MCG_CMD_READ) {
+      forget_held();  // a write may change other registers (a mode switch, a commit)
+      return;
+    }
+    if (f.payload.size() < 4 || e.generation != generation) return;
+    const std::int16_t raw = get_i16(f.payload, 2);
+    if (f.payload[1] == seq_state_reg) sequence_may_play = raw != MCG_SEQ_STOP;
+    if (Held* h = held_for(f.payload[1])) {
+      h->raw = raw;
+      h->at_s = now_s();
+    }
+  }
+
+  /// In the line's spare room while streaming: the owner's own read of whichever configuration
+  /// register is due (seq_state first while a sequence may play).
+  void refresh_held() {
+    if (!queue.empty() || waiting || !anyone_streams(-1)) return;
+    Frame f;
+    f.cmd = MCG_CMD_READ;
+    if (sequence_may_play) {
+      f.payload = {seq_state_reg};
+    } else {
+      const double now = now_s();
+      const auto due = std::find_if(held.begin(), held.end(),
+                                    [&](const Held& h) { return !h.raw || now - h.at_s > k_refresh_s; });
+      if (due == held.end()) return;
+      f.payload = {due->reg};
+    }
+    queue.emplace_back(-1, std::move(f));
+  }
 
   Client* find(int id) {
     for (auto& c : clients) {
@@ -248,8 +339,9 @@ struct PortOwner::Impl {
       const bool on = get_i16(f.payload, 1) != 0;
       c.stream = on;
       // The stream is on while anyone reads it: writing what it already is would restart the
-      // board's block (a gap for the others), writing it off would end theirs.
-      if (anyone_streams(c.id)) {
+      // board's block (a gap for the others), writing it off would end theirs. Blocks that
+      // stopped coming (a board that reset) need the write.
+      if (anyone_streams(c.id) && (!on || now_s() - last_block_s < k_stream_silent_s)) {
         Frame reply;
         reply.cmd = static_cast<std::uint8_t>(MCG_CMD_WRITE | MCG_REPLY_BIT);
         reply.payload = {MCG_ST_OK, stream_reg};
@@ -257,6 +349,10 @@ struct PortOwner::Impl {
         send_to(c, reply);
         return;
       }
+    }
+    if (auto reply = answer_here(f)) {
+      send_to(c, *reply);
+      return;
     }
     if (f.cmd == MCG_CMD_LOG_DUMP) log_client = c.id;
     // A client that resends while its request still waits for its turn asks once.
@@ -268,6 +364,7 @@ struct PortOwner::Impl {
 
   void from_board(const Frame& f) {
     if (f.cmd == MCG_MSG_STREAM) {
+      last_block_s = now_s();
       for (auto& c : clients) {
         if (c.stream) send_to(c, f);
       }
@@ -291,6 +388,7 @@ struct PortOwner::Impl {
     const auto it = std::find_if(expected.begin(), expected.end(), [&](const Expect& e) { return answers(e, f); });
     if (it == expected.end()) return;
     const int id = it->client;
+    learn(*it, f);
     expected.erase(it);
     waiting = false;
     if (Client* c = find(id)) send_to(*c, f);
@@ -299,13 +397,23 @@ struct PortOwner::Impl {
   void send_next() {
     const double now = now_s();
     std::erase_if(expected, [&](const Expect& e) { return now - e.sent_s > k_forget_s; });
-    if (queue.empty() || (waiting && now - last_sent_s < k_hold_s)) return;
+    if (waiting && now - last_sent_s >= k_hold_s) waiting = false;
+    refresh_held();
+    if (queue.empty() || waiting) return;
     if (anyone_streams(-1) && now - last_sent_s < k_stream_pace_s) return;
     auto [id, f] = std::move(queue.front());
     queue.pop_front();
+    if (f.cmd != MCG_CMD_READ && f.cmd != MCG_CMD_VERSION) {
+      forget_held();
+      if (f.cmd == MCG_CMD_WRITE && f.payload.size() >= 3 && f.payload[0] == seq_state_reg &&
+          get_i16(f.payload, 1) != MCG_SEQ_STOP) {
+        sequence_may_play = true;
+      }
+    }
     port->write_all(encode(f.cmd, f.payload), k_port_write_timeout_s);
     Expect e = expectation(id, f);
     e.sent_s = now;
+    e.generation = generation;
     expected.push_back(e);
     last_sent_s = now;
     waiting = true;
@@ -383,7 +491,7 @@ struct PortOwner::Impl {
     std::uint8_t buf[512];
     for (;;) {
       std::vector<pollfd> fds;
-      fds.push_back({wake[0], POLLIN, 0});
+      fds.push_back({finishing ? -1 : wake[0], POLLIN, 0});
       fds.push_back({listen_fd, POLLIN, 0});
       fds.push_back({port->poll_fd(), POLLIN, 0});
       for (const auto& c : clients) {
@@ -397,7 +505,10 @@ struct PortOwner::Impl {
       if (fds[2].fd < 0) timeout_s = std::min(timeout_s, 0.002);
       const int ready = ::poll(fds.data(), fds.size(), poll_ms(timeout_s));
       if (ready < 0 && errno != EINTR) fail("control socket: poll: {}", std::strerror(errno));
-      if (ready > 0 && fds[0].revents != 0) return;
+      if (ready > 0 && fds[0].revents != 0 && !finishing) {
+        finishing = true;
+      }
+      if (finishing && clients.empty() && queue.empty() && !waiting) return;
       if (ready > 0 && (fds[1].revents & POLLIN) != 0) accept_clients();
       if (fds[2].fd < 0 || (ready > 0 && fds[2].revents != 0)) {
         const std::size_t n = port->read_some(buf, 0.0);
@@ -433,6 +544,8 @@ PortOwner::PortOwner(std::unique_ptr<Port> port) : m_impl(std::make_unique<Impl>
   Impl& m = *m_impl;
   m.port = std::move(port);
   m.stream_reg = require_register("stream").id;
+  m.seq_state_reg = require_register("seq_state").id;
+  for (const char* name : config_register_names()) m.held.push_back({require_register(name).id, std::nullopt, 0.0});
   m.path = control_socket_path(m.port->name());
   const sockaddr_un addr = socket_address(m.path);
   m.listen_fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
@@ -455,7 +568,8 @@ PortOwner::PortOwner(std::unique_ptr<Port> port) : m_impl(std::make_unique<Impl>
 
 PortOwner::~PortOwner() {
   Impl& m = *m_impl;
-  // Closing the pipe's write end wakes the thread's poll (POLLHUP) and ends it.
+  // Closing the pipe's write end wakes the thread's poll (POLLHUP): it serves the clients
+  // still connected until the last one leaves, then ends.
   ::close(m.wake[1]);
   m.thread.join();
   ::close(m.wake[0]);

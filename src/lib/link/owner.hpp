@@ -32,10 +32,15 @@ std::unique_ptr<Port> open_shared_port(const std::string& port, int baud);
 /// the clients that turned the stream on (the stream stays on while one of them wants it);
 /// log data to the client that asked for the dump; the board's frame-error reports to the
 /// clients waiting for an answer. When the port vanishes every client sees its line vanish.
+/// The version, and while the stream is on a configuration register (board_config's) read
+/// from the board less than 3 s ago with no write since, are answered from what the owner
+/// holds; it rereads those registers in the line's spare room.
 class PortOwner {
  public:
   /// Takes `port` and listens on control_socket_path(port->name()), replacing a stale socket.
   explicit PortOwner(std::unique_ptr<Port> port);
+  /// Serves the clients still connected (a newcomer too) until the last one leaves, so that
+  /// none of them sees the port vanish; a signal that kills the process ends them all.
   ~PortOwner();
   PortOwner(const PortOwner&) = delete;
   PortOwner& operator=(const PortOwner&) = delete;

@@ -65,6 +65,8 @@ struct StreamOptions {
   double idle_timeout_s = 1.0;     ///< no stream block for this long is an error
   RigOptions rig;                  ///< supply and load resistor: v and r_load of the rows
   std::string then;                ///< "", "play" or "loop": start the loaded sequence once streaming
+  double reconnect_wait_s = 0.0;   ///< > 0: when the port vanishes or the stream stops, wait this long
+                                   ///< for it to come back and go on after a break row (0: an error)
 };
 /// stream: turns the board's stream on, writes CSV rows (t, rpm, counts, duty, v, rpm_cmd,
 /// clutch, r_load; mcg-csv(5)) as the blocks arrive (flushed per block), turns it off at the end. Sequence gaps count as

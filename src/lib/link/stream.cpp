@@ -5,6 +5,8 @@
 #include <cmath>
 #include <ostream>
 
+#include <unistd.h>
+
 #include "common/error.hpp"       // mcg::fail
 #include "common/quote.hpp"
 #include "config/ini.hpp"         // format_number
@@ -68,19 +70,18 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
   if (options.seconds > 0.0) want = static_cast<std::int64_t>(std::llround(options.seconds / k_sample_s));
   const Rig rig = load_rig(options.rig);
   auto c = connect(link, Hold::Serve);
-  Session& s = *c->session;
   const InterruptGuard guard;
   const std::vector<std::pair<std::string, std::string>> config = board_config(*c);
   const RegisterInfo& stream = require_register("stream");
   if (options.then.empty()) {
-    s.write(stream, 1);
+    c->session->write(stream, 1);
   } else {
     // A sequence that turns the stream on in its first entry starts the capture on its own first
     // tick (t = 0 there). Writing 1 after it changes nothing on the board (on stays on), turns on
     // a sequence's stream that does not, and tells a port owner this client reads the stream.
     const RegisterInfo& state = require_register("seq_state");
-    s.write(state, static_cast<std::int16_t>(parse_value(state, options.then, "--then")));
-    s.write(stream, 1);
+    c->session->write(state, static_cast<std::int16_t>(parse_value(state, options.then, "--then")));
+    c->session->write(stream, 1);
   }
 
   table::Writer w(out);
@@ -89,44 +90,107 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
   StreamAssembler assembler(window_samples);
   std::int64_t written = 0;
   auto last_block = Clock::now();
+  auto idle_from = last_block;  // the last block, or the moment the stream came back
   std::string ended_by;
-  try {
-    while (want == 0 || written < want) {
-      if (InterruptGuard::interrupted()) break;
-      const auto f = s.receive(0.1);
-      if (!f) {
-        if (seconds_since(last_block) > options.idle_timeout_s) {
-          ended_by = fmt::format("{}: no stream data for {} s", link.port,
-                                 config::format_number(options.idle_timeout_s));
-          break;
+  DecoderStats before_reconnect;  // the line's damage over the connections already closed
+  // --reconnect: the port back (or the board answering again), the stream on again; false
+  // when the wait ran out or a signal came first.
+  const auto come_back = [&](std::string_view why, bool vanished) {
+    const auto lost_at = Clock::now();
+    bool back = false;
+    while (!back && seconds_since(lost_at) < options.reconnect_wait_s && !InterruptGuard::interrupted()) {
+      try {
+        if (vanished) {
+          if (c) {
+            const auto& st = c->session->stats();
+            before_reconnect.bad_crc += st.bad_crc;
+            before_reconnect.too_long += st.too_long;
+            before_reconnect.timeouts += st.timeouts;
+            before_reconnect.skipped_bytes += st.skipped_bytes;
+            c.reset();
+          }
+          c = connect(link, Hold::Serve);
         }
-        continue;
+        c->session->write(stream, 1);
+        back = true;
+      } catch (const PortVanished&) {
+        vanished = true;
+        ::usleep(200000);
+      } catch (const Error&) {
+        if (vanished) c.reset();
+        ::usleep(200000);  // not back yet
       }
-      if (f->cmd != MCG_MSG_STREAM) continue;
-      const double arrival_gap_s = seconds_since(last_block);
-      last_block = Clock::now();
-      if (!assembler.push(f->payload, arrival_gap_s)) continue;
-      for (const StreamRow& r : assembler.rows()) {
-        if (want != 0 && written >= want) break;
-        write_stream_row(w, r, rig);
-        ++written;
-      }
-      w.finish();
     }
-  } catch (const PortVanished&) {
-    w.finish();
-    fail("{}: the port vanished after {} samples (they are on stdout)", link.port, written);
+    if (!back) return false;
+    const double silence_s = seconds_since(last_block);
+    assembler.restart();
+    err << fmt::format("mcg-serial: note: {}: {}; back after {} s, the gap is a row of nan in the capture\n",
+                       link.port, why, config::format_number(std::round(silence_s * 10.0) / 10.0));
+    idle_from = Clock::now();
+    return true;
+  };
+  for (;;) {
+    try {
+      while (want == 0 || written < want) {
+        if (InterruptGuard::interrupted()) break;
+        const auto f = c->session->receive(0.1);
+        if (!f) {
+          if (seconds_since(idle_from) > options.idle_timeout_s) {
+            ended_by = fmt::format("{}: no stream data for {} s", link.port,
+                                   config::format_number(options.idle_timeout_s));
+            break;
+          }
+          continue;
+        }
+        if (f->cmd != MCG_MSG_STREAM) continue;
+        const double arrival_gap_s = seconds_since(last_block);
+        last_block = Clock::now();
+        idle_from = last_block;
+        if (!assembler.push(f->payload, arrival_gap_s)) continue;
+        for (const StreamRow& r : assembler.rows()) {
+          if (want != 0 && written >= want) break;
+          write_stream_row(w, r, rig);
+          ++written;
+        }
+        w.finish();
+      }
+    } catch (const PortVanished&) {
+      w.finish();
+      if (options.reconnect_wait_s > 0.0 && come_back("the port vanished", true)) continue;
+      if (!c) fail("{}: the port vanished and did not come back within {} s ({} samples captured are on stdout)",
+                   link.port, config::format_number(options.reconnect_wait_s), written);
+      fail("{}: the port vanished after {} samples (they are on stdout)", link.port, written);
+    }
+    if (!ended_by.empty() && options.reconnect_wait_s > 0.0 && !InterruptGuard::interrupted()) {
+      // A board that reset turns its stream off; the port stays: ask it again.
+      ended_by.clear();
+      if (come_back("the stream stopped", false)) continue;
+      ended_by = fmt::format("{}: no stream data, and the board did not come back within {} s", link.port,
+                             config::format_number(options.reconnect_wait_s));
+      break;
+    }
+    break;
   }
   w.finish();
-  if (ended_by.empty()) {
+  if (ended_by.empty() && c) {
     try {
-      s.write(require_register("stream"), 0);
+      c->session->write(require_register("stream"), 0);
     } catch (const Error&) {
       // The capture is complete; a board that does not confirm the stop changes nothing.
     }
   }
   if (!ended_by.empty()) fail("{} ({} samples captured are on stdout)", ended_by, written);
-  const auto& st = s.stats();
+  if (assembler.breaks() > 0) {
+    err << fmt::format("mcg-serial: note: {} break{} in the stream (a row of nan each)\n", assembler.breaks(),
+                       assembler.breaks() == 1 ? "" : "s");
+  }
+  DecoderStats st = before_reconnect;
+  if (c) {
+    st.bad_crc += c->session->stats().bad_crc;
+    st.too_long += c->session->stats().too_long;
+    st.timeouts += c->session->stats().timeouts;
+    st.skipped_bytes += c->session->stats().skipped_bytes;
+  }
   const std::uint64_t lost = assembler.lost_samples();
   if (lost > 0) {
     err << fmt::format(

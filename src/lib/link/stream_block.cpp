@@ -40,25 +40,40 @@ StreamAssembler::StreamAssembler(int window_samples)
 
 std::uint64_t StreamAssembler::lost_samples() const { return m_lost_blocks * MCG_STREAM_SAMPLES; }
 
+void StreamAssembler::restart() { m_restarted = m_started; }
+
 bool StreamAssembler::push(std::span<const std::uint8_t> payload, double arrival_gap_s) {
   if (payload.size() != MCG_STREAM_PAYLOAD) return false;
   const std::uint8_t seq = payload[0];
   std::int64_t step = 1;
-  if (m_started) {
+  bool is_break = false;
+  if (m_restarted) {
+    // The sequence numbers may have restarted: only the wall-clock silence places the block.
+    step = std::max<std::int64_t>(2, std::llround(std::clamp(arrival_gap_s, 0.0, 1e12) / k_block_s));
+    is_break = true;
+  } else if (m_started) {
     step = static_cast<std::uint8_t>(seq - m_last_seq);
-    // Choose the unwrapped step nearest to what the silence since the last block suggests.
-    const double expected = arrival_gap_s / k_block_s;
-    while (static_cast<double>(step) + 128.0 < expected) step += 256;
+    // Choose the unwrapped step nearest to what the silence since the last block suggests
+    // (in closed form: a day's silence is no loop of 5000 turns).
+    const double expected = std::min(arrival_gap_s, 1e12) / k_block_s;
+    if (static_cast<double>(step) + 128.0 < expected) {
+      step += 256 * static_cast<std::int64_t>(std::ceil((expected - 128.0 - static_cast<double>(step)) / 256.0));
+    }
     if (step == 0) step = 256;
-    m_block_index += step;
+    is_break = step - 1 > k_max_filled_blocks;
   }
+  m_restarted = false;
+  if (m_started) m_block_index += step;
   m_rows.clear();
   if (step > 1) {
-    // Lost blocks: a row per lost sample, and nothing measured carries across the gap.
-    for (std::int64_t n = (m_block_index - step + 1) * MCG_STREAM_SAMPLES; n < m_block_index * MCG_STREAM_SAMPLES; ++n) {
+    // Lost blocks: a row per lost sample (one for a break), and nothing measured carries across.
+    const std::int64_t first = (m_block_index - step + 1) * MCG_STREAM_SAMPLES;
+    const std::int64_t end = is_break ? first + 1 : m_block_index * MCG_STREAM_SAMPLES;
+    for (std::int64_t n = first; n < end; ++n) {
       m_rows.push_back({static_cast<double>(n) * k_sample_s, k_nan, k_nan, k_nan, k_nan, k_nan, k_nan});
     }
     m_lost_blocks += static_cast<std::uint64_t>(step - 1);
+    if (is_break) ++m_breaks;
     m_window_counts.clear();
     m_prev_counts = k_nan;
     m_rpm_cmd = k_nan;

@@ -27,6 +27,11 @@ struct StreamRow {
 /// field NaN, so the time axis stays true and a tool driven by the capture stops at the gap. The wrap is
 /// resolved with the arrival time: a gap of g seconds since the previous block means about
 /// g / 0.064 blocks, so 20 s without data does not read as a small gap.
+///
+/// A gap longer than k_max_filled_blocks (the sequence number's range, about 16 s: a laptop
+/// suspended, a port that came back) is a break instead: one row, t of the first missing
+/// sample and every other field NaN, then the block at its own t. The work and memory of a
+/// push stay bounded whatever the silence.
 class StreamAssembler {
  public:
   /// `window_samples`: the rpm estimator's window in samples (>= 1).
@@ -38,6 +43,14 @@ class StreamAssembler {
   const std::vector<StreamRow>& rows() const { return m_rows; }
   std::uint64_t lost_samples() const;
   std::uint64_t blocks() const { return m_blocks; }
+  /// Breaks (gaps longer than k_max_filled_blocks, and restarts) so far.
+  std::uint64_t breaks() const { return m_breaks; }
+  /// The line was lost and came back (the board may have restarted its sequence numbers):
+  /// the next block follows a break, placed by its arrival gap alone.
+  void restart();
+
+  /// Longest gap, in blocks, filled with a row per lost sample.
+  static constexpr std::int64_t k_max_filled_blocks = 256;
 
  private:
   int m_window;
@@ -46,6 +59,8 @@ class StreamAssembler {
   std::int64_t m_block_index = 0;    ///< unwrapped index of the last block
   std::uint64_t m_lost_blocks = 0;
   std::uint64_t m_blocks = 0;
+  std::uint64_t m_breaks = 0;
+  bool m_restarted = false;          ///< the next push follows a restart
   double m_rpm_cmd;                  ///< in force at the end of the last block (NaN: unknown)
   double m_prev_counts;              ///< counts of the last sample, for the next row (NaN: none)
   std::deque<double> m_window_counts;   ///< the last samples; NaN marks a lost or saturated one
