@@ -14,6 +14,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <sstream>
 #include <string>
 #include <thread>
 
@@ -51,7 +52,8 @@ int main(int argc, char** argv) {
     o.speed = speed;
     o.seconds = seconds * speed + 30.0;
     try {
-      mcg::board::serve(o);
+      std::ostringstream announce;  // the link's path is known here
+      mcg::board::serve(o, announce);
     } catch (const mcg::Error& e) {
       std::fprintf(stderr, "board: %s\n", e.what());
       ::_exit(1);

@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
       }
       board.board.max_step_s = opt.max_step_s;
       if (app.count("--r-load") > 0) board.board.r_load_ohm = opt.r_load_ohm;
-      mcg::board::serve(board);
+      mcg::board::serve(board, std::cerr);
       return;
     }
     mcg::sim::run_stdio(opt);

@@ -3,6 +3,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <iosfwd>
 #include <span>
 #include <string>
 #include <vector>
@@ -77,9 +78,11 @@ struct ServeOptions {
 /// own windows), and its clutch and load come from the board's outputs.
 void refuse_unused_options(const std::vector<std::string>& options_given);
 
-/// Creates the pseudo-terminal, links it at options.link_path and runs the board in real time
-/// (times `speed`) until SIGINT or SIGTERM (or `seconds`), then removes the link. A client may
-/// come and go any number of times. Throws mcg::Error when the link cannot be made.
-void serve(const ServeOptions& options);
+/// Creates the pseudo-terminal, links it at options.link_path, announces it on `err` in one
+/// line ("mcg-sim: board at LINK (PTY); Ctrl-C ends", flushed, once the link exists), enters
+/// it in the list of mcg-serial list (link::EmulatedPortEntry), and runs the board in real
+/// time (times `speed`) until SIGINT or SIGTERM (or `seconds`), then removes the link. A
+/// client may come and go any number of times. Throws mcg::Error when the link cannot be made.
+void serve(const ServeOptions& options, std::ostream& err);
 
 }  // namespace mcg::board

@@ -9,7 +9,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
+#include <ostream>
 #include <vector>
 
 #include <fmt/format.h>
@@ -18,8 +18,8 @@
 #include "common/error.hpp"   // mcg::fail
 #include "common/quote.hpp"
 #include "config/ini.hpp"     // Ini
-#include "common/tool.hpp"    // stderr_is_terminal
 #include "link/interrupt.hpp" // InterruptGuard
+#include "link/port.hpp"      // EmulatedPortEntry
 #include "link/pty.hpp"       // PtyLink
 #include "mcg_protocol.h"     // MCG_SYNC, MCG_FRAME_OVERHEAD
 
@@ -107,18 +107,18 @@ void refuse_unused_options(const std::vector<std::string>& options_given) {
   }
 }
 
-void serve(const ServeOptions& options) {
+void serve(const ServeOptions& options, std::ostream& err) {
   refuse_unused_options(options.options_given);
   BoardOptions board_options = options.board;
   board_options.model = load_model(options.configs, options.effects);
   link::PtyLink pty(options.link_path);
   EmulatedBoard board(board_options);
   const link::InterruptGuard guard;
-  if (stderr_is_terminal()) {
-    std::fputs(fmt::format("mcg-sim: board at {} ({}); Ctrl-C ends\n", printable_name(pty.link_path()),
-                           pty.slave_path()).c_str(),
-               stderr);
-  }
+  const link::EmulatedPortEntry entry(pty.link_path(), fmt::format("emulated board (mcg-sim pid {}, {})",
+                                                                    ::getpid(), pty.slave_path()));
+  err << fmt::format("mcg-sim: board at {} ({}); Ctrl-C ends\n", printable_name(pty.link_path()),
+                     pty.slave_path())
+      << std::flush;
 
   using Clock = std::chrono::steady_clock;
   const double tick_s = 1e-3 / options.speed;  // wall-clock seconds per simulated tick

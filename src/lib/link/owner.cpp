@@ -48,14 +48,17 @@ constexpr std::size_t k_max_backlog = 1u << 20;
 constexpr double k_port_write_timeout_s = 2.0;
 /// Stream blocks come every 64 ms: none for this long means the board's stream is off.
 constexpr double k_stream_silent_s = 0.5;
-/// While the stream is on, a read of a configuration register (board_config's) is answered
+/// While the stream is on, a read of a configuration register (one only a write changes) is answered
 /// from the value the board gave for it at most this long ago: the line has room for one
 /// answer per k_stream_pace_s, so twelve reads from the board would hold a capture's first
 /// row back 1.5 s. Any other request (a write, a sequence, a log) forgets every such value.
-constexpr double k_held_s = 3.0;
+constexpr double k_held_s = 5.0;
 /// The owner reads a configuration register again in the line's spare room (no request
 /// queued) once its value is this old, so the values stay within k_held_s.
-constexpr double k_refresh_s = 1.5;
+constexpr double k_refresh_s = 2.0;
+/// ... once no client has asked the board anything for this long (a client reading register
+/// after register has the line to itself).
+constexpr double k_client_quiet_s = 0.3;
 
 int poll_ms(double timeout_s) { return static_cast<int>(std::clamp(std::ceil(timeout_s * 1e3), 0.0, 3.6e6)); }
 
@@ -218,6 +221,7 @@ struct PortOwner::Impl {
   std::vector<Expect> expected;              ///< sent, not answered
   double last_sent_s = -1e9;
   double last_block_s = -1e9;                ///< when the last stream block arrived
+  double last_client_s = -1e9;               ///< when a client last asked the board something
   bool waiting = false;                      ///< the last request sent has no answer yet
   int log_client = -1;                       ///< who asked for the log dump
   std::uint8_t stream_reg = 0;
@@ -285,13 +289,13 @@ struct PortOwner::Impl {
   /// In the line's spare room while streaming: the owner's own read of whichever configuration
   /// register is due (seq_state first while a sequence may play).
   void refresh_held() {
-    if (!queue.empty() || waiting || !anyone_streams(-1)) return;
+    const double now = now_s();
+    if (waiting || !queue.empty() || !anyone_streams(-1) || now - last_client_s < k_client_quiet_s) return;
     Frame f;
     f.cmd = MCG_CMD_READ;
     if (sequence_may_play) {
       f.payload = {seq_state_reg};
     } else {
-      const double now = now_s();
       const auto due = std::find_if(held.begin(), held.end(),
                                     [&](const Held& h) { return !h.raw || now - h.at_s > k_refresh_s; });
       if (due == held.end()) return;
@@ -354,6 +358,7 @@ struct PortOwner::Impl {
       send_to(c, *reply);
       return;
     }
+    last_client_s = now_s();
     if (f.cmd == MCG_CMD_LOG_DUMP) log_client = c.id;
     // A client that resends while its request still waits for its turn asks once.
     const bool again = std::any_of(queue.begin(), queue.end(), [&](const auto& q) {
@@ -508,7 +513,10 @@ struct PortOwner::Impl {
       if (ready > 0 && fds[0].revents != 0 && !finishing) {
         finishing = true;
       }
-      if (finishing && clients.empty() && queue.empty() && !waiting) return;
+      if (finishing && clients.empty() && queue.empty() && !waiting) {
+        accept_clients();  // one that connected just now is served too
+        if (clients.empty()) return;
+      }
       if (ready > 0 && (fds[1].revents & POLLIN) != 0) accept_clients();
       if (fds[2].fd < 0 || (ready > 0 && fds[2].revents != 0)) {
         const std::size_t n = port->read_some(buf, 0.0);
@@ -545,7 +553,13 @@ PortOwner::PortOwner(std::unique_ptr<Port> port) : m_impl(std::make_unique<Impl>
   m.port = std::move(port);
   m.stream_reg = require_register("stream").id;
   m.seq_state_reg = require_register("seq_state").id;
+  // board_config's registers first (a capture's header needs them), then every other one that
+  // only a write changes: not the duty a closed loop drives, a counter, or a sequence's state.
   for (const char* name : config_register_names()) m.held.push_back({require_register(name).id, std::nullopt, 0.0});
+  for (const RegisterInfo& reg : registers()) {
+    if (!reg.writable || reg.name == "duty" || reg.name == "tx_drops" || reg.name == "seq_state") continue;
+    if (m.held_for(reg.id) == nullptr) m.held.push_back({reg.id, std::nullopt, 0.0});
+  }
   m.path = control_socket_path(m.port->name());
   const sockaddr_un addr = socket_address(m.path);
   m.listen_fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);

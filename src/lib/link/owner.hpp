@@ -32,9 +32,11 @@ std::unique_ptr<Port> open_shared_port(const std::string& port, int baud);
 /// the clients that turned the stream on (the stream stays on while one of them wants it);
 /// log data to the client that asked for the dump; the board's frame-error reports to the
 /// clients waiting for an answer. When the port vanishes every client sees its line vanish.
-/// The version, and while the stream is on a configuration register (board_config's) read
-/// from the board less than 3 s ago with no write since, are answered from what the owner
-/// holds; it rereads those registers in the line's spare room.
+/// The version, and while the stream is on a register that only a write changes (not duty,
+/// tx_drops, seq_state, the measurements) read from the board less than 5 s ago with no
+/// request but reads since, are answered from what the owner holds; it rereads those
+/// registers in the line's spare room, so a client's capture starts without a dozen round
+/// trips between stream blocks. A keypad edit on the board shows within 5 s.
 class PortOwner {
  public:
   /// Takes `port` and listens on control_socket_path(port->name()), replacing a stale socket.

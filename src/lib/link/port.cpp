@@ -1,9 +1,11 @@
 // Serial ports through libserialport, pseudo-terminals through termios; both waited on with poll.
 #include "link/port.hpp"
 
+#include <dirent.h>
 #include <fcntl.h>
 #include <libserialport.h>
 #include <poll.h>
+#include <signal.h>
 #include <sys/file.h>
 #include <sys/ioctl.h>
 #include <sys/stat.h>
@@ -11,6 +13,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string_view>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -254,6 +261,67 @@ std::vector<PortListing> list_ports() {
     out.push_back(std::move(item));
   }
   sp_free_port_list(list);
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
+  return out;
+}
+
+namespace {
+
+std::string runtime_dir() {
+  const char* dir = std::getenv("XDG_RUNTIME_DIR");
+  return (dir != nullptr && *dir != '\0') ? std::string(dir) : std::string("/tmp");
+}
+
+constexpr std::string_view k_entry_prefix = "mcg-board.";
+
+}  // namespace
+
+EmulatedPortEntry::EmulatedPortEntry(const std::string& link_path, const std::string& description)
+    : m_file(fmt::format("{}/{}{}", runtime_dir(), k_entry_prefix, ::getpid())) {
+  std::string path = link_path;
+  if (!path.starts_with('/')) {
+    if (char* cwd = ::getcwd(nullptr, 0)) {
+      path = fmt::format("{}/{}", cwd, path.starts_with("./") ? path.substr(2) : path);
+      std::free(cwd);
+    }
+  }
+  // The entry is a convenience for `list`: a directory that takes no file leaves it out.
+  if (std::FILE* f = std::fopen(m_file.c_str(), "w")) {
+    std::fputs(fmt::format("{}\t{}\n", path, description).c_str(), f);
+    std::fclose(f);
+  } else {
+    m_file.clear();
+  }
+}
+
+EmulatedPortEntry::~EmulatedPortEntry() {
+  if (!m_file.empty()) ::unlink(m_file.c_str());
+}
+
+std::vector<PortListing> emulated_ports() {
+  std::vector<PortListing> out;
+  const std::string dir = runtime_dir();
+  DIR* d = ::opendir(dir.c_str());
+  if (d == nullptr) return out;
+  while (const dirent* e = ::readdir(d)) {
+    const std::string_view name = e->d_name;
+    if (!name.starts_with(k_entry_prefix)) continue;
+    const std::string_view pid_text = name.substr(k_entry_prefix.size());
+    int pid = 0;
+    const auto [ptr, ec] = std::from_chars(pid_text.data(), pid_text.data() + pid_text.size(), pid);
+    if (ec != std::errc() || ptr != pid_text.data() + pid_text.size() || pid <= 0) continue;
+    if (::kill(pid, 0) != 0 && errno != EPERM) continue;  // its process is gone
+    std::ifstream in(fmt::format("{}/{}", dir, name));
+    std::string line;
+    if (!std::getline(in, line)) continue;
+    const auto tab = line.find('\t');
+    if (tab == std::string::npos) continue;
+    PortListing item{line.substr(0, tab), line.substr(tab + 1)};
+    struct stat st {};
+    if (::stat(item.name.c_str(), &st) != 0) continue;  // the link is gone
+    out.push_back(std::move(item));
+  }
+  ::closedir(d);
   std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
   return out;
 }

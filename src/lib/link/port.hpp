@@ -61,6 +61,22 @@ struct PortListing {
 /// Every serial port libserialport enumerates, sorted by name.
 std::vector<PortListing> list_ports();
 
+/// An emulated port (mcg-sim --board) entered, for as long as this object lives, in the list
+/// emulated_ports() reads: a file mcg-board.PID in $XDG_RUNTIME_DIR (else /tmp) holding the
+/// link's absolute path and the description.
+class EmulatedPortEntry {
+ public:
+  EmulatedPortEntry(const std::string& link_path, const std::string& description);
+  ~EmulatedPortEntry();
+  EmulatedPortEntry(const EmulatedPortEntry&) = delete;
+  EmulatedPortEntry& operator=(const EmulatedPortEntry&) = delete;
+
+ private:
+  std::string m_file;
+};
+/// The emulated ports whose process still runs and whose link still exists, sorted by name.
+std::vector<PortListing> emulated_ports();
+
 /// The one-line message for a failed open of `path` with `err` (an errno value).
 std::string open_error_message(const std::string& path, int err);
 

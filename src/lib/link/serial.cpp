@@ -29,24 +29,34 @@ Connection::Connection() = default;
 Connection::~Connection() = default;
 
 std::unique_ptr<Connection> connect(const LinkOptions& link, Hold hold) {
-  auto c = std::make_unique<Connection>();
-  if (auto through_owner = connect_owner(link.port)) {
-    c->port = std::move(through_owner);
-  } else {
-    auto port = open_shared_port(link.port, link.baud);
-    if (hold == Hold::Serve && port->poll_fd() >= 0) {
-      c->owner = std::make_unique<PortOwner>(std::move(port));
-      c->port = c->owner->local_client();
+  for (int attempt = 0;; ++attempt) {
+    auto c = std::make_unique<Connection>();
+    bool through_owner = false;
+    if (auto owner_line = connect_owner(link.port)) {
+      c->port = std::move(owner_line);
+      through_owner = true;
     } else {
-      c->port = std::move(port);
+      auto port = open_shared_port(link.port, link.baud);
+      if (hold == Hold::Serve && port->poll_fd() >= 0) {
+        c->owner = std::make_unique<PortOwner>(std::move(port));
+        c->port = c->owner->local_client();
+      } else {
+        c->port = std::move(port);
+      }
     }
+    SessionOptions so;
+    so.reply_timeout_s = link.timeout_s;
+    so.attempts = link.attempts;
+    c->session = std::make_unique<Session>(*c->port, so);
+    try {
+      c->version = c->session->hello();
+    } catch (const PortVanished&) {
+      // An owner that ended as this process came: once more, on the port or its next owner.
+      if (!through_owner || attempt > 0) throw;
+      continue;
+    }
+    return c;
   }
-  SessionOptions so;
-  so.reply_timeout_s = link.timeout_s;
-  so.attempts = link.attempts;
-  c->session = std::make_unique<Session>(*c->port, so);
-  c->version = c->session->hello();
-  return c;
 }
 
 int Connection::frac_bits() {
@@ -152,6 +162,7 @@ void print_board_section(Connection& c, std::span<const RegisterInfo* const> reg
 
 void run_list(std::ostream& out) {
   for (const auto& p : list_ports()) out << p.name << '\t' << p.description << '\n';
+  for (const auto& p : emulated_ports()) out << p.name << '\t' << p.description << '\n';
 }
 
 void run_get(const LinkOptions& link, const std::vector<std::string>& names, std::ostream& out) {

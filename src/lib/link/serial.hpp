@@ -25,7 +25,8 @@ struct LinkOptions {
 /// Exit status of a capture that lost samples (without --allow-loss).
 inline constexpr int k_exit_lost_samples = 3;
 
-/// list: every serial port with its description, "PATH<TAB>DESCRIPTION" per line.
+/// list: every serial port with its description, "PATH<TAB>DESCRIPTION" per line, then the
+/// emulated boards running (mcg-sim --board, emulated_ports()).
 void run_list(std::ostream& out);
 
 /// get NAME...: each register's value in engineering units, one per line. Without names:
