@@ -528,6 +528,27 @@ struct Recording {
   std::vector<StreamRow> pending;
 };
 
+/// What an action asks, for the session log: "set rpm_cmd 450", "load pi.ini", ...
+std::string describe(const ConsoleAction& a) {
+  using Kind = ConsoleAction::Kind;
+  switch (a.kind) {
+    case Kind::set:
+      return fmt::format("set {} {}", a.name, a.value);
+    case Kind::toggle_clutch:
+      return "toggle the clutch";
+    case Kind::toggle_load:
+      return "toggle the load";
+    case Kind::record_log:
+      return fmt::format("record the RAM log and dump it to {}", a.value);
+    case Kind::dump_log:
+      return fmt::format("dump the RAM log to {}", a.value);
+    case Kind::load_ini:
+      return fmt::format("load {}", a.value);
+    default:
+      return {};
+  }
+}
+
 double unix_now_s() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
@@ -603,6 +624,7 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
   const auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   const auto start = Clock::now();
   auto last_block = start;
+  auto quiet_from = start;  // the last block, or the moment the port came back
   auto next_draw = start;
   auto next_retry = start;
   std::string ended_by;
@@ -618,6 +640,7 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
             if (f->cmd != MCG_MSG_STREAM) continue;
             const double gap = since(last_block);
             last_block = Clock::now();
+            quiet_from = last_block;
             if (!assembler.push(f->payload, gap)) continue;
             for (const StreamRow& r : assembler.rows()) {
               model::Drive drive;
@@ -657,13 +680,14 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
             again->session->write(require_register("stream"), 1);
             c = std::move(again);
             assembler.restart();
+            quiet_from = Clock::now();
             state.link_note = "PORT BACK";
             log(fmt::format("{}: the port is back", link.port));
           } catch (const Error&) {
             // Not back yet.
           }
         }
-        if (c && since(last_block) > k_stall_s && Clock::now() >= next_retry) {
+        if (c && since(quiet_from) > k_stall_s && Clock::now() >= next_retry) {
           // A board that reset stops its stream: ask for it again now and then.
           next_retry = Clock::now() + std::chrono::milliseconds(static_cast<int>(k_retry_s * 1e3));
           const std::string note = fmt::format("{}: no stream data for {:.0f} s", link.port, since(last_block));
@@ -674,6 +698,7 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
           try {
             c->session->write(require_register("stream"), 1);
             assembler.restart();
+            quiet_from = Clock::now();
           } catch (const PortVanished&) {
             throw;
           } catch (const Error&) {
@@ -749,7 +774,7 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
         } else if (a.kind != ConsoleAction::Kind::none) {
           state.status = "...";
           worker.post(a);
-          log(fmt::format("key {}: {}{}{}", static_cast<char>(ch), a.name, a.name.empty() ? "" : " ", a.value));
+          log(describe(a));
         }
       }
       if (!ended_by.empty() || InterruptGuard::interrupted()) break;
