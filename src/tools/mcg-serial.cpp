@@ -120,6 +120,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   console->add_option("--seconds", console_opt.seconds, "stop after this long, s (default: q)")
       ->check(CLI::Range(0.01, 1e6));
+  console->add_option("--log", console_opt.log_path,
+                      "a timestamped session log to this file, from the start (L starts and stops one too)");
 
   mcg::link::ServeOptions serve_opt;
   auto* serve = app.add_subcommand("serve", "hold the port and serve the other mcg-serial commands on it");
