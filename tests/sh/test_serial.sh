@@ -12,7 +12,8 @@ start_board "$tty" || exit 1
 S() { timeout 30 mcg-serial -p "$tty" "$@"; }
 
 check "list: one port per line, path and description" eval 'timeout 30 mcg-serial list > "$work/ports" &&
-  ! grep -v "^/dev/[^	]*	" "$work/ports"'
+  ! grep -v "^/[^	]*	." "$work/ports"'
+check "list: the emulated board among them" eval 'grep -q "^$tty	emulated board (mcg-sim pid [0-9]*, /dev/pts/[0-9]*)$" "$work/ports"'
 
 # get / set / read-back
 check "get prints the default speed command" eval 'S get rpm_cmd > "$work/out" && same "$work/out" 420'
