@@ -162,7 +162,8 @@ TEST(LinkConsole, AClosedLoopOnGainsThatMakeNoSenseIsWarnedOf) {
   EXPECT_EQ(closed_loop_warning(r), "");
   r["b1"] = "-7";
   EXPECT_EQ(closed_loop_warning(r),
-            "WARNING: mode pi with b0 = 6.5, b1 = -7: the integral gain (their sum) is negative, the speed runs away");
+            "WARNING: mode pi with b0 = 6.5, b1 = -7: the integral gain (their sum) is negative, the speed "
+            "runs away");
   r["b0"] = "-1";
   r["b1"] = "2";
   EXPECT_EQ(closed_loop_warning(r), "WARNING: mode pi with b0 = -1, b1 = 2: b0 <= 0 acts against the error");

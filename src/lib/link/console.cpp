@@ -191,7 +191,8 @@ std::string closed_loop_warning(const std::map<std::string, std::string>& regist
   if (mode == "p") {
     if (!kp) return {};
     if (*kp == 0.0) return "WARNING: mode p with kp = 0: the controller outputs nothing";
-    if (*kp < 0.0) return fmt::format("WARNING: mode p with kp = {}: positive feedback, the speed runs away", *kp);
+    if (*kp < 0.0)
+      return fmt::format("WARNING: mode p with kp = {}: positive feedback, the speed runs away", *kp);
     return {};
   }
   if (!b0 || !b1 || (mode == "pid" && !b2)) return {};
@@ -203,8 +204,9 @@ std::string closed_loop_warning(const std::map<std::string, std::string>& regist
   }
   if (*b0 <= 0.0) return fmt::format("WARNING: mode {} with {}: b0 <= 0 acts against the error", mode, gains);
   if (integral < 0.0) {
-    return fmt::format("WARNING: mode {} with {}: the integral gain (their sum) is negative, the speed runs away",
-                       mode, gains);
+    return fmt::format(
+        "WARNING: mode {} with {}: the integral gain (their sum) is negative, the speed runs away", mode,
+        gains);
   }
   return {};
 }
@@ -304,7 +306,8 @@ std::vector<std::string> render_console(const ConsoleState& state, int width, in
   grid[static_cast<std::size_t>(bottom + 2)] = fit(closed_loop_warning(state.registers), width);
   if (state.show_help) {
     const auto& help = console_key_help();
-    for (int r = 1; r < bottom; ++r) grid[static_cast<std::size_t>(r)] = std::string(static_cast<std::size_t>(width), ' ');
+    for (int r = 1; r < bottom; ++r)
+      grid[static_cast<std::size_t>(r)] = std::string(static_cast<std::size_t>(width), ' ');
     for (std::size_t k = 0; k < help.size() && static_cast<int>(k) + 2 < bottom; ++k) {
       grid[k + 2] = fit(help[k], width);
     }
@@ -560,8 +563,8 @@ std::string session_log_line(double unix_s, std::string_view text) {
   const auto ms = std::clamp(static_cast<int>(std::floor((unix_s - std::floor(unix_s)) * 1e3)), 0, 999);
   std::tm utc{};
   gmtime_r(&whole, &utc);
-  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{:03}Z {}", utc.tm_year + 1900, utc.tm_mon + 1, utc.tm_mday,
-                     utc.tm_hour, utc.tm_min, utc.tm_sec, ms, text);
+  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{:03}Z {}", utc.tm_year + 1900, utc.tm_mon + 1,
+                     utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, ms, text);
 }
 
 int run_console(const LinkOptions& link, const ConsoleOptions& options) {
@@ -621,7 +624,9 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
     log(state.status);
   };
   using Clock = std::chrono::steady_clock;
-  const auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+  const auto since = [](Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+  };
   const auto start = Clock::now();
   auto last_block = start;
   auto quiet_from = start;  // the last block, or the moment the port came back
@@ -690,7 +695,8 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
         if (c && since(quiet_from) > k_stall_s && Clock::now() >= next_retry) {
           // A board that reset stops its stream: ask for it again now and then.
           next_retry = Clock::now() + std::chrono::milliseconds(static_cast<int>(k_retry_s * 1e3));
-          const std::string note = fmt::format("{}: no stream data for {:.0f} s", link.port, since(last_block));
+          const std::string note =
+              fmt::format("{}: no stream data for {:.0f} s", link.port, since(last_block));
           if (state.link_note != note) {
             if (state.link_note.empty()) log(note);
             state.link_note = note;

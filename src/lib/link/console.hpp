@@ -26,7 +26,16 @@ struct ConsoleSample {
 /// What a key asks the board (or the console) to do.
 struct ConsoleAction {
   enum class Kind {
-    none, set, toggle_clutch, toggle_load, record_log, dump_log, load_ini, record_csv, session_log, quit
+    none,
+    set,
+    toggle_clutch,
+    toggle_load,
+    record_log,
+    dump_log,
+    load_ini,
+    record_csv,
+    session_log,
+    quit
   };
   Kind kind = Kind::none;
   std::string name;   ///< set: the register

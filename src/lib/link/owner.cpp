@@ -226,7 +226,7 @@ struct PortOwner::Impl {
   int log_client = -1;                       ///< who asked for the log dump
   std::uint8_t stream_reg = 0;
   std::uint8_t seq_state_reg = 0;
-  bool finishing = false;                    ///< the owner's process is done: serve the rest, then end
+  bool finishing = false;  ///< the owner's process is done: serve the rest, then end
 
   /// A configuration register's value as the board last answered a read of it.
   struct Held {
@@ -235,9 +235,9 @@ struct PortOwner::Impl {
     double at_s = 0.0;
   };
   std::vector<Held> held;
-  std::uint64_t generation = 0;      ///< bumped whenever the held values are forgotten
-  bool sequence_may_play = true;     ///< until a read of seq_state says it stopped
-  std::optional<Frame> version;      ///< the board's answer to MCG_CMD_VERSION (it never changes)
+  std::uint64_t generation = 0;   ///< bumped whenever the held values are forgotten
+  bool sequence_may_play = true;  ///< until a read of seq_state says it stopped
+  std::optional<Frame> version;   ///< the board's answer to MCG_CMD_VERSION (it never changes)
 
   Held* held_for(int reg) {
     for (auto& h : held) {
@@ -555,7 +555,8 @@ PortOwner::PortOwner(std::unique_ptr<Port> port) : m_impl(std::make_unique<Impl>
   m.seq_state_reg = require_register("seq_state").id;
   // board_config's registers first (a capture's header needs them), then every other one that
   // only a write changes: not the duty a closed loop drives, a counter, or a sequence's state.
-  for (const char* name : config_register_names()) m.held.push_back({require_register(name).id, std::nullopt, 0.0});
+  for (const char* name : config_register_names())
+    m.held.push_back({require_register(name).id, std::nullopt, 0.0});
   for (const RegisterInfo& reg : registers()) {
     if (!reg.writable || reg.name == "duty" || reg.name == "tx_drops" || reg.name == "seq_state") continue;
     if (m.held_for(reg.id) == nullptr) m.held.push_back({reg.id, std::nullopt, 0.0});

@@ -157,8 +157,9 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
     } catch (const PortVanished&) {
       w.finish();
       if (options.reconnect_wait_s > 0.0 && come_back("the port vanished", true)) continue;
-      if (!c) fail("{}: the port vanished and did not come back within {} s ({} samples captured are on stdout)",
-                   link.port, config::format_number(options.reconnect_wait_s), written);
+      if (!c)
+        fail("{}: the port vanished and did not come back within {} s ({} samples captured are on stdout)",
+             link.port, config::format_number(options.reconnect_wait_s), written);
       fail("{}: the port vanished after {} samples (they are on stdout)", link.port, written);
     }
     if (!ended_by.empty() && options.reconnect_wait_s > 0.0 && !InterruptGuard::interrupted()) {

@@ -57,7 +57,8 @@ bool StreamAssembler::push(std::span<const std::uint8_t> payload, double arrival
     // (in closed form: a day's silence is no loop of 5000 turns).
     const double expected = std::min(arrival_gap_s, 1e12) / k_block_s;
     if (static_cast<double>(step) + 128.0 < expected) {
-      step += 256 * static_cast<std::int64_t>(std::ceil((expected - 128.0 - static_cast<double>(step)) / 256.0));
+      step +=
+          256 * static_cast<std::int64_t>(std::ceil((expected - 128.0 - static_cast<double>(step)) / 256.0));
     }
     if (step == 0) step = 256;
     is_break = step - 1 > k_max_filled_blocks;
