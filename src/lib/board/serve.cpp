@@ -116,8 +116,7 @@ void serve(const ServeOptions& options, std::ostream& err) {
   const link::InterruptGuard guard;
   const link::EmulatedPortEntry entry(
       pty.link_path(), fmt::format("emulated board (mcg-sim pid {}, {})", ::getpid(), pty.slave_path()));
-  err << fmt::format("mcg-sim: board at {} ({}); Ctrl-C ends
-", printable_name(pty.link_path()),
+  err << fmt::format("mcg-sim: board at {} ({}); Ctrl-C ends\n", printable_name(pty.link_path()),
                      pty.slave_path())
       << std::flush;
 
