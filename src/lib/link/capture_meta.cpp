@@ -43,7 +43,7 @@ bool carried_by_rows(std::string_view name) { return name == "rpm_cmd" || name =
 
 }  // namespace
 
-std::span<const char* const> config_register_names() { return k_config_registers; }
+std::span<const std::string_view> config_register_names() { return k_config_registers; }
 
 std::vector<std::pair<std::string, std::string>> board_config(Connection& c) {
   std::vector<std::pair<std::string, std::string>> out;

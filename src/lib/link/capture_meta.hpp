@@ -48,7 +48,7 @@ Rig load_rig(const RigOptions& options);
 /// engineering units (mode, rpm_cmd, clutch, load, the controller's coefficients and limits).
 std::vector<std::pair<std::string, std::string>> board_config(Connection& c);
 /// The registers board_config reads, in its order.
-std::span<const char* const> config_register_names();
+std::span<const std::string_view> config_register_names();
 
 /// What a capture's `# board_config` says the board ran: its mode, and the raw values of its
 /// other registers but those each row carries (rpm_cmd, clutch, load), as the firmware core

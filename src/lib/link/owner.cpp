@@ -555,7 +555,7 @@ PortOwner::PortOwner(std::unique_ptr<Port> port) : m_impl(std::make_unique<Impl>
   m.seq_state_reg = require_register("seq_state").id;
   // board_config's registers first (a capture's header needs them), then every other one that
   // only a write changes: not the duty a closed loop drives, a counter, or a sequence's state.
-  for (const char* name : config_register_names())
+  for (const std::string_view name : config_register_names())
     m.held.push_back({require_register(name).id, std::nullopt, 0.0});
   for (const RegisterInfo& reg : registers()) {
     if (!reg.writable || reg.name == "duty" || reg.name == "tx_drops" || reg.name == "seq_state") continue;
