@@ -1,5 +1,6 @@
 // tool_main: the shared entry of every mcg executable.
 #include "common/tool.hpp"
+#include "common/edit_distance.hpp"
 
 #include "common/error.hpp"
 #include "common/quote.hpp"
@@ -30,24 +31,6 @@ void print_error(const std::string& tool, const std::string& message) {
   std::fflush(stdout);
   std::cout.flush();
   std::fputs(fmt::format("{}: error: {}\n", tool, message).c_str(), stderr);
-}
-
-/// Edit distance of a and b (optimal string alignment: insertions, deletions, substitutions and
-/// swaps of neighbours each cost one).
-std::size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
-  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
-  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
-      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
-        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
-      }
-    }
-  }
-  return d[a.size()][b.size()];
 }
 
 /// The first argument that `app` or a subcommand it ran could not place, with that (sub)command.

@@ -1,6 +1,7 @@
 // mcg-design subcommands: resolve the plant, the chain and the controller; design or analyse;
 // write INI or CSV.
 #include "design/run.hpp"
+#include "common/edit_distance.hpp"
 
 #include "design/rig.hpp"
 
@@ -114,22 +115,6 @@ constexpr std::string_view k_plant_keys[] = {"tf",    "num",       "den",       
 /// The sections mcg-design reads. Other tools' sections pass, but one a typing slip away from
 /// these is an error: a misspelt [plnat] would otherwise leave the built-in plant analysed.
 constexpr std::string_view k_design_sections[] = {"plant", "loop", "controller", "design"};
-
-/// Levenshtein distance (the names compared are a few characters long).
-std::size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diagonal = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diagonal = up;
-    }
-  }
-  return row[b.size()];
-}
 
 /// Unknown [plant] keys and near misses of mcg-design's sections are errors naming file:line.
 void check_plant_names(const Ini& ini) {
