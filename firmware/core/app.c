@@ -168,12 +168,13 @@ void core_poll(void) {
   dump_pump();
 }
 
-/* Room for the largest answer struct. */
-static uint8_t MCG_XDATA s_ans[sizeof(McgVersionAnswer)];
+/* Room for the largest answer: a MCG_CMD_READ_MANY of MCG_READ_MANY_MAX registers. */
+static uint8_t MCG_XDATA s_ans[sizeof(McgReadManyRequest) + 2u * MCG_READ_MANY_MAX];
 
 void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA* payload, uint8_t len) {
   MCG_SLOW uint8_t st;
   MCG_SLOW int16_t value = 0;
+  MCG_SLOW uint8_t k;
   switch (cmd) {
     case MCG_CMD_VERSION:
       if (len != 0) {
@@ -207,6 +208,21 @@ void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA* payload, uint8_t len) {
       s_ans[0] = payload[0];
       put16(s_ans + 1, value);
       frame_reply(cmd, MCG_ST_OK, s_ans, (uint8_t)sizeof(McgRegisterAnswer));
+      return;
+    case MCG_CMD_READ_MANY:
+      if (len != sizeof(McgReadManyRequest) || payload[1] == 0 || payload[1] > MCG_READ_MANY_MAX) {
+        break;
+      }
+      s_ans[0] = payload[0];
+      s_ans[1] = payload[1];
+      for (k = 0; k < payload[1]; ++k) {
+        if (regs_read((uint8_t)(payload[0] + k), &value) != MCG_ST_OK) {
+          frame_reply(cmd, MCG_ST_BAD_REG, s_ans, 0);
+          return;
+        }
+        put16(s_ans + sizeof(McgReadManyRequest) + 2u * k, value);
+      }
+      frame_reply(cmd, MCG_ST_OK, s_ans, (uint8_t)(sizeof(McgReadManyRequest) + 2u * payload[1]));
       return;
     case MCG_CMD_LOG_START:
       if (len != 0) {

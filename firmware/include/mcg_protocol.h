@@ -19,13 +19,13 @@
 #define MCG_FIRMWARE_INCLUDE_MCG_PROTOCOL_H
 
 /* Protocol revision: bumped on any incompatible change of this header. */
-#define MCG_PROTOCOL_VERSION 3u
+#define MCG_PROTOCOL_VERSION 4u
 
 /* Firmware version reported by MCG_CMD_VERSION. */
 #include <stdint.h> /* uint8_t */
 
 #define MCG_FW_VERSION_MAJOR 0u
-#define MCG_FW_VERSION_MINOR 3u
+#define MCG_FW_VERSION_MINOR 4u
 #define MCG_FW_VERSION_PATCH 0u
 
 /* Board ids reported by MCG_CMD_VERSION. */
@@ -50,6 +50,9 @@
 #define MCG_CMD_LOG_DUMP 0x05u  /* ()                       -> st, points u8, interval_ms u8 */
 #define MCG_CMD_SEQ_WRITE 0x06u /* (index u8, n x entry)    -> st, next index u8 */
 #define MCG_CMD_SEQ_CLEAR 0x07u /* ()                       -> st */
+/* Registers first..first+count-1 in one answer (reads as MCG_CMD_READ), count 1..MCG_READ_MANY_MAX:
+ * a full read-back costs one answer of the line's spare room beside the stream, not one per register. */
+#define MCG_CMD_READ_MANY 0x08u /* (first u8, count u8)     -> st, first u8, count u8, count x i16 */
 
 /* ---- Payloads as byte structs ------------------------------------------------------------------
  * Every member is a uint8_t (multi-byte fields as [lo, hi]), so no compiler pads them and sizeof
@@ -66,6 +69,10 @@ typedef struct {
   uint8_t reg;
   uint8_t value[2];
 } McgRegisterAnswer; /* MCG_CMD_READ and MCG_CMD_WRITE: the register and the value it holds */
+typedef struct {
+  uint8_t first;
+  uint8_t count;
+} McgReadManyRequest; /* also the header of the answer, before count x i16 */
 typedef struct {
   uint8_t protocol;
   uint8_t major;
@@ -93,6 +100,9 @@ typedef struct {
   uint8_t reg;
   uint8_t value[2]; /* i16 */
 } McgSeqEntry;
+
+/* Registers in one MCG_CMD_READ_MANY answer: status, header and values fill MCG_MAX_PAYLOAD. */
+#define MCG_READ_MANY_MAX ((MCG_MAX_PAYLOAD - 1u - sizeof(McgReadManyRequest)) / 2u)
 
 /* ---- Frames the board sends on its own -------------------------------------------------------- */
 #define MCG_MSG_STREAM 0xF0u   /* stream block, see MCG_STREAM_* */

@@ -51,6 +51,47 @@ TEST(FwProtocol, WriteThenReadBack) {
   EXPECT_EQ(f->payload, (Bytes{MCG_ST_OK, MCG_REG_SERVICE_MS, 0x7B, 0x00}));
 }
 
+// One READ_MANY answers what READ gives register by register, for every register in one frame.
+TEST(FwProtocol, ReadManyIsReadOfEach) {
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_RPM_CMD, 515), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_DUTY, 250), MCG_ST_OK);
+  const auto count = static_cast<std::uint8_t>(MCG_REG_COUNT - 1);
+  ASSERT_LE(count, MCG_READ_MANY_MAX) << "every register must fit one READ_MANY answer";
+  const auto f = b.request(MCG_CMD_READ_MANY, Bytes{1, count});
+  ASSERT_TRUE(f);
+  ASSERT_EQ(f->payload.size(), 3u + 2u * count);
+  EXPECT_EQ(f->payload[0], MCG_ST_OK);
+  EXPECT_EQ(f->payload[1], 1);
+  EXPECT_EQ(f->payload[2], count);
+  for (std::uint8_t k = 0; k < count; ++k) {
+    const auto reg = static_cast<std::uint8_t>(1 + k);
+    if (reg == MCG_REG_STREAM_SEQ || reg == MCG_REG_RX_ERRORS) continue;  // may move between the reads
+    EXPECT_EQ(fwtest::i16_at(f->payload, 3u + 2u * k), b.read(reg)) << "register 0x" << std::hex << int{reg};
+  }
+  EXPECT_EQ(fwtest::i16_at(f->payload, 3u + 2u * (MCG_REG_DUTY - 1u)), 250);
+  EXPECT_EQ(fwtest::i16_at(f->payload, 3u + 2u * (MCG_REG_RPM_CMD - 1u)), 515);
+}
+
+TEST(FwProtocol, ReadManyRefusesWhatDoesNotExist) {
+  Board b;
+  const auto status = [&](const Bytes& p) {
+    const auto f = b.request(MCG_CMD_READ_MANY, p);
+    return f ? f->payload : Bytes{};
+  };
+  EXPECT_EQ(status({0, 2}), Bytes{MCG_ST_BAD_REG});
+  EXPECT_EQ(status({MCG_REG_COUNT - 1, 2}), Bytes{MCG_ST_BAD_REG});
+  EXPECT_EQ(status({250, 10}), Bytes{MCG_ST_BAD_REG}) << "first + count wraps past 255";
+  EXPECT_EQ(status({1, 0}), Bytes{MCG_ST_BAD_LENGTH});
+  EXPECT_EQ(status({1, static_cast<std::uint8_t>(MCG_READ_MANY_MAX + 1)}), Bytes{MCG_ST_BAD_LENGTH});
+  EXPECT_EQ(status({1}), Bytes{MCG_ST_BAD_LENGTH});
+  const auto last = b.request(MCG_CMD_READ_MANY, Bytes{MCG_REG_COUNT - 1, 1});
+  ASSERT_TRUE(last);
+  EXPECT_EQ(last->payload.size(), 5u) << "the largest id alone";
+  EXPECT_LE(MCG_FRAME_OVERHEAD + 1u + sizeof(McgReadManyRequest) + 2u * MCG_READ_MANY_MAX,
+            MCG_FRAME_OVERHEAD + MCG_MAX_PAYLOAD);
+}
+
 TEST(FwProtocol, DefaultsAfterReset) {
   Board b;
   EXPECT_EQ(b.read(MCG_REG_MODE), static_cast<int>(MCG_MODE_OPEN));

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -85,6 +86,37 @@ TEST(FwRegs, ManPageTableIsTheHeaderTable) {
   std::ostringstream paste;
   for (const std::string& row : expected) paste << row << '\n';
   EXPECT_EQ(man, expected) << "rows for man/mcg-protocol.7, REGISTERS (after the '_' line):\n" << paste.str();
+}
+
+// Every frame the EXAMPLES section shows ("PC:" and "board:" lines) is one a decoder accepts: its
+// LEN counts its payload and its CRC is right.
+TEST(FwRegs, ManPageExampleFramesAreWellFormed) {
+  std::ifstream in(MCG_PROTOCOL_MAN);
+  std::string line;
+  int frames = 0;
+  while (std::getline(in, line)) {
+    if (line.rfind("PC:", 0) != 0 && line.rfind("board:", 0) != 0) continue;
+    std::istringstream bytes(line.substr(line.find(':') + 1));
+    std::vector<unsigned> b;
+    unsigned v = 0;
+    while (bytes >> std::hex >> v) b.push_back(v);
+    ASSERT_GE(b.size(), MCG_FRAME_OVERHEAD) << line;
+    EXPECT_EQ(b[0], MCG_SYNC) << line;
+    EXPECT_EQ(b.size(), b[1] + MCG_FRAME_OVERHEAD) << line;
+    unsigned crc = MCG_CRC_INIT;
+    for (std::size_t k = 1; k + 2 < b.size(); ++k) crc = mcg_crc16_update(crc, b[k]);
+    EXPECT_EQ(crc, b[b.size() - 2] | (b.back() << 8)) << line;
+    ++frames;
+  }
+  EXPECT_GE(frames, 8);
+}
+
+TEST(FwRegs, ManPageStatesTheReadManyLimit) {
+  std::ifstream in(MCG_PROTOCOL_MAN);
+  const std::string page((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string limit = "count u8 (1.." + std::to_string(MCG_READ_MANY_MAX) + ")";
+  EXPECT_NE(page.find(limit), std::string::npos) << limit;
+  EXPECT_NE(page.find("outside 1.." + std::to_string(MCG_READ_MANY_MAX)), std::string::npos);
 }
 
 }  // namespace

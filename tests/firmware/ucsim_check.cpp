@@ -476,7 +476,7 @@ int main(int argc, char** argv) {
     const auto v = sim.request(MCG_CMD_VERSION);
     check(v && v->payload == Bytes{MCG_ST_OK, MCG_PROTOCOL_VERSION, MCG_FW_VERSION_MAJOR,
                                    MCG_FW_VERSION_MINOR, MCG_FW_VERSION_PATCH, MCG_BOARD_UCSIM},
-          "version: protocol 3, firmware 0.3.0, board ucsim");
+          "version: protocol 4, firmware 0.4.0, board ucsim");
 
     const auto w = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_RPM_CMD, 515));
     check(w && w->payload == Bytes{MCG_ST_OK, MCG_REG_RPM_CMD, 0x03, 0x02}, "write rpm_cmd 515 acknowledged");
@@ -490,6 +490,13 @@ int main(int argc, char** argv) {
                  read_reg(sim, MCG_REG_KP) == value;
     }
     check(all_bits, "Kp written, committed and read back with the eighth bit of both bytes");
+
+    const auto count = static_cast<std::uint8_t>(MCG_REG_COUNT - 1);
+    const auto many = sim.request(MCG_CMD_READ_MANY, {1, count});
+    check(many && many->payload.size() == 3u + 2u * count && many->payload[0] == MCG_ST_OK &&
+              fwtest::i16_at(many->payload, 3u + 2u * (MCG_REG_RPM_CMD - 1u)) == 515 &&
+              fwtest::i16_at(many->payload, 3u + 2u * (MCG_REG_COEF_FRAC - 1u)) == read_reg(sim, MCG_REG_COEF_FRAC),
+          "every register in one READ_MANY answer (the largest frame the board sends)");
 
     const auto r = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_RPM_CMD, 800));
     check(r && r->payload == Bytes{MCG_ST_RANGE} && read_reg(sim, MCG_REG_RPM_CMD) == 515,

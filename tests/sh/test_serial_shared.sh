@@ -2,8 +2,9 @@
 # The port shared as one, as a person uses it against the emulated board: the board announces
 # its link and `list` shows it; an owner that ends normally while a client streams and a
 # console (in tmux) records leaves both running, without a lost or repeated sample; pressing
-# w never shows a stall; the board killed and started again on the same path is a break row
-# in stream --reconnect's capture and in the console's recording; the console's keys ?, p, L.
+# w never shows a stall; full gets meanwhile cost the streams no block; the board killed and
+# started again on the same path is a break row in stream --reconnect's capture and in the
+# console's recording; the console's keys ?, p, L.
 # Args: TOOL_DIR SOURCE_DIR; exit 125 = skipped (no tmux).
 tools=$1
 export PATH="$tools:$PATH"
@@ -50,7 +51,11 @@ check "w starts a recording" shows "REC rec.csv"
 check "w shows no stall in 3 s of screens" eval '! grep -q "no stream data" screens.txt'
 check "and the console's time goes on meanwhile" eval 'grep -o "t [0-9.]* s" screens.txt | awk "{ print \$2 }" |
   sort -g | awk "NR == 1 { a = \$1 } END { exit !(\$1 - a > 2) }"'
-sleep 5
+for i in 1 2 3; do mcg-serial -p ./ttyH get > get$i.ini 2> get.err || echo "get $i: status $?" >> get.err; done
+check "three full gets back to back while two streams run" eval '[ ! -s get.err ] && [ "$(grep -c " = " get3.ini)" -ge 27 ] &&
+  [ "$(grep -c " = " get3.ini)" = "$(grep -c " = " get1.ini)" ]'
+check "and the board dropped no block for them" eval 'grep -q "^tx_drops = 0 " get3.ini'
+sleep 2
 check "the owner's own stream ended, it serves its clients still" eval '[ "$(rows owner.csv)" = 1500 ] && kill -0 $opid'
 check "the client stream: 12 s, every sample once, status 0" eval 'wait_bounded $cpid 30 && [ "$status" = 0 ] &&
   [ "$(rows client.csv)" = 3000 ] && steady client.csv && [ ! -s client.err ]'

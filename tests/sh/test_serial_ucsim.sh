@@ -31,7 +31,7 @@ for i in $(seq 50); do
   U get mode > /dev/null 2>&1 && break
   sleep 0.2
 done
-check "the SIM image answers with protocol 3 (version checked)" eval '[ "$(U get mode)" = open ]'
+check "the SIM image answers with protocol 4 (version checked)" eval '[ "$(U get mode)" = open ]'
 check "all registers read" eval 'U get > "$work/all.ini" && grep -q "^rpm_cmd = 420 " "$work/all.ini"'
 check "set rpm_cmd, read back" eval 'U set rpm_cmd 555 && [ "$(U get rpm_cmd)" = 555 ]'
 check "set a gain in Q8, read back" eval 'U set kp 2.75 && [ "$(U get kp)" = 2.75 ]'

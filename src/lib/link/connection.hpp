@@ -37,7 +37,7 @@ struct Connection {
   void forget_frac_bits() { m_frac_bits.reset(); }
   /// F as the gains that follow are to be written: the coef_frac just staged.
   void set_frac_bits(int frac_bits) { m_frac_bits = frac_bits; }
-  /// "host firmware 0.3.0, protocol 3".
+  /// "host firmware 0.4.0, protocol 4".
   std::string board_text() const;
 
  private:

@@ -38,9 +38,19 @@ double now_s() { return std::chrono::duration<double>(Clock::now().time_since_ep
 /// A request goes to the board after the previous one was answered, or after this long.
 constexpr double k_hold_s = 0.1;
 /// While the stream is on it takes 56 of every 61 bytes the line carries at 9600 baud (a
-/// 56-byte block per 64 ms): one answer (9 bytes for a register) per this long fits in the rest
-/// without making the board drop a block.
+/// 56-byte block per 64 ms): one answer of k_register_answer_bytes (a register) per this long
+/// fits in the rest without making the board drop a block; a longer answer (MCG_CMD_READ_MANY)
+/// holds the next request back in proportion to its length.
 constexpr double k_stream_pace_s = 0.12;
+constexpr std::size_t k_register_answer_bytes = MCG_FRAME_OVERHEAD + 1 + sizeof(McgRegisterAnswer);
+
+/// The length on the wire of the answer to `request`.
+std::size_t answer_bytes(const Frame& request) {
+  if (request.cmd == MCG_CMD_READ_MANY && request.payload.size() == sizeof(McgReadManyRequest)) {
+    return MCG_FRAME_OVERHEAD + 1 + sizeof(McgReadManyRequest) + 2u * request.payload[1];
+  }
+  return k_register_answer_bytes;
+}
 /// An unanswered request is forgotten (its answer goes nowhere) after this long.
 constexpr double k_forget_s = 10.0;
 /// A client that does not read what it is sent is dropped beyond this backlog.
@@ -136,7 +146,8 @@ Expect expectation(int client, const Frame& request) {
   Expect e;
   e.client = client;
   e.answer = static_cast<std::uint8_t>(request.cmd | MCG_REPLY_BIT);
-  if ((request.cmd == MCG_CMD_READ || request.cmd == MCG_CMD_WRITE) && !request.payload.empty()) {
+  const bool echoes = request.cmd == MCG_CMD_READ || request.cmd == MCG_CMD_WRITE || request.cmd == MCG_CMD_READ_MANY;
+  if (echoes && !request.payload.empty()) {
     e.reg = request.payload[0];
   }
   return e;
@@ -220,6 +231,7 @@ struct PortOwner::Impl {
   std::deque<std::pair<int, Frame>> queue;   ///< requests not sent yet (client -1: the owner's own)
   std::vector<Expect> expected;              ///< sent, not answered
   double last_sent_s = -1e9;
+  double pace_s = k_stream_pace_s;  ///< while streaming, the gap the last request's answer needs
   double last_block_s = -1e9;                ///< when the last stream block arrived
   double last_client_s = -1e9;               ///< when a client last asked the board something
   bool waiting = false;                      ///< the last request sent has no answer yet
@@ -273,14 +285,26 @@ struct PortOwner::Impl {
       version = f;
       return;
     }
-    if (cmd != MCG_CMD_READ) {
+    if (cmd != MCG_CMD_READ && cmd != MCG_CMD_READ_MANY) {
       forget_held();  // a write may change other registers (a mode switch, a commit)
       return;
     }
-    if (f.payload.size() < 4 || e.generation != generation) return;
-    const std::int16_t raw = get_i16(f.payload, 2);
-    if (f.payload[1] == seq_state_reg) sequence_may_play = raw != MCG_SEQ_STOP;
-    if (Held* h = held_for(f.payload[1])) {
+    if (e.generation != generation) return;
+    if (cmd == MCG_CMD_READ) {
+      if (f.payload.size() >= 1 + sizeof(McgRegisterAnswer)) hold(f.payload[1], get_i16(f.payload, 2));
+      return;
+    }
+    const std::size_t head = 1 + sizeof(McgReadManyRequest);
+    if (f.payload.size() < head || f.payload.size() != head + 2u * f.payload[2]) return;
+    for (std::size_t k = 0; k < f.payload[2]; ++k) {
+      hold(static_cast<int>(f.payload[1] + k), get_i16(f.payload, head + 2 * k));
+    }
+  }
+
+  /// The board just answered `raw` for register `reg`.
+  void hold(int reg, std::int16_t raw) {
+    if (reg == seq_state_reg) sequence_may_play = raw != MCG_SEQ_STOP;
+    if (Held* h = held_for(reg)) {
       h->raw = raw;
       h->at_s = now_s();
     }
@@ -405,10 +429,10 @@ struct PortOwner::Impl {
     if (waiting && now - last_sent_s >= k_hold_s) waiting = false;
     refresh_held();
     if (queue.empty() || waiting) return;
-    if (anyone_streams(-1) && now - last_sent_s < k_stream_pace_s) return;
+    if (anyone_streams(-1) && now - last_sent_s < pace_s) return;
     auto [id, f] = std::move(queue.front());
     queue.pop_front();
-    if (f.cmd != MCG_CMD_READ && f.cmd != MCG_CMD_VERSION) {
+    if (f.cmd != MCG_CMD_READ && f.cmd != MCG_CMD_READ_MANY && f.cmd != MCG_CMD_VERSION) {
       forget_held();
       if (f.cmd == MCG_CMD_WRITE && f.payload.size() >= 3 && f.payload[0] == seq_state_reg &&
           get_i16(f.payload, 1) != MCG_SEQ_STOP) {
@@ -421,6 +445,7 @@ struct PortOwner::Impl {
     e.generation = generation;
     expected.push_back(e);
     last_sent_s = now;
+    pace_s = k_stream_pace_s * static_cast<double>(answer_bytes(f)) / static_cast<double>(k_register_answer_bytes);
     waiting = true;
   }
 
@@ -504,7 +529,7 @@ struct PortOwner::Impl {
       }
       double timeout_s = 0.05;
       if (!queue.empty()) {
-        const double gap_s = std::max(waiting ? k_hold_s : 0.0, anyone_streams(-1) ? k_stream_pace_s : 0.0);
+        const double gap_s = std::max(waiting ? k_hold_s : 0.0, anyone_streams(-1) ? pace_s : 0.0);
         timeout_s = std::clamp(gap_s - (now_s() - last_sent_s), 0.0, timeout_s);
       }
       if (fds[2].fd < 0) timeout_s = std::min(timeout_s, 0.002);

@@ -143,9 +143,11 @@ int load_rank(const RegisterInfo& reg) {
 
 void print_board_section(Connection& c, std::span<const RegisterInfo* const> regs, std::ostream& out) {
   out << "[board]\n";
-  for (const RegisterInfo* reg : regs) {
+  const std::vector<std::int16_t> values = c.session->read_many(regs);
+  for (std::size_t k = 0; k < regs.size(); ++k) {
+    const RegisterInfo* reg = regs[k];
     const int frac = reg->unit == Unit::Gain ? c.frac_bits() : 0;
-    const std::int16_t raw = c.session->read(*reg);
+    const std::int16_t raw = values[k];
     const std::string_view comment = reg->doc;
     if (reg->id == MCG_REG_COMMIT) {
       out << fmt::format("; {} = {}  (an action, not a setting) {}\n", reg->name,

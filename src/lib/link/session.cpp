@@ -68,7 +68,8 @@ std::vector<std::uint8_t> Session::request(std::uint8_t cmd, std::span<const std
   const std::vector<std::uint8_t> bytes = encode(cmd, payload);
   const auto answer_cmd = static_cast<std::uint8_t>(cmd | MCG_REPLY_BIT);
   // READ and WRITE answers echo the register: an answer to an earlier try must not pass.
-  const bool echoes_reg = (cmd == MCG_CMD_READ || cmd == MCG_CMD_WRITE) && !payload.empty();
+  const bool echoes_reg =
+      (cmd == MCG_CMD_READ || cmd == MCG_CMD_WRITE || cmd == MCG_CMD_READ_MANY) && !payload.empty();
   for (int attempt = 0; attempt < m_options.attempts; ++attempt) {
     m_port.write_all(bytes, k_write_timeout_s);
     const double deadline = now_s() + m_options.reply_timeout_s;
@@ -119,6 +120,29 @@ std::int16_t Session::read(const RegisterInfo& reg) {
   const auto data = request(MCG_CMD_READ, req, fmt::format("reading {}", reg.name));
   if (data.size() < sizeof(McgRegisterAnswer)) fail("{}: reading {}: malformed answer", m_port.name(), reg.name);
   return get_i16(data, 1);
+}
+
+std::vector<std::int16_t> Session::read_many(std::span<const RegisterInfo* const> regs) {
+  std::vector<std::int16_t> values;
+  values.reserve(regs.size());
+  std::size_t at = 0;
+  while (at < regs.size()) {
+    std::size_t n = 1;
+    while (at + n < regs.size() && n < MCG_READ_MANY_MAX && regs[at + n]->id == regs[at]->id + n) ++n;
+    if (n == 1) {
+      values.push_back(read(*regs[at]));
+      ++at;
+      continue;
+    }
+    const std::uint8_t req[sizeof(McgReadManyRequest)] = {regs[at]->id, static_cast<std::uint8_t>(n)};
+    const auto data = request(MCG_CMD_READ_MANY, req, fmt::format("reading {}..{}", regs[at]->name, regs[at + n - 1]->name));
+    if (data.size() != sizeof(McgReadManyRequest) + 2 * n || data[1] != n) {
+      fail("{}: reading {}..{}: malformed answer", m_port.name(), regs[at]->name, regs[at + n - 1]->name);
+    }
+    for (std::size_t k = 0; k < n; ++k) values.push_back(get_i16(data, sizeof(McgReadManyRequest) + 2 * k));
+    at += n;
+  }
+  return values;
 }
 
 std::int16_t Session::write(const RegisterInfo& reg, std::int16_t raw) {
