@@ -22,6 +22,7 @@
 #include <fmt/format.h>
 
 #include "board/board.hpp"
+#include "common/diagnostics.hpp"
 #include "common/error.hpp"
 #include "link/owner.hpp"
 #include "link/port.hpp"
@@ -53,7 +54,8 @@ int main(int argc, char** argv) {
     o.seconds = seconds * speed + 30.0;
     try {
       std::ostringstream announce;  // the link's path is known here
-      mcg::board::serve(o, announce);
+      mcg::Diagnostics diag(announce, "board");
+      mcg::board::serve(o, diag);
     } catch (const mcg::Error& e) {
       std::fprintf(stderr, "board: %s\n", e.what());
       ::_exit(1);

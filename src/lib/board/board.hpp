@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "board/core.hpp"         // FirmwareCore
+#include "common/diagnostics.hpp"
 #include "link/capture_meta.hpp"  // k_load_resistor_ohm
 #include "model/model.hpp"  // Model, Plant, State
 
@@ -59,9 +60,6 @@ class EmulatedBoard {
   std::uint16_t m_pulses = 0; ///< pulses counted during the last tick
 };
 
-/// The model of mcg-sim's --config files and --effect texts (later ones win).
-model::Model load_model(const std::vector<std::string>& configs, const std::vector<std::string>& effects);
-
 /// Where and how fast mcg-sim --board serves the emulated board.
 struct ServeOptions {
   std::string link_path;           ///< the pseudo-terminal's link, e.g. ./ttyMCG
@@ -78,11 +76,11 @@ struct ServeOptions {
 /// own windows), and its clutch and load come from the board's outputs.
 void refuse_unused_options(const std::vector<std::string>& options_given);
 
-/// Creates the pseudo-terminal, links it at options.link_path, announces it on `err` in one
-/// line ("mcg-sim: board at LINK (PTY); Ctrl-C ends", flushed, once the link exists), enters
+/// Creates the pseudo-terminal, links it at options.link_path, announces it on `diag` in one
+/// report line ("board at LINK (PTY); Ctrl-C ends", flushed, once the link exists), enters
 /// it in the list of mcg-serial list (link::EmulatedPortEntry), and runs the board in real
 /// time (times `speed`) until SIGINT or SIGTERM (or `seconds`), then removes the link. A
 /// client may come and go any number of times. Throws mcg::Error when the link cannot be made.
-void serve(const ServeOptions& options, std::ostream& err);
+void serve(const ServeOptions& options, Diagnostics& diag);
 
 }  // namespace mcg::board

@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include "board/board.hpp"
+#include "common/diagnostics.hpp"
 #include "common/error.hpp"   // mcg::fail
 #include "common/quote.hpp"
 #include "config/ini.hpp"     // Ini
@@ -22,6 +23,7 @@
 #include "link/port.hpp"      // EmulatedPortEntry
 #include "link/pty.hpp"       // PtyLink
 #include "mcg_protocol.h"     // MCG_SYNC, MCG_FRAME_OVERHEAD
+#include "model/load.hpp"
 
 namespace mcg::board {
 
@@ -71,21 +73,6 @@ void write_frames(int fd, std::vector<std::uint8_t>& line) {
 
 }  // namespace
 
-model::Model load_model(const std::vector<std::string>& configs, const std::vector<std::string>& effects) {
-  model::Model model = model::model_from_ini(config::Ini::load_all(configs));
-  for (const auto& text : effects) {
-    model::Effect effect = model::parse_effect(text, "--effect");
-    const auto it = std::find_if(model.effects.begin(), model.effects.end(),
-                                 [&](const model::Effect& e) { return e.name == effect.name; });
-    if (it != model.effects.end()) {
-      *it = effect;
-    } else {
-      model.effects.push_back(effect);
-    }
-  }
-  return model;
-}
-
 void refuse_unused_options(const std::vector<std::string>& options_given) {
   // What each mcg-sim option would mean on the emulated board, and why it does not apply.
   static constexpr std::array<std::pair<std::string_view, std::string_view>, 10> k_refused{{
@@ -107,18 +94,17 @@ void refuse_unused_options(const std::vector<std::string>& options_given) {
   }
 }
 
-void serve(const ServeOptions& options, std::ostream& err) {
+void serve(const ServeOptions& options, Diagnostics& diag) {
   refuse_unused_options(options.options_given);
   BoardOptions board_options = options.board;
-  board_options.model = load_model(options.configs, options.effects);
+  board_options.model = model::load_model(options.configs, options.effects);
   link::PtyLink pty(options.link_path);
   EmulatedBoard board(board_options);
   const link::InterruptGuard guard;
   const link::EmulatedPortEntry entry(
       pty.link_path(), fmt::format("emulated board (mcg-sim pid {}, {})", ::getpid(), pty.slave_path()));
-  err << fmt::format("mcg-sim: board at {} ({}); Ctrl-C ends\n", printable_name(pty.link_path()),
-                     pty.slave_path())
-      << std::flush;
+  diag.report(fmt::format("board at {} ({}); Ctrl-C ends", printable_name(pty.link_path()), pty.slave_path()));
+  diag.stream().flush();
 
   using Clock = std::chrono::steady_clock;
   const double tick_s = 1e-3 / options.speed;  // wall-clock seconds per simulated tick

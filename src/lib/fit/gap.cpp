@@ -98,7 +98,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   return report;
 }
 
-int run_gap(const GapOptions& options, std::ostream& out, std::ostream& err) {
+int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
   const auto started = std::chrono::steady_clock::now();
   model::Model model;
   GapSettings settings;
@@ -129,7 +129,10 @@ int run_gap(const GapOptions& options, std::ostream& out, std::ostream& err) {
   settings.deadline = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                     std::chrono::duration<double>(options.budget_s));
   if (options.progress) {
-    settings.progress = [&err](const std::string& line) { err << "mcg-fit gap: " << line << std::endl; };
+    settings.progress = [&diag](const std::string& line) {
+      diag.report(line);
+      diag.stream().flush();
+    };
   }
   const GapReport report = diagnose_gap(model, data, settings);
   if (!options.residuals.empty()) {
@@ -141,7 +144,7 @@ int run_gap(const GapOptions& options, std::ostream& out, std::ostream& err) {
     write_gap_text(out, report);
   } else {
     write_gap_csv(out, report);
-    write_gap_text(err, report);
+    write_gap_text(diag.stream(), report);
   }
   return report.partial ? k_gap_partial_exit : 0;
 }

@@ -30,6 +30,7 @@
 // the best candidate's residual analysed to say where what is left lies.
 #pragma once
 
+#include "common/diagnostics.hpp"
 #include "fit/diag_residual.hpp"
 #include "fit/greybox.hpp"
 #include "model/model.hpp"
@@ -240,15 +241,16 @@ struct GapOptions {
   double to_s = std::numeric_limits<double>::infinity();
   double gear_ratio = 1.0;       ///< motor turns per turn of the measured shaft
   double budget_s = 120.0;       ///< wall-clock budget of the diagnosis (partial results after it)
-  bool progress = false;         ///< progress lines on `err`
+  bool progress = false;         ///< progress report lines on the diagnostics
   bool discrepancy = false;      ///< the catalog-free discrepancy fit whatever the verdict
 };
 
 /// Exit status of `mcg-fit gap` when the time budget ran out (the results so far are written).
 inline constexpr int k_gap_partial_exit = 4;
 
-/// The whole subcommand: reads the files, diagnoses, writes stdout/stderr (and residuals).
+/// The whole subcommand: reads the files, diagnoses, writes `out` (the CSV or text) and the
+/// summary (with --format csv) and progress on `diag` (and the residuals).
 /// Returns 0, or k_gap_partial_exit when the budget ran out.
-int run_gap(const GapOptions& options, std::ostream& out, std::ostream& err);
+int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag);
 
 }  // namespace mcg::fit

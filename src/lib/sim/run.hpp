@@ -3,12 +3,12 @@
 
 #include <cstdint>
 #include <iosfwd>
-#include <iostream>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "boardunits/chain.hpp"  // k_board_counts_per_rev
+#include "common/diagnostics.hpp"
 
 namespace mcg::sim {
 
@@ -40,11 +40,12 @@ struct RunOptions {
 /// output table to `out`, row by row: each output row is written as soon as its input row is
 /// in, in memory that does not grow with the run. When `in` reads through an FdInput, the
 /// output is flushed whenever the input pauses (a live pipe sees each row at once). Throws
-/// mcg::Error for bad input, after writing the rows before it.
+/// mcg::Error for bad input, after writing the rows before it. With --compare, the RMS of the
+/// residuals per regime goes to `diag` (when given) as report lines at the end.
 void run(const RunOptions& options, std::istream& in, const std::string& source, std::ostream& out,
-         std::ostream& report = std::cerr);
+         Diagnostics* diag = nullptr);
 
 /// run() on the standard input and output, live.
-void run_stdio(const RunOptions& options);
+void run_stdio(const RunOptions& options, Diagnostics& diag);
 
 }  // namespace mcg::sim
