@@ -128,8 +128,29 @@ void controller_to_ini(const Controller& c, config::Ini& ini) {
   ini.set(k_section, "input_scale", c.input_scale, "counts per sample per rpm");
   ini.set(k_section, "output", "duty_counts");
   ini.set(k_section, "duty_full_scale", c.duty_full_scale, "duty counts at 100 %");
-  ini.set(k_section, "round_output", c.round_output ? 1.0 : 0.0);
-  ini.set(k_section, "duty_resolution", c.duty_resolution, "fraction of full scale");
+  ini.set(k_section, "round_output", c.round_output ? 1.0 : 0.0,
+          c.round_output ? "y in whole counts" : "the board keeps an exact accumulator");
+  if (c.duty_resolution != Controller{}.duty_resolution) {
+    ini.set(k_section, "duty_resolution", c.duty_resolution, "fraction of full scale");
+  }
+}
+
+void fixed_point_to_ini(const BoardFixedPoint& q, double counts_per_rev, double duty_full_scale,
+                        config::Ini& ini) {
+  const double lsb = std::ldexp(1.0, -q.coef_frac);
+  ini.set(k_fixed, "mode", q.mode);
+  ini.set(k_fixed, "coef_frac", static_cast<double>(q.coef_frac),
+          fmt::format("F: c_q = round(c_board * 2^F), Q{}.{}", 15 - q.coef_frac, q.coef_frac));
+  ini.set(k_fixed, "unit_factor", q.factor,
+          fmt::format("c_board = c * ({}/2048) * (1000/{}) in 1/1000 duty per pulse/ms",
+                      config::format_number(counts_per_rev), config::format_number(duty_full_scale)));
+  static constexpr const char* k_names[] = {"b0", "b1", "b2"};
+  for (std::size_t k = 0; k < q.regs.size(); ++k) {
+    const double v = static_cast<double>(q.regs[k]);
+    const std::string note = fmt::format("{} /1000 per pulse/ms", config::format_number(v * lsb));
+    ini.set(k_fixed, q.mode == "p" ? std::string("kp") : std::string(k_names[k]), v, note);
+  }
+  ini.set(k_fixed, "acc_max", q.acc_max, "worst case 1000 * 2^(F+8) + 8191 * sum |c_q| <= 2^31 - 1");
 }
 
 std::optional<BoardFixedPoint> board_controller(const config::Ini& ini) {

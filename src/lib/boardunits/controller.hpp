@@ -39,7 +39,15 @@ Controller report_pi();
 /// The [controller] section of `ini`, or nullopt when there is none. Throws mcg::Error
 /// naming file, line and key for an unknown key or a bad value (a_0 = 0, dt_s <= 0, ...).
 std::optional<Controller> controller_from_ini(const config::Ini& ini);
+/// Writes `controller` as the [controller] section of `ini`: the one writer of the keys
+/// controller_from_ini() reads (duty_resolution only when not the default).
 void controller_to_ini(const Controller& controller, config::Ini& ini);
+
+/// Writes `q` as the [fixed_point] section of `ini` (mode, coef_frac, unit_factor, the
+/// registers, acc_max), each with the equation it follows; `counts_per_rev` and
+/// `duty_full_scale` are the chain's, quoted in unit_factor's comment.
+void fixed_point_to_ini(const BoardFixedPoint& q, double counts_per_rev, double duty_full_scale,
+                        config::Ini& ini);
 
 /// One line naming what the board can run, for refusals.
 inline constexpr const char* k_board_forms =

@@ -540,35 +540,18 @@ void write_design(const Options& o, const Resolved& r, const Design& d, std::ost
     const Chain& c = r.chain_values;
     const double full = r.chain ? c.pwm_full_counts : Chain{}.pwm_full_counts;
     const double cpr = r.chain ? c.counts_per_rev : Chain{}.counts_per_rev;
-    ini.set("controller", "type", d.kind);
-    ini.set("controller", "b", linsys::list_text(b), "numerator on e, b_0 first");
-    ini.set("controller", "a", linsys::list_text(a), "denominator on y, a_0 first");
-    ini.set("controller", "dt_s", su.dt_s, "s");
-    ini.set("controller", "input_scale", cpr / 60.0 * su.dt_s, "counts per sample per rpm");
-    ini.set("controller", "output", "duty_counts");
-    ini.set("controller", "duty_full_scale", full, "duty counts at 100 %");
+    boardunits::Controller controller;
+    controller.type = d.kind;
+    controller.b = b;
+    controller.a = a;
+    controller.dt_s = su.dt_s;
+    controller.input_scale = cpr / 60.0 * su.dt_s;
+    controller.duty_full_scale = full;
     // The board keeps its accumulator exact: the output is rounded, the state is not.
-    ini.set("controller", "round_output", 0.0, "the board keeps an exact accumulator");
-
-    boardunits::ControllerUnits units;
-    units.input_scale = cpr / 60.0 * su.dt_s;
-    units.duty_full_scale = full;
-    units.dt_s = su.dt_s;
-    if (const auto q = boardunits::board_fixed_point(b, a, units)) {
-      const double lsb = std::ldexp(1.0, -q->coef_frac);
-      ini.set("fixed_point", "mode", q->mode);
-      ini.set("fixed_point", "coef_frac", static_cast<double>(q->coef_frac),
-              fmt::format("F: c_q = round(c_board * 2^F), Q{}.{}", 15 - q->coef_frac, q->coef_frac));
-      ini.set("fixed_point", "unit_factor", q->factor,
-              fmt::format("c_board = c * ({}/2048) * (1000/{}) in 1/1000 duty per pulse/ms", format_number(cpr),
-                          format_number(full)));
-      static constexpr const char* k_names[] = {"b0", "b1", "b2"};
-      for (std::size_t k = 0; k < q->regs.size(); ++k) {
-        const double v = static_cast<double>(q->regs[k]);
-        const std::string note = fmt::format("{} /1000 per pulse/ms", format_number(v * lsb));
-        ini.set("fixed_point", q->mode == "p" ? std::string("kp") : std::string(k_names[k]), v, note);
-      }
-      ini.set("fixed_point", "acc_max", q->acc_max, "worst case 1000 * 2^(F+8) + 8191 * sum |c_q| <= 2^31 - 1");
+    controller.round_output = false;
+    boardunits::controller_to_ini(controller, ini);
+    if (const auto q = boardunits::board_fixed_point(b, a, controller.units())) {
+      boardunits::fixed_point_to_ini(*q, cpr, full, ini);
       const Tf cq = controller_from_coefficients(q->b, q->a, su.dt_s);
       write_margins(ini, "margins_quantised", {cq, su.plant}, su.dt_s);
     }
