@@ -138,11 +138,10 @@ void check_plant_names(const Ini& ini) {
   }
 }
 
-Resolved resolve(const Options& o) {
-  Resolved r;
-  r.ini = Ini::load_all(o.configs);
+/// The plant as given (--plant, --num/--den, the linearised rig, [plant] tf or num/den, or the
+/// report's) and its domain, into r.raw and r.raw_where. Returns true for the built-in plant.
+bool read_plant(const Options& o, Resolved& r) {
   const Ini& ini = r.ini;
-  check_plant_names(ini);
   bool builtin = false;
   std::optional<Domain> domain;
   if (!o.plant.empty() || o.plant_given) {
@@ -211,23 +210,15 @@ Resolved resolve(const Options& o) {
     }
   }
   r.raw.domain = domain.value_or(Domain::s);
+  return builtin;
+}
 
-  // Delay: the flag adds to the text's exp(); the INI's delay_s applies to INI plants.
-  if (auto d = flag(o.delay_s)) {
-    if (!(*d >= 0.0) || !std::isfinite(*d)) fail("--delay: must be >= 0, got {}", *d);
-    r.raw.delay_s += *d;
-  } else if (o.plant.empty() && o.num.empty() && !builtin) {
-    if (auto ini_delay = ini.number("plant", "delay_s")) {
-      if (!(*ini_delay >= 0.0) || !std::isfinite(*ini_delay)) ini.reject("plant", "delay_s", "must be >= 0");
-      r.raw.delay_s += *ini_delay;
-    }
-  }
-
-  r.chain = o.loop || ini.has_section("loop") || builtin;
-  // The plant's units: stated (--plant-units, [plant] maps), or implied by the chain (whose input is
-  // rad/s per V). Physical units get the chain, converted to rad/s per V; loop units are designed on
-  // as they are.
-  const bool hand_plant = !o.plant.empty() || o.plant_given || !o.num.empty() || !o.den.empty();
+/// The plant's units: stated (--plant-units, [plant] maps), or implied by the chain (whose input is
+/// rad/s per V). Physical units get the chain, converted to rad/s per V; loop units are designed on
+/// as they are.
+/// A plant mapping the loop already refuses a second chain.
+std::optional<PlantUnits> stated_units(const Options& o, const Resolved& r, bool builtin, bool hand_plant) {
+  const Ini& ini = r.ini;
   const bool ini_plant =
       !builtin && !hand_plant && !o.rig && ini.get("plant", "model") != std::optional<std::string>("rig");
   std::optional<PlantUnits> units;
@@ -274,6 +265,30 @@ Resolved resolve(const Options& o) {
     if (units_where == "--plant-units") fail("--plant-units: {}", why);
     ini.reject("plant", "maps", why);
   }
+  return units;
+}
+
+Resolved resolve(const Options& o) {
+  Resolved r;
+  r.ini = Ini::load_all(o.configs);
+  const Ini& ini = r.ini;
+  check_plant_names(ini);
+  const bool builtin = read_plant(o, r);
+
+  // Delay: the flag adds to the text's exp(); the INI's delay_s applies to INI plants.
+  if (auto d = flag(o.delay_s)) {
+    if (!(*d >= 0.0) || !std::isfinite(*d)) fail("--delay: must be >= 0, got {}", *d);
+    r.raw.delay_s += *d;
+  } else if (o.plant.empty() && o.num.empty() && !builtin) {
+    if (auto ini_delay = ini.number("plant", "delay_s")) {
+      if (!(*ini_delay >= 0.0) || !std::isfinite(*ini_delay)) ini.reject("plant", "delay_s", "must be >= 0");
+      r.raw.delay_s += *ini_delay;
+    }
+  }
+
+  r.chain = o.loop || ini.has_section("loop") || builtin;
+  const bool hand_plant = !o.plant.empty() || o.plant_given || !o.num.empty() || !o.den.empty();
+  const std::optional<PlantUnits> units = stated_units(o, r, builtin, hand_plant);
   if (units && !units->loop) r.chain = true;
   r.units = units.value_or(r.chain ? PlantUnits{} : PlantUnits{true});
   const std::optional<double> dt_flag = flag(o.dt_s);
