@@ -1,5 +1,5 @@
-// mcg-design subcommands: resolve the plant, the chain and the controller; design or analyse;
-// write INI or CSV.
+// The services of mcg-design's commands: the plant, the chain and the controller resolved from
+// the options and INI files; a design and the margins written as INI.
 #include "design/run.hpp"
 #include "common/edit_distance.hpp"
 
@@ -30,6 +30,7 @@ using config::format_number;
 using config::Ini;
 using linsys::Domain;
 using linsys::Poly;
+using Chain = boardunits::LoopChain;
 
 namespace {
 
@@ -37,36 +38,9 @@ constexpr double k_pi = std::numbers::pi;
 /// The report's identified plant, ω_internal/V_in in rad/s per V (Figure 16-1).
 constexpr const char* k_report_plant = "16.557/((s/65+1)*(s/950+1))";
 
-using Chain = boardunits::LoopChain;
-
-struct Resolved {
-  Ini ini;
-  Tf raw;              ///< the plant as given
-  std::string raw_where;
-  bool chain = false;
-  boardunits::PlantUnits units;  ///< what raw maps; physical units get the chain (converted to rad/s per V)
-  Chain chain_values;
-  bool hold = false;   ///< the continuous plant is sampled through a ZOH (the PWM)
-  double dt_s = 0.0;   ///< controller sample period, 0 = continuous
-  Setup setup;
-};
 
 std::optional<double> flag(double v) { return std::isnan(v) ? std::nullopt : std::optional<double>(v); }
 
-std::vector<double> parse_list(const std::string& text, const std::string& where) {
-  std::vector<double> out;
-  std::string token;
-  std::string normalised = text;
-  std::replace(normalised.begin(), normalised.end(), ',', ' ');
-  std::istringstream words(normalised);
-  while (words >> token) {
-    double v = 0.0;
-    if (!table::parse_number(token, v) || !std::isfinite(v)) fail("{}: invalid number {}", where, quote(token));
-    out.push_back(v);
-  }
-  if (out.empty()) fail("{}: empty coefficient list", where);
-  return out;
-}
 
 Tf tf_from_lists(const std::vector<double>& num, const std::vector<double>& den, const std::string& where) {
   Tf g;
@@ -97,13 +71,6 @@ double positive(const Ini& ini, const char* section, const char* key, std::optio
 }
 
 using boardunits::PlantUnits;
-
-bool is_design_command(const std::string& command) {
-  for (const char* c : {"p", "pi", "pid", "lead", "lag", "rlocus-design", "tune"}) {
-    if (command == c) return true;
-  }
-  return false;
-}
 
 constexpr const char* k_units_choices = "rpm/V, rad/s/V, rpm/duty, rad/s/duty or loop";
 
@@ -140,7 +107,7 @@ void check_plant_names(const Ini& ini) {
 
 /// The plant as given (--plant, --num/--den, the linearised rig, [plant] tf or num/den, or the
 /// report's) and its domain, into r.raw and r.raw_where. Returns true for the built-in plant.
-bool read_plant(const Options& o, Resolved& r) {
+bool read_plant(const PlantOptions& o, ResolvedPlant& r) {
   const Ini& ini = r.ini;
   bool builtin = false;
   std::optional<Domain> domain;
@@ -217,7 +184,7 @@ bool read_plant(const Options& o, Resolved& r) {
 /// rad/s per V). Physical units get the chain, converted to rad/s per V; loop units are designed on
 /// as they are.
 /// A plant mapping the loop already refuses a second chain.
-std::optional<PlantUnits> stated_units(const Options& o, const Resolved& r, bool builtin, bool hand_plant) {
+std::optional<PlantUnits> stated_units(const PlantOptions& o, const ResolvedPlant& r, bool builtin, bool hand_plant) {
   const Ini& ini = r.ini;
   const bool ini_plant =
       !builtin && !hand_plant && !o.rig && ini.get("plant", "model") != std::optional<std::string>("rig");
@@ -268,8 +235,25 @@ std::optional<PlantUnits> stated_units(const Options& o, const Resolved& r, bool
   return units;
 }
 
-Resolved resolve(const Options& o) {
-  Resolved r;
+}  // namespace
+
+std::vector<double> parse_list(const std::string& text, const std::string& where) {
+  std::vector<double> out;
+  std::string token;
+  std::string normalised = text;
+  std::replace(normalised.begin(), normalised.end(), ',', ' ');
+  std::istringstream words(normalised);
+  while (words >> token) {
+    double v = 0.0;
+    if (!table::parse_number(token, v) || !std::isfinite(v)) fail("{}: invalid number {}", where, quote(token));
+    out.push_back(v);
+  }
+  if (out.empty()) fail("{}: empty coefficient list", where);
+  return out;
+}
+
+ResolvedPlant resolve(const PlantOptions& o, bool designs) {
+  ResolvedPlant r;
   r.ini = Ini::load_all(o.configs);
   const Ini& ini = r.ini;
   check_plant_names(ini);
@@ -302,7 +286,7 @@ Resolved resolve(const Options& o) {
     }
   }
   if (!dt && r.chain) dt = Chain{}.dt_s;
-  if (hand_plant && !units && !r.chain && dt && is_design_command(o.command)) {
+  if (hand_plant && !units && !r.chain && dt && designs) {
     fail(
         "{}: the plant's units are not stated, and a sampled controller for the board depends on them: give "
         "--plant-units ({}) or --loop (rad/s per V)",
@@ -345,6 +329,8 @@ Resolved resolve(const Options& o) {
   }
   return r;
 }
+
+namespace {
 
 /// y[n] = −a1 y[n−1] − ... + b0 e[n] + b1 e[n−1] + ..., a normalised to a0 = 1.
 void difference_coefficients(const Tf& cz, std::vector<double>& b, std::vector<double>& a) {
@@ -404,8 +390,26 @@ std::string poles_text(const std::vector<Complex>& poles, bool imag) {
   return linsys::list_text(v);
 }
 
-/// One Tf for the loop's product; a mixed loop (z controller, s plant) samples the plant
-/// through a ZOH, which `note` records.
+void echo_plant(Ini& ini, const ResolvedPlant& r) {
+  ini.set("plant", "tf", linsys::tf_text(r.raw), r.raw_where);
+  ini.set("plant", "domain", linsys::var_name(r.raw.domain));
+  ini.set("plant", "maps", boardunits::units_text(r.units),
+          r.chain ? boardunits::units_words(r.units) + "; [loop] is the chain around it"
+                  : boardunits::units_words(r.units));
+  if (r.raw.discrete()) ini.set("plant", "dt_s", r.raw.dt_s);
+  ini.set("plant", "hold", r.hold ? "zoh" : "none", r.hold ? "the PWM holds the duty over each period" : "");
+  if (r.chain) {
+    const Chain& c = r.chain_values;
+    ini.set("loop", "pwm_full_counts", c.pwm_full_counts, "duty counts at 100 %");
+    ini.set("loop", "pwm_logic_v", c.pwm_logic_v, "V at 100 % duty");
+    ini.set("loop", "hbridge_gain", c.hbridge_gain, "V/V");
+    ini.set("loop", "counts_per_rev", c.counts_per_rev);
+    ini.set("loop", "dt_s", c.dt_s, "s, counts summed over one period");
+  }
+}
+
+}  // namespace
+
 Tf single_loop(const std::vector<Tf>& factors, std::string* note) {
   Tf acc = factors.front();
   for (std::size_t i = 1; i < factors.size(); ++i) {
@@ -470,48 +474,8 @@ void write_margins(Ini& ini, const std::string& section, const std::vector<Tf>& 
   ini.set(section, "k_stable_high", linsys::list_text(hi));
 }
 
-void echo_plant(Ini& ini, const Resolved& r) {
-  ini.set("plant", "tf", linsys::tf_text(r.raw), r.raw_where);
-  ini.set("plant", "domain", linsys::var_name(r.raw.domain));
-  ini.set("plant", "maps", boardunits::units_text(r.units),
-          r.chain ? boardunits::units_words(r.units) + "; [loop] is the chain around it"
-                  : boardunits::units_words(r.units));
-  if (r.raw.discrete()) ini.set("plant", "dt_s", r.raw.dt_s);
-  ini.set("plant", "hold", r.hold ? "zoh" : "none", r.hold ? "the PWM holds the duty over each period" : "");
-  if (r.chain) {
-    const Chain& c = r.chain_values;
-    ini.set("loop", "pwm_full_counts", c.pwm_full_counts, "duty counts at 100 %");
-    ini.set("loop", "pwm_logic_v", c.pwm_logic_v, "V at 100 % duty");
-    ini.set("loop", "hbridge_gain", c.hbridge_gain, "V/V");
-    ini.set("loop", "counts_per_rev", c.counts_per_rev);
-    ini.set("loop", "dt_s", c.dt_s, "s, counts summed over one period");
-  }
-}
-
-Design run_design(const Options& o, const Setup& su) {
-  auto need = [](double v, const char* name) {
-    if (std::isnan(v)) fail("{}: required", name);
-    return v;
-  };
-  if (o.command == "p") return design_p(su, need(o.pm_deg, "--pm"));
-  if (o.command == "pi") {
-    const double pm = need(o.pm_deg, "--pm");
-    if (!std::isnan(o.zero_rad_s) && !std::isnan(o.wc_rad_s)) fail("--zero: give --zero or --wc, not both");
-    if (!std::isnan(o.zero_rad_s)) return design_pi_zero(su, pm, o.zero_rad_s);
-    if (!std::isnan(o.wc_rad_s)) return design_pi_crossover(su, pm, o.wc_rad_s);
-    fail("--zero or --wc: required");
-  }
-  if (o.command == "pid" && o.pid_form == "board") {
-    return design_pid_board(su, need(o.pm_deg, "--pm"), need(o.wc_rad_s, "--wc"), o.ti_over_td);
-  }
-  if (o.command == "pid") return design_pid(su, need(o.pm_deg, "--pm"), need(o.wc_rad_s, "--wc"), o.ti_over_td, o.n);
-  if (o.command == "lead") return design_lead(su, need(o.pm_deg, "--pm"), need(o.wc_rad_s, "--wc"));
-  if (o.command == "lag") return design_lag(su, need(o.pm_deg, "--pm"), need(o.k_dc, "--k-dc"), o.ratio);
-  return tune(su, o.structure, o.limits);
-}
-
-void write_design(const Options& o, const Resolved& r, const Design& d, std::ostream& out,
-                  const std::optional<RlocusResult>& rl) {
+void write_design(const ResolvedPlant& r, const Design& d, std::ostream& out, const std::optional<RlocusResult>& rl,
+                  const TuneLimits* limits) {
   Ini ini;
   const Setup& su = r.setup;
   ini.set("design", "kind", d.kind);
@@ -527,10 +491,10 @@ void write_design(const Options& o, const Resolved& r, const Design& d, std::ost
     ini.set("design", "poles_re", poles_text(rl->poles, false));
     ini.set("design", "poles_im", poles_text(rl->poles, true));
   }
-  if (o.command == "tune") {
-    ini.set("design", "pm_min_deg", o.limits.pm_min_deg);
-    ini.set("design", "gm_min_db", o.limits.gm_min_db);
-    ini.set("design", "ms_max", o.limits.ms_max);
+  if (limits != nullptr) {
+    ini.set("design", "pm_min_deg", limits->pm_min_deg);
+    ini.set("design", "gm_min_db", limits->gm_min_db);
+    ini.set("design", "ms_max", limits->ms_max);
   }
   std::optional<Tf> cz;
   if (su.dt_s > 0.0) {
@@ -575,10 +539,9 @@ void write_design(const Options& o, const Resolved& r, const Design& d, std::ost
   ini.write(out);
 }
 
-/// The controller for analysis commands, as it runs: --controller text or [controller] b/a.
-std::optional<Tf> analysis_controller(const Options& o, const Resolved& r) {
-  if (!o.controller.empty()) {
-    linsys::ParsedTf p = linsys::parse_tf(o.controller, "--controller");
+std::optional<Tf> analysis_controller(const std::string& controller, const ResolvedPlant& r) {
+  if (!controller.empty()) {
+    linsys::ParsedTf p = linsys::parse_tf(controller, "--controller");
     Tf c = p.tf;
     c.domain = p.domain.value_or(Domain::s);
     if (!c.proper()) {
@@ -598,277 +561,10 @@ std::optional<Tf> analysis_controller(const Options& o, const Resolved& r) {
   return std::nullopt;
 }
 
-std::vector<Tf> analysis_factors(const Options& o, const Resolved& r) {
-  const std::optional<Tf> c = analysis_controller(o, r);
+std::vector<Tf> analysis_factors(const std::string& controller, const ResolvedPlant& r) {
+  const std::optional<Tf> c = analysis_controller(controller, r);
   if (!c) return {r.setup.plant};
   return {*c, r.setup.plant};
-}
-
-void plot_range(const Options& o, const std::vector<Tf>& factors, double& lo, double& hi) {
-  lo = INFINITY;
-  hi = 0.0;
-  double dt = 0.0;
-  for (const Tf& f : factors) {
-    const linsys::FreqEval fe(f);
-    for (double c : fe.corner_frequencies()) {
-      lo = std::min(lo, c / 100.0);
-      hi = std::max(hi, c * 100.0);
-    }
-    if (f.discrete()) dt = dt == 0.0 ? f.dt_s : std::min(dt, f.dt_s);
-  }
-  if (!std::isfinite(lo)) {
-    lo = 0.01;
-    hi = 1e4;
-  }
-  if (dt > 0.0) hi = std::min(hi, k_pi / dt);
-  if (lo >= hi) lo = hi / 1e4;
-  if (!std::isnan(o.f_min_hz)) lo = 2.0 * k_pi * o.f_min_hz;
-  if (!std::isnan(o.f_max_hz)) hi = 2.0 * k_pi * o.f_max_hz;
-  if (!(lo > 0.0) || !(hi > lo)) fail("--f-min/--f-max: need 0 < f-min < f-max");
-}
-
-void write_frequency(const Options& o, const std::vector<Tf>& factors, std::ostream& out, bool nyquist) {
-  double lo = 0.0;
-  double hi = 0.0;
-  plot_range(o, factors, lo, hi);
-  const int points = o.points > 0 ? o.points : 500;
-  const linsys::LoopEval le(factors);
-  table::Writer w(out);
-  w.meta("source", std::string("mcg-design ") + k_version);
-  std::string loop;
-  for (const Tf& f : factors) loop += (loop.empty() ? "" : " * ") + linsys::tf_text(f);
-  w.meta("loop", loop);
-  if (nyquist) {
-    w.header({"f_hz", "re", "im"});
-  } else {
-    w.header({"f_hz", "mag_db", "phase_deg"});
-  }
-  for (double x : linsys::log_grid(lo, hi, std::max(points, 2))) {
-    if (nyquist) {
-      const Complex v = le.value(x);
-      w.row({x / (2.0 * k_pi), v.real(), v.imag()});
-    } else {
-      w.row({x / (2.0 * k_pi), le.log_mag(x) * 20.0 / std::log(10.0), le.phase_rad(x) * 180.0 / k_pi});
-    }
-  }
-  w.finish();
-}
-
-void write_rlocus(const Options& o, const std::vector<Tf>& factors, std::ostream& out) {
-  std::string note;
-  Tf loop = single_loop(factors, &note);
-  if (loop.discrete()) loop = linsys::fold_delay(loop, "loop");
-  if (!loop.discrete() && loop.delay_s > 0.0) {
-    loop.delay_s = 0.0;
-    loop = linsys::series(loop, linsys::pade(single_loop(factors, nullptr).delay_s, 6));
-    note = "delay as its [6/6] Pade approximant";
-  }
-  const auto ranges = linsys::stable_gain_ranges(loop);
-  const auto bounds = linsys::boundary_gains(loop);
-  double k_max = o.k_max;
-  if (std::isnan(k_max)) k_max = bounds.empty() ? 100.0 : 3.0 * bounds.back();
-  if (!(k_max > 0.0)) fail("--k-max: must be positive");
-  const int points = o.points > 0 ? o.points : 400;
-  std::vector<double> ks{0.0};
-  for (double k : linsys::log_grid(k_max * 1e-4, k_max, std::max(points, 2))) ks.push_back(k);
-  for (double k : bounds) {
-    if (k <= k_max) ks.push_back(k);
-  }
-  std::sort(ks.begin(), ks.end());
-  table::Writer w(out);
-  w.meta("source", std::string("mcg-design ") + k_version);
-  w.meta("loop", linsys::tf_text(loop));
-  if (!note.empty()) w.meta("note", note);
-  for (const auto& g : ranges) w.meta("k_stable", fmt::format("{} .. {}", format_number(g.k_low), format_number(g.k_high)));
-  w.meta("boundary", loop.discrete() ? "unit circle" : "imaginary axis");
-  // n − m branches leave for infinity along rays from the centroid (Σp − Σz)/(n − m) at
-  // (2q + 1)·180/(n − m) degrees.
-  const std::vector<Complex> poles = linsys::roots(linsys::trim(loop.den));
-  const std::vector<Complex> zeros = linsys::roots(linsys::trim(loop.num));
-  if (poles.size() > zeros.size()) {
-    const double excess = static_cast<double>(poles.size() - zeros.size());
-    double centre = 0.0;
-    for (const Complex& p : poles) centre += p.real();
-    for (const Complex& z : zeros) centre -= z.real();
-    std::string angles;
-    for (std::size_t q = 0; q < poles.size() - zeros.size(); ++q) {
-      angles += (angles.empty() ? "" : " ") + format_number((2.0 * static_cast<double>(q) + 1.0) * 180.0 / excess);
-    }
-    w.meta("asymptote_centre", format_number(centre / excess));
-    w.meta("asymptote_angles_deg", angles);
-  }
-  w.header({"k", "branch", "re", "im"});
-  std::vector<Complex> prev;
-  for (double k : ks) {
-    std::vector<Complex> p = linsys::roots(linsys::add(loop.den, linsys::scale(loop.num, k)));
-    if (!prev.empty() && p.size() == prev.size()) {
-      // Keep branches continuous: each previous pole takes its nearest new one.
-      std::vector<Complex> ordered(prev.size());
-      std::vector<bool> used(p.size(), false);
-      for (std::size_t i = 0; i < prev.size(); ++i) {
-        std::size_t best = 0;
-        double best_d = INFINITY;
-        for (std::size_t j = 0; j < p.size(); ++j) {
-          if (!used[j] && std::abs(p[j] - prev[i]) < best_d) {
-            best_d = std::abs(p[j] - prev[i]);
-            best = j;
-          }
-        }
-        used[best] = true;
-        ordered[i] = p[best];
-      }
-      p = ordered;
-    }
-    for (std::size_t i = 0; i < p.size(); ++i) w.row({k, static_cast<double>(i + 1), p[i].real(), p[i].imag()});
-    prev = p;
-  }
-  w.finish();
-}
-
-linsys::StepLimits step_limits(const Options& o) {
-  linsys::StepLimits lim;
-  if (!o.rise_pct.empty()) {
-    const std::vector<double> v = parse_list(o.rise_pct, "--rise");
-    if (v.size() != 2 || !(v[0] >= 0.0 && v[0] < v[1] && v[1] <= 100.0)) {
-      fail("--rise: expected LOW,HIGH with 0 <= LOW < HIGH <= 100 (percent), got {}", quote(o.rise_pct));
-    }
-    lim.rise_low = v[0] / 100.0;
-    lim.rise_high = v[1] / 100.0;
-  }
-  if (!std::isnan(o.settling_pct)) lim.settling = o.settling_pct / 100.0;
-  return lim;
-}
-
-void write_step(const Options& o, const Resolved& r, std::ostream& out) {
-  const std::optional<Tf> c = analysis_controller(o, r);
-  Tf plant = r.setup.plant;
-  std::string note;
-  if (c && c->discrete() && !plant.discrete()) {
-    plant = linsys::c2d(plant, c->dt_s, linsys::C2dMethod::zoh, 0.0, r.raw_where);
-    note = "plant sampled through a zero-order hold";
-  }
-  const double t_end = std::isnan(o.t_end_s) ? 0.0 : o.t_end_s;
-  if (!std::isnan(o.t_end_s) && !(o.t_end_s > 0.0)) fail("--t-end: must be positive");
-  const linsys::StepLimits lim = step_limits(o);
-  const linsys::StepResponse s =
-      linsys::step_response(plant, c, t_end, o.points > 0 ? o.points : 2000, o.open_loop);
-  const linsys::StepMetrics m = linsys::step_info(s, 1.0, lim);
-  std::vector<std::pair<std::string, double>> metrics{
-      {"final_value", m.final_value},   {"rise_time_s", m.rise_time_s},       {"transient_time_s", m.transient_time_s},
-      {"settling_time_s", m.settling_time_s}, {"settling_min", m.settling_min}, {"settling_max", m.settling_max},
-      {"overshoot_pct", m.overshoot_pct}, {"undershoot_pct", m.undershoot_pct}, {"peak", m.peak},
-      {"peak_time_s", m.peak_time_s}};
-  if (!o.open_loop) metrics.emplace_back("steady_state_error", m.steady_state_error);
-  const std::string loop_kind = o.open_loop ? "open" : "closed";
-  const std::string levels = fmt::format("rise {}-{} %, settling {} %", format_number(100.0 * lim.rise_low),
-                                         format_number(100.0 * lim.rise_high), format_number(100.0 * lim.settling));
-  const char* timing = s.sampled ? "at the sample instants" : "interpolated between samples";
-  if (o.metrics) {
-    Ini ini;
-    ini.set("step", "loop", loop_kind);
-    for (const auto& [k, v] : metrics) ini.set("step", k, v);
-    ini.set("step", "levels", levels);
-    ini.set("step", "times", timing);
-    if (!note.empty()) ini.set("step", "note", note);
-    if (!s.note.empty()) ini.set("step", "simulation", s.note);
-    ini.write(out);
-    return;
-  }
-  table::Writer w(out);
-  w.meta("source", std::string("mcg-design ") + k_version);
-  w.meta("loop", linsys::tf_text(c ? linsys::series(*c, plant) : plant));
-  w.meta("step", loop_kind);
-  if (!note.empty()) w.meta("note", note);
-  if (!s.note.empty()) w.meta("simulation", s.note);
-  for (const auto& [k, v] : metrics) w.meta(k, format_number(v));
-  w.meta("levels", levels);
-  w.meta("times", timing);
-  if (o.open_loop) {
-    w.header({"t", "r", "y", "u"});
-    for (std::size_t k = 0; k < s.t_s.size(); ++k) w.row({s.t_s[k], 1.0, s.y[k], s.u[k]});
-  } else {
-    w.header({"t", "r", "y", "e", "u"});
-    for (std::size_t k = 0; k < s.t_s.size(); ++k) w.row({s.t_s[k], 1.0, s.y[k], 1.0 - s.y[k], s.u[k]});
-  }
-  w.finish();
-}
-
-void write_c2d(const Options& o, const Resolved& r, std::ostream& out) {
-  if (r.raw.discrete()) fail("{}: the plant is already discrete", r.raw_where);
-  if (!(r.dt_s > 0.0)) fail("--dt: required");
-  const linsys::C2dMethod method =
-      o.method.empty() ? linsys::C2dMethod::zoh : linsys::parse_method(o.method, "--method");
-  const double prewarp = std::isnan(o.prewarp_rad_s) ? 0.0 : o.prewarp_rad_s;
-  Tf g = r.raw;
-  if (r.chain)
-    g = linsys::scaled(g, r.chain_values.gain() * boardunits::omega_per_v_factor(r.units, r.chain_values));
-  const Tf h = linsys::c2d(g, r.dt_s, method, prewarp, r.raw_where);
-  Ini ini;
-  ini.set("plant", "tf", linsys::tf_text(h), fmt::format("{} of {}", linsys::method_name(method), linsys::tf_text(g)));
-  ini.set("plant", "domain", "z");
-  ini.set("plant", "dt_s", r.dt_s);
-  ini.set("plant", "num", linsys::list_text(linsys::trim(h.num)));
-  ini.set("plant", "den", linsys::list_text(linsys::trim(h.den)));
-  ini.set("plant", "method", linsys::method_name(method));
-  if (prewarp > 0.0) ini.set("plant", "prewarp_rad_s", prewarp);
-  ini.write(out);
-}
-
-void write_loop(const Resolved& r, std::ostream& out) {
-  const Chain& c = r.chain_values;
-  Ini ini;
-  ini.set("loop", "pwm_full_counts", c.pwm_full_counts, "duty counts at 100 %");
-  ini.set("loop", "pwm_logic_v", c.pwm_logic_v, "V at 100 % duty");
-  ini.set("loop", "pwm_v_per_count", c.pwm_v_per_count(), "PWM gain, V per duty count (report: .00542)");
-  ini.set("loop", "hbridge_gain", c.hbridge_gain, "V/V (report: 4 = 20 V / 5 V)");
-  ini.set("loop", "counts_per_rev", c.counts_per_rev);
-  ini.set("loop", "encoder_counts_per_rad", c.counts_per_rad(), "report: 81.5");
-  ini.set("loop", "dt_s", c.dt_s, "software conversion: counts summed over one period");
-  ini.set("loop", "chain_gain", c.gain(), "counts per sample per (rad/s) per duty count, without the plant");
-  const double g0 = r.raw.dc_gain();
-  ini.set("loop", "plant_dc_gain", g0, "rad/s per V");
-  ini.set("loop", "forward_gain", c.pwm_v_per_count() * c.hbridge_gain * g0, "rad/s per duty count (report: 0.3589)");
-  ini.set("loop", "feedback_gain", c.counts_per_rad() * c.dt_s, "counts per sample per rad/s (report: 81.5*.001)");
-  ini.set("loop", "loop_dc_gain", c.gain() * g0, "report's third-order fit: 0.0146");
-  Tf cont = linsys::scaled(r.raw, c.gain());
-  ini.set("loop", "tf_s", linsys::tf_text(cont), "chain x plant, without the hold");
-  const Tf& z = r.setup.plant;
-  ini.set("loop", "tf_z", linsys::tf_text(z), "with the PWM as a zero-order hold");
-  ini.set("loop", "num_z", linsys::list_text(linsys::trim(z.num)));
-  ini.set("loop", "den_z", linsys::list_text(linsys::trim(z.den)));
-  write_margins(ini, "margins", {z}, r.dt_s);
-  ini.write(out);
-}
-
-}  // namespace
-
-void run(const Options& o, std::ostream& out) {
-  Options opts = o;
-  if (opts.command == "loop") opts.loop = true;
-  const Resolved r = resolve(opts);
-  const std::string& cmd = opts.command;
-  if (cmd == "margins") {
-    Ini ini;
-    const std::vector<Tf> f = analysis_factors(opts, r);
-    for (const Tf& x : f) {
-      if (!x.proper()) fail("margins need a proper loop");
-    }
-    write_margins(ini, "margins", f, r.dt_s);
-    ini.write(out);
-    return;
-  }
-  if (cmd == "bode" || cmd == "nyquist") return write_frequency(opts, analysis_factors(opts, r), out, cmd == "nyquist");
-  if (cmd == "rlocus") return write_rlocus(opts, analysis_factors(opts, r), out);
-  if (cmd == "step") return write_step(opts, r, out);
-  if (cmd == "c2d") return write_c2d(opts, r, out);
-  if (cmd == "loop") return write_loop(r, out);
-  if (cmd == "rlocus-design") {
-    if (std::isnan(opts.zeta)) fail("--zeta: required");
-    const RlocusResult rl = design_rlocus(r.setup, opts.zeta);
-    return write_design(opts, r, rl.design, out, rl);
-  }
-  const Design d = run_design(opts, r.setup);
-  write_design(opts, r, d, out, std::nullopt);
 }
 
 }  // namespace mcg::design
