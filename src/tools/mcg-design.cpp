@@ -27,6 +27,6 @@ int main(int argc, char** argv) {
   mcg::cmd::C2d c2d;
   mcg::cmd::Loop loop;
   return mcg::cmd::main_of(app, argc, argv, diag,
-                           {&p, &pi, &pid, &lead, &lag, &rlocus_design, &tune, &margins, &bode, &nyquist, &rlocus,
-                            &step, &c2d, &loop});
+                           {&p, &pi, &pid, &lead, &lag, &rlocus_design, &tune, &margins, &bode, &nyquist,
+                            &rlocus, &step, &c2d, &loop});
 }

@@ -11,16 +11,19 @@ namespace mcg::cmd {
 void Sim::define(CLI::App& app) {
   m_app = &app;
   sim::RunOptions& opt = options;
-  app.add_option("--config", opt.configs, "INI parameter set: model, [effect.NAME], [controller] (repeatable)")
+  app.add_option("--config", opt.configs,
+                 "INI parameter set: model, [effect.NAME], [controller] (repeatable)")
       ->check(CLI::ExistingFile);
   app.add_option("--effect", opt.effects, "add an effect of the catalog: NAME[:key=value,...] (repeatable)");
   app.add_option("--clutch", opt.clutch, "clutch state when the input has no 'clutch' column")
       ->check(CLI::IsMember({0, 1, 2}))
       ->capture_default_str();
-  app.add_option("--r-load", opt.r_load_ohm, "generator load, ohm, when the input has no 'r_load' column (inf = open)")
+  app.add_option("--r-load", opt.r_load_ohm,
+                 "generator load, ohm, when the input has no 'r_load' column (inf = open)")
       ->check(CLI::Range(0.0, std::numeric_limits<double>::infinity()))
       ->capture_default_str();
-  app.add_flag("--encoder", opt.encoder, "rpm as the board measures it (encoder counts over --window); true speed in rpm_true");
+  app.add_flag("--encoder", opt.encoder,
+               "rpm as the board measures it (encoder counts over --window); true speed in rpm_true");
   app.add_option("--window", opt.window_s, "encoder count window, s")
       ->check(CLI::Range(1e-5, 10.0))
       ->capture_default_str();
@@ -37,14 +40,16 @@ void Sim::define(CLI::App& app) {
       ->check(CLI::Range(0.0, 10.0));
   app.add_option("--noise-v-gen", opt.noise_v_gen_V, "Gaussian noise on v_gen, standard deviation in V")
       ->check(CLI::Range(0.0, 100.0));
-  app.add_flag("--adc", opt.adc, "i through the board's 10-bit ADC (1 ohm shunt, 2.5 V offset: -2.5..2.495 A)");
+  app.add_flag("--adc", opt.adc,
+               "i through the board's 10-bit ADC (1 ohm shunt, 2.5 V offset: -2.5..2.495 A)");
   app.add_option("--seed", opt.seed, "seed of the measurement noise")->capture_default_str();
   app.add_option("--max-step", opt.max_step_s, "largest integration step, s")
       ->check(CLI::Range(1e-7, 1e-3))
       ->capture_default_str();
-  app.add_flag("--compare", opt.compare,
-               "the input is a measured run: keep its rpm and i as rpm_measured, i_measured, add the residuals "
-               "and their running RMS per regime; the RMS per regime on stderr at the end");
+  app.add_flag(
+      "--compare", opt.compare,
+      "the input is a measured run: keep its rpm and i as rpm_measured, i_measured, add the residuals "
+      "and their running RMS per regime; the RMS per regime on stderr at the end");
   app.add_flag("--list-effects", list_effects,
                "instead: print the effect catalog (effect, parameter, unit, default, range, meaning)");
   app.add_option("--board", board.link_path,

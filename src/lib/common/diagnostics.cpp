@@ -11,7 +11,9 @@ void Diagnostics::warning(std::string_view message) {
   *m_out << fmt::format("{}: warning: {}\n", m_prefix, message);
 }
 
-void Diagnostics::note(std::string_view message) { *m_out << fmt::format("{}: note: {}\n", m_prefix, message); }
+void Diagnostics::note(std::string_view message) {
+  *m_out << fmt::format("{}: note: {}\n", m_prefix, message);
+}
 
 void Diagnostics::error(std::string_view message, int status) {
   *m_out << fmt::format("{}: error: {}\n", m_prefix, message);

@@ -38,9 +38,7 @@ constexpr double k_pi = std::numbers::pi;
 /// The report's identified plant, ω_internal/V_in in rad/s per V (Figure 16-1).
 constexpr const char* k_report_plant = "16.557/((s/65+1)*(s/950+1))";
 
-
 std::optional<double> flag(double v) { return std::isnan(v) ? std::nullopt : std::optional<double>(v); }
-
 
 Tf tf_from_lists(const std::vector<double>& num, const std::vector<double>& den, const std::string& where) {
   Tf g;
@@ -184,7 +182,8 @@ bool read_plant(const PlantOptions& o, ResolvedPlant& r) {
 /// rad/s per V). Physical units get the chain, converted to rad/s per V; loop units are designed on
 /// as they are.
 /// A plant mapping the loop already refuses a second chain.
-std::optional<PlantUnits> stated_units(const PlantOptions& o, const ResolvedPlant& r, bool builtin, bool hand_plant) {
+std::optional<PlantUnits> stated_units(const PlantOptions& o, const ResolvedPlant& r, bool builtin,
+                                       bool hand_plant) {
   const Ini& ini = r.ini;
   const bool ini_plant =
       !builtin && !hand_plant && !o.rig && ini.get("plant", "model") != std::optional<std::string>("rig");
@@ -245,7 +244,8 @@ std::vector<double> parse_list(const std::string& text, const std::string& where
   std::istringstream words(normalised);
   while (words >> token) {
     double v = 0.0;
-    if (!table::parse_number(token, v) || !std::isfinite(v)) fail("{}: invalid number {}", where, quote(token));
+    if (!table::parse_number(token, v) || !std::isfinite(v))
+      fail("{}: invalid number {}", where, quote(token));
     out.push_back(v);
   }
   if (out.empty()) fail("{}: empty coefficient list", where);
@@ -474,8 +474,8 @@ void write_margins(Ini& ini, const std::string& section, const std::vector<Tf>& 
   ini.set(section, "k_stable_high", linsys::list_text(hi));
 }
 
-void write_design(const ResolvedPlant& r, const Design& d, std::ostream& out, const std::optional<RlocusResult>& rl,
-                  const TuneLimits* limits) {
+void write_design(const ResolvedPlant& r, const Design& d, std::ostream& out,
+                  const std::optional<RlocusResult>& rl, const TuneLimits* limits) {
   Ini ini;
   const Setup& su = r.setup;
   ini.set("design", "kind", d.kind);

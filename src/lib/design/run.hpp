@@ -3,16 +3,16 @@
 // writers of a design and of margins.
 #pragma once
 
-#include "boardunits/chain.hpp"
-#include "boardunits/plant_units.hpp"
-#include "config/ini.hpp"
-#include "design/design.hpp"
-
 #include <cmath>
 #include <iosfwd>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "boardunits/chain.hpp"
+#include "boardunits/plant_units.hpp"
+#include "config/ini.hpp"
+#include "design/design.hpp"
 
 namespace mcg::design {
 
@@ -50,13 +50,13 @@ struct PlantOptions {
 /// The plant as the commands design on and analyse it.
 struct ResolvedPlant {
   config::Ini ini;
-  Tf raw;              ///< the plant as given
+  Tf raw;  ///< the plant as given
   std::string raw_where;
   bool chain = false;
   boardunits::PlantUnits units;  ///< what raw maps; physical units get the chain (converted to rad/s per V)
   boardunits::LoopChain chain_values;
-  bool hold = false;   ///< the continuous plant is sampled through a ZOH (the PWM)
-  double dt_s = 0.0;   ///< controller sample period, 0 = continuous
+  bool hold = false;  ///< the continuous plant is sampled through a ZOH (the PWM)
+  double dt_s = 0.0;  ///< controller sample period, 0 = continuous
   Setup setup;
 };
 

@@ -1,16 +1,16 @@
 // mcg-sim: read inputs, simulate open or closed loop, add measurement effects, write the table.
 #include "sim/run.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iostream>
 #include <numbers>
+#include <optional>
 #include <ostream>
 #include <random>
-#include <iostream>
-#include <optional>
-
-#include <unistd.h>
 
 #include "boardunits/chain.hpp"
 #include "boardunits/controller.hpp"
@@ -23,10 +23,10 @@
 #include "link/capture_meta.hpp"
 #include "mcg/version.hpp"
 #include "mcg_protocol.h"  // MCG_FW_VERSION_*, MCG_MODE_OPEN
+#include "measurement/measurement.hpp"
 #include "model/load.hpp"
 #include "model/model.hpp"
 #include "sim/controller.hpp"
-#include "measurement/measurement.hpp"
 #include "sim/encoder.hpp"
 #include "table/table.hpp"
 
@@ -160,9 +160,9 @@ LoopSetup loop_setup(const config::Ini& ini, const RunOptions& opt) {
   l.on_board = opt.loop == "board";
   if (l.on_board) {
     try {
-      l.registers = l.configured ? boardunits::board_controller(ini)
-                                 : boardunits::board_fixed_point(l.controller.b, l.controller.a,
-                                                                 l.controller.units());
+      l.registers = l.configured
+                        ? boardunits::board_controller(ini)
+                        : boardunits::board_fixed_point(l.controller.b, l.controller.a, l.controller.units());
     } catch (const Error& e) {
       fail("{} (--loop equation runs any difference equation)", e.what());
     }
@@ -175,8 +175,8 @@ LoopSetup loop_setup(const config::Ini& ini, const RunOptions& opt) {
 /// (replaced where the simulation writes the same name), then the new ones.
 struct Columns {
   std::optional<link::CapturedBoard> captured;  ///< what a board's capture ran (board_config)
-  bool closed = false;         ///< rpm_cmd drives a closed loop
-  bool captured_loop = false;  ///< the capture's own registers run it
+  bool closed = false;                          ///< rpm_cmd drives a closed loop
+  bool captured_loop = false;                   ///< the capture's own registers run it
   std::size_t t = 0;
   std::optional<std::size_t> drive;
   bool drive_is_duty = false;
@@ -293,8 +293,10 @@ table::Metadata output_metadata(table::Metadata meta, const RunOptions& opt, con
   for (const auto& e : model.effects) effect_texts.push_back(model::format_effect(e));
   meta.set("effects", effect_texts.empty() ? std::string("none") : join(effect_texts, "; "));
   const std::string drive_name = c.closed ? "rpm_cmd" : (c.drive_is_duty ? "duty" : "v");
-  meta.set("timing", fmt::format("{}, clutch, r_load of row n act over [t(n), t(n+1)); rpm, i, v_gen sampled at t(n){}",
-                                 drive_name, c.closed ? "; duty, v: the controller's output at t(n), held to t(n+1)" : ""));
+  meta.set(
+      "timing",
+      fmt::format("{}, clutch, r_load of row n act over [t(n), t(n+1)); rpm, i, v_gen sampled at t(n){}",
+                  drive_name, c.closed ? "; duty, v: the controller's output at t(n), held to t(n+1)" : ""));
   meta.set("initial_state", fmt::format("at rest, t = {}", config::format_number(t_first)));
   if (!est.capture_estimator) meta.erase("rpm_estimator");
   if (!est.capture_estimator) meta.erase("encoder");
@@ -313,7 +315,8 @@ table::Metadata output_metadata(table::Metadata meta, const RunOptions& opt, con
                             : fmt::format("{} counts/rev", config::format_number(opt.counts_per_rev)));
   }
   if (noisy || opt.adc) {
-    measurement::CurrentChain chain = opt.adc ? measurement::board_current_chain() : measurement::CurrentChain{};
+    measurement::CurrentChain chain =
+        opt.adc ? measurement::board_current_chain() : measurement::CurrentChain{};
     chain.simulated = !opt.adc;
     if (opt.noise_i_A > 0.0) chain.sigma_A = opt.noise_i_A;
     meta.set("i_measurement", measurement::format_i_measurement(chain));
@@ -354,9 +357,10 @@ void check_row(const table::Reader& reader, const Columns& c, const RunOptions& 
          config::format_number(r_load));
   }
   if (c.closed && on_board && !board_takes_command(drive_value)) {
-    fail("{}:{}: column 'rpm_cmd': {} is not a command the board takes (0 = off, or a whole rpm in "
-         "120..720; --loop equation takes any)",
-         source, reader.line(), config::format_number(drive_value));
+    fail(
+        "{}:{}: column 'rpm_cmd': {} is not a command the board takes (0 = off, or a whole rpm in "
+        "120..720; --loop equation takes any)",
+        source, reader.line(), config::format_number(drive_value));
   }
 }
 
@@ -366,8 +370,15 @@ class Simulation {
  public:
   Simulation(const RunOptions& opt, const model::Model& model, const LoopSetup& l, const Columns& c,
              const Estimation& est, table::Writer& writer)
-      : m_opt(opt), m_model(model), m_loop_setup(l), m_c(c), m_encoder(est.encoder),
-        m_estimator(est.estimator), m_writer(writer), m_rng(opt.seed), m_row(c.names.size()) {
+      : m_opt(opt),
+        m_model(model),
+        m_loop_setup(l),
+        m_c(c),
+        m_encoder(est.encoder),
+        m_estimator(est.estimator),
+        m_writer(writer),
+        m_rng(opt.seed),
+        m_row(c.names.size()) {
     m_sim.max_step_s = opt.max_step_s;
   }
 
@@ -411,22 +422,54 @@ class Simulation {
     for (std::size_t k = 0; k < m_c.plan.size(); ++k) {
       double& x = m_row[k];
       switch (m_c.plan[k].what) {
-        case Out::Input: x = in_row[m_c.plan[k].input]; break;
-        case Out::Clutch: x = clutch; break;
-        case Out::RLoad: x = r_load; break;
-        case Out::Duty: x = duty; break;
-        case Out::V: x = duty * supply; break;
-        case Out::Omega: x = s.omega_rad_s; break;
-        case Out::Rpm: x = rpm; break;
-        case Out::RpmTrue: x = rpm_true; break;
-        case Out::I: x = i_meas; break;
-        case Out::IGen: x = s.i_gen_A; break;
-        case Out::VGen: x = v_gen; break;
-        case Out::Theta: x = s.theta_rad; break;
-        case Out::RpmResidual: x = rpm_residual; break;
-        case Out::RpmResidualRms: x = rpm_residual_rms; break;
-        case Out::IResidual: x = i_residual; break;
-        case Out::IResidualRms: x = i_residual_rms; break;
+        case Out::Input:
+          x = in_row[m_c.plan[k].input];
+          break;
+        case Out::Clutch:
+          x = clutch;
+          break;
+        case Out::RLoad:
+          x = r_load;
+          break;
+        case Out::Duty:
+          x = duty;
+          break;
+        case Out::V:
+          x = duty * supply;
+          break;
+        case Out::Omega:
+          x = s.omega_rad_s;
+          break;
+        case Out::Rpm:
+          x = rpm;
+          break;
+        case Out::RpmTrue:
+          x = rpm_true;
+          break;
+        case Out::I:
+          x = i_meas;
+          break;
+        case Out::IGen:
+          x = s.i_gen_A;
+          break;
+        case Out::VGen:
+          x = v_gen;
+          break;
+        case Out::Theta:
+          x = s.theta_rad;
+          break;
+        case Out::RpmResidual:
+          x = rpm_residual;
+          break;
+        case Out::RpmResidualRms:
+          x = rpm_residual_rms;
+          break;
+        case Out::IResidual:
+          x = i_residual;
+          break;
+        case Out::IResidualRms:
+          x = i_residual_rms;
+          break;
       }
     }
     m_writer.row(m_row);
@@ -447,7 +490,8 @@ class Simulation {
     if (m_c.closed) {
       if (!m_closed) {
         m_closed.emplace(m_model,
-                         m_c.captured_loop ? board_loop_controller(m_c.captured->mode, m_c.captured->registers)
+                         m_c.captured_loop
+                             ? board_loop_controller(m_c.captured->mode, m_c.captured->registers)
                          : m_loop_setup.on_board ? board_loop_controller(*m_loop_setup.registers)
                                                  : equation_loop_controller(m_loop_setup.controller),
                          m_sim, clutch_state);
@@ -463,8 +507,8 @@ class Simulation {
     }
     if (!m_first) m_plant->step(t - m_t_prev, m_drive);
     const model::State s = m_plant->state();
-    m_drive = model::Drive{m_c.drive_is_duty ? drive_value * m_model.params.supply_V : drive_value, clutch_state,
-                           r_load};
+    m_drive = model::Drive{m_c.drive_is_duty ? drive_value * m_model.params.supply_V : drive_value,
+                           clutch_state, r_load};
     return s;
   }
 
@@ -522,13 +566,14 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   const auto begin_output = [&](double rpm0, double t_rpm0) {
     if (rpm0 != 0.0) {
       sim.start_at(rpm0 * std::numbers::pi / 30.0, duty0);
-      meta.set("initial_state",
-               fmt::format("the motor at {} rpm (rpm_measured at t = {}){}, t = {}", config::format_number(rpm0),
-                           config::format_number(t_rpm0),
-                           c.closed ? fmt::format(", the controller's output at duty {} (the capture's first)",
-                                                  config::format_number(duty0))
-                                    : "",
-                           config::format_number(t_first)));
+      meta.set(
+          "initial_state",
+          fmt::format("the motor at {} rpm (rpm_measured at t = {}){}, t = {}", config::format_number(rpm0),
+                      config::format_number(t_rpm0),
+                      c.closed ? fmt::format(", the controller's output at duty {} (the capture's first)",
+                                             config::format_number(duty0))
+                               : "",
+                      config::format_number(t_first)));
     }
     writer.metadata(meta);
     writer.header(c.names);

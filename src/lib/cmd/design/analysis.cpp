@@ -27,15 +27,16 @@ using config::format_number;
 using config::Ini;
 using design::parse_list;
 using design::single_loop;
-using design::write_margins;
 using design::Tf;
+using design::write_margins;
 using linsys::Complex;
 
 constexpr double k_pi = std::numbers::pi;
 constexpr double k_inf = std::numeric_limits<double>::infinity();
 
 void add_controller(CLI::App& app, std::string& controller) {
-  app.add_option("--controller", controller, "controller text in s or z (default: [controller] of --config, or 1)");
+  app.add_option("--controller", controller,
+                 "controller text in s or z (default: [controller] of --config, or 1)");
 }
 
 void plot_range(const BodeOptions& o, const std::vector<Tf>& factors, double& lo, double& hi) {
@@ -115,7 +116,8 @@ void write_rlocus(const RlocusOptions& o, const std::vector<Tf>& factors, std::o
   w.meta("source", tool + " " + k_version);
   w.meta("loop", linsys::tf_text(loop));
   if (!note.empty()) w.meta("note", note);
-  for (const auto& g : ranges) w.meta("k_stable", fmt::format("{} .. {}", format_number(g.k_low), format_number(g.k_high)));
+  for (const auto& g : ranges)
+    w.meta("k_stable", fmt::format("{} .. {}", format_number(g.k_low), format_number(g.k_high)));
   w.meta("boundary", loop.discrete() ? "unit circle" : "imaginary axis");
   // n − m branches leave for infinity along rays from the centroid (Σp − Σz)/(n − m) at
   // (2q + 1)·180/(n − m) degrees.
@@ -128,7 +130,8 @@ void write_rlocus(const RlocusOptions& o, const std::vector<Tf>& factors, std::o
     for (const Complex& z : zeros) centre -= z.real();
     std::string angles;
     for (std::size_t q = 0; q < poles.size() - zeros.size(); ++q) {
-      angles += (angles.empty() ? "" : " ") + format_number((2.0 * static_cast<double>(q) + 1.0) * 180.0 / excess);
+      angles +=
+          (angles.empty() ? "" : " ") + format_number((2.0 * static_cast<double>(q) + 1.0) * 180.0 / excess);
     }
     w.meta("asymptote_centre", format_number(centre / excess));
     w.meta("asymptote_angles_deg", angles);
@@ -155,7 +158,8 @@ void write_rlocus(const RlocusOptions& o, const std::vector<Tf>& factors, std::o
       }
       p = ordered;
     }
-    for (std::size_t i = 0; i < p.size(); ++i) w.row({k, static_cast<double>(i + 1), p[i].real(), p[i].imag()});
+    for (std::size_t i = 0; i < p.size(); ++i)
+      w.row({k, static_cast<double>(i + 1), p[i].real(), p[i].imag()});
     prev = p;
   }
   w.finish();
@@ -175,7 +179,8 @@ linsys::StepLimits step_limits(const StepOptions& o) {
   return lim;
 }
 
-void write_step(const StepOptions& o, const design::ResolvedPlant& r, std::ostream& out, const std::string& tool) {
+void write_step(const StepOptions& o, const design::ResolvedPlant& r, std::ostream& out,
+                const std::string& tool) {
   const std::optional<Tf> c = design::analysis_controller(o.controller, r);
   Tf plant = r.setup.plant;
   std::string note;
@@ -189,15 +194,21 @@ void write_step(const StepOptions& o, const design::ResolvedPlant& r, std::ostre
   const linsys::StepResponse s =
       linsys::step_response(plant, c, t_end, o.points > 0 ? o.points : 2000, o.open_loop);
   const linsys::StepMetrics m = linsys::step_info(s, 1.0, lim);
-  std::vector<std::pair<std::string, double>> metrics{
-      {"final_value", m.final_value},   {"rise_time_s", m.rise_time_s},       {"transient_time_s", m.transient_time_s},
-      {"settling_time_s", m.settling_time_s}, {"settling_min", m.settling_min}, {"settling_max", m.settling_max},
-      {"overshoot_pct", m.overshoot_pct}, {"undershoot_pct", m.undershoot_pct}, {"peak", m.peak},
-      {"peak_time_s", m.peak_time_s}};
+  std::vector<std::pair<std::string, double>> metrics{{"final_value", m.final_value},
+                                                      {"rise_time_s", m.rise_time_s},
+                                                      {"transient_time_s", m.transient_time_s},
+                                                      {"settling_time_s", m.settling_time_s},
+                                                      {"settling_min", m.settling_min},
+                                                      {"settling_max", m.settling_max},
+                                                      {"overshoot_pct", m.overshoot_pct},
+                                                      {"undershoot_pct", m.undershoot_pct},
+                                                      {"peak", m.peak},
+                                                      {"peak_time_s", m.peak_time_s}};
   if (!o.open_loop) metrics.emplace_back("steady_state_error", m.steady_state_error);
   const std::string loop_kind = o.open_loop ? "open" : "closed";
-  const std::string levels = fmt::format("rise {}-{} %, settling {} %", format_number(100.0 * lim.rise_low),
-                                         format_number(100.0 * lim.rise_high), format_number(100.0 * lim.settling));
+  const std::string levels =
+      fmt::format("rise {}-{} %, settling {} %", format_number(100.0 * lim.rise_low),
+                  format_number(100.0 * lim.rise_high), format_number(100.0 * lim.settling));
   const char* timing = s.sampled ? "at the sample instants" : "interpolated between samples";
   if (o.metrics) {
     Ini ini;
@@ -278,12 +289,14 @@ int Rlocus::run(Io& io) {
 void Step::define(CLI::App& app) {
   define_plant(app, options.plant);
   add_controller(app, options.controller);
-  app.add_flag("--open-loop", options.open_loop, "the step of the plant (times the controller) as typed, no feedback");
+  app.add_flag("--open-loop", options.open_loop,
+               "the step of the plant (times the controller) as typed, no feedback");
   app.add_option("--rise", options.rise_pct, "rise-time limits LOW,HIGH, % of the final value (10,90)");
   app.add_option("--settling", options.settling_pct, "settling band, % (2)")->check(mcg::Range(1e-9, 100.0));
   app.add_option("--t-end", options.t_end_s, "duration, s (10 time constants of the slowest pole)")
       ->check(mcg::Range(1e-12, k_inf));
-  app.add_option("--points", options.points, "samples of a continuous loop (2000)")->check(mcg::Range(2, 1000000));
+  app.add_option("--points", options.points, "samples of a continuous loop (2000)")
+      ->check(mcg::Range(2, 1000000));
   app.add_flag("--metrics", options.metrics, "write the step metrics as INI instead of the series");
 }
 

@@ -39,8 +39,9 @@ class Bode final : public PlantCommand {
  public:
   BodeOptions options;
   explicit Bode(bool nyquist)
-      : PlantCommand(nyquist ? "nyquist" : "bode", nyquist ? "Nyquist plot: f_hz, re, im (CSV)"
-                                                           : "frequency response: f_hz, mag_db, phase_deg (CSV)"),
+      : PlantCommand(nyquist ? "nyquist" : "bode", nyquist
+                                                       ? "Nyquist plot: f_hz, re, im (CSV)"
+                                                       : "frequency response: f_hz, mag_db, phase_deg (CSV)"),
         m_nyquist(nyquist) {}
   void define(CLI::App& app) override;
   int run(Io& io) override;
@@ -81,8 +82,9 @@ class Step final : public PlantCommand {
  public:
   StepOptions options;
   Step()
-      : PlantCommand("step",
-                     "unit step, closed loop (t, r, y, e, u) or open (t, r, y, u): CSV with stepinfo metrics") {}
+      : PlantCommand(
+            "step",
+            "unit step, closed loop (t, r, y, e, u) or open (t, r, y, u): CSV with stepinfo metrics") {}
   void define(CLI::App& app) override;
   int run(Io& io) override;
 };

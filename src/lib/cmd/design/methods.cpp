@@ -69,9 +69,10 @@ void DesignPid::define(CLI::App& app) {
   app.add_option("--n", options.n, "derivative filter: pole at N/Td (--form filtered)")
       ->check(mcg::Range(1e-6, 1e6))
       ->capture_default_str();
-  app.add_option("--form", options.form,
-                 "filtered: C(s) with the derivative filter, discretised by --method; board: the board's PID, "
-                 "designed in z (backward differences, no filter; needs --dt)")
+  app.add_option(
+         "--form", options.form,
+         "filtered: C(s) with the derivative filter, discretised by --method; board: the board's PID, "
+         "designed in z (backward differences, no filter; needs --dt)")
       ->check(CLI::IsMember({"filtered", "board"}))
       ->capture_default_str();
 }
@@ -105,13 +106,16 @@ void DesignLag::define(CLI::App& app) {
   define_plant(app, options.plant);
   add_pm(app, options.pm_deg);
   app.add_option("--k-dc", options.k_dc, "controller DC gain")->check(mcg::Range(1e-12, k_inf));
-  app.add_option("--ratio", options.ratio, "zero at wc/ratio")->check(mcg::Range(1.0, 1e6))->capture_default_str();
+  app.add_option("--ratio", options.ratio, "zero at wc/ratio")
+      ->check(mcg::Range(1.0, 1e6))
+      ->capture_default_str();
 }
 
 int DesignLag::run(Io& io) {
   const design::ResolvedPlant r = resolve(options.plant, true);
   const double k_dc = need(options.k_dc, "--k-dc");
-  design::write_design(r, design::design_lag(r.setup, need(options.pm_deg, "--pm"), k_dc, options.ratio), io.out);
+  design::write_design(r, design::design_lag(r.setup, need(options.pm_deg, "--pm"), k_dc, options.ratio),
+                       io.out);
   return 0;
 }
 

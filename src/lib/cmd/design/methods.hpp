@@ -47,8 +47,8 @@ struct DesignPidOptions {
   double pm_deg = NAN;
   double wc_rad_s = NAN;
   double ti_over_td = 4.0;
-  double n = 10.0;                    ///< derivative filter: pole at N/Td (form filtered)
-  std::string form = "filtered";      ///< "filtered" (C(s) with N, discretised) or "board" (the board's form)
+  double n = 10.0;                ///< derivative filter: pole at N/Td (form filtered)
+  std::string form = "filtered";  ///< "filtered" (C(s) with N, discretised) or "board" (the board's form)
 };
 
 class DesignPid final : public PlantCommand {

@@ -30,7 +30,8 @@ void write_c2d(const design::PlantOptions& o, const design::ResolvedPlant& r, st
     g = linsys::scaled(g, r.chain_values.gain() * boardunits::omega_per_v_factor(r.units, r.chain_values));
   const Tf h = linsys::c2d(g, r.dt_s, method, prewarp, r.raw_where);
   Ini ini;
-  ini.set("plant", "tf", linsys::tf_text(h), fmt::format("{} of {}", linsys::method_name(method), linsys::tf_text(g)));
+  ini.set("plant", "tf", linsys::tf_text(h),
+          fmt::format("{} of {}", linsys::method_name(method), linsys::tf_text(g)));
   ini.set("plant", "domain", "z");
   ini.set("plant", "dt_s", r.dt_s);
   ini.set("plant", "num", linsys::list_text(linsys::trim(h.num)));
@@ -53,8 +54,10 @@ void write_loop(const design::ResolvedPlant& r, std::ostream& out) {
   ini.set("loop", "chain_gain", c.gain(), "counts per sample per (rad/s) per duty count, without the plant");
   const double g0 = r.raw.dc_gain();
   ini.set("loop", "plant_dc_gain", g0, "rad/s per V");
-  ini.set("loop", "forward_gain", c.pwm_v_per_count() * c.hbridge_gain * g0, "rad/s per duty count (report: 0.3589)");
-  ini.set("loop", "feedback_gain", c.counts_per_rad() * c.dt_s, "counts per sample per rad/s (report: 81.5*.001)");
+  ini.set("loop", "forward_gain", c.pwm_v_per_count() * c.hbridge_gain * g0,
+          "rad/s per duty count (report: 0.3589)");
+  ini.set("loop", "feedback_gain", c.counts_per_rad() * c.dt_s,
+          "counts per sample per rad/s (report: 81.5*.001)");
   ini.set("loop", "loop_dc_gain", c.gain() * g0, "report's third-order fit: 0.0146");
   Tf cont = linsys::scaled(r.raw, c.gain());
   ini.set("loop", "tf_s", linsys::tf_text(cont), "chain x plant, without the hold");

@@ -27,7 +27,8 @@ struct LoopOptions {
 class Loop final : public PlantCommand {
  public:
   LoopOptions options;
-  Loop() : PlantCommand("loop", "the report's Figure 17-1 chain: every gain, the ZOH loop, its margins (INI)") {}
+  Loop()
+      : PlantCommand("loop", "the report's Figure 17-1 chain: every gain, the ZOH loop, its margins (INI)") {}
   void define(CLI::App& app) override;
   int run(Io& io) override;
 };

@@ -28,14 +28,16 @@ std::vector<table::Table> read_all(const std::vector<std::string>& files) {
   return tables;
 }
 
-void write_friction(config::Ini& ini, const std::string& section, const FrictionTerm& term, std::string_view origin) {
+void write_friction(config::Ini& ini, const std::string& section, const FrictionTerm& term,
+                    std::string_view origin) {
   // A friction level cannot be negative (the model rejects it); a negative difference of two
   // totals is written as 0 and the estimate kept in the comment.
   const auto level = [&](const char* key, double value, double se, const std::string& note) {
     if (value >= 0.0) {
       ini.set(section, key, num6(value), se_comment(se, "N m" + note));
     } else {
-      ini.set(section, key, "0", fmt::format("estimate {} {} is below 0{}", num6(value), se_comment(se, "N m"), note));
+      ini.set(section, key, "0",
+              fmt::format("estimate {} {} is below 0{}", num6(value), se_comment(se, "N m"), note));
     }
   };
   level("Ts_Nm", term.value.Ts_Nm, term.se.Ts_Nm, ", " + std::string(origin));
@@ -114,17 +116,21 @@ int FitFriction::run(Io& io) {
     ini.set(sec, p + "torque_from",
             !options.fit.torque_column.empty() ? "column " + options.fit.torque_column
                                                : (st.from_current ? "current" : "voltage balance"));
-    ini.set(sec, p + "total_Ts" + torque_key, num6(st.total.value.Ts_Nm), se_comment(st.total.se.Ts_Nm, torque_unit));
-    ini.set(sec, p + "total_Tc" + torque_key, num6(st.total.value.Tc_Nm), se_comment(st.total.se.Tc_Nm, torque_unit));
+    ini.set(sec, p + "total_Ts" + torque_key, num6(st.total.value.Ts_Nm),
+            se_comment(st.total.se.Ts_Nm, torque_unit));
+    ini.set(sec, p + "total_Tc" + torque_key, num6(st.total.value.Tc_Nm),
+            se_comment(st.total.se.Tc_Nm, torque_unit));
     if (lin) {
       static const char* const keys[3] = {"total_visc1_N_s_m", "total_visc2_N_s2_m2", "total_visc3_N_s3_m3"};
       static const char* const units[3] = {"N s/m", "N s^2/m^2", "N s^3/m^3"};
       for (std::size_t c = 0; c < static_cast<std::size_t>(options.fit.order); ++c) {
-        ini.set(sec, p + keys[c], num6(st.total.value.viscous[c]), se_comment(st.total.se.viscous[c], units[c]));
+        ini.set(sec, p + keys[c], num6(st.total.value.viscous[c]),
+                se_comment(st.total.se.viscous[c], units[c]));
       }
     }
     if (std::isfinite(st.inertia)) {
-      ini.set(sec, p + (lin ? "mass_kg" : "inertia_kg_m2"), num6(st.inertia), se_comment(st.inertia_se, lin ? "kg" : "kg m^2"));
+      ini.set(sec, p + (lin ? "mass_kg" : "inertia_kg_m2"), num6(st.inertia),
+              se_comment(st.inertia_se, lin ? "kg" : "kg m^2"));
     }
     if (std::isfinite(st.offset)) {
       ini.set(sec, p + "offset" + torque_key, num6(st.offset), se_comment(st.offset_se, torque_unit));

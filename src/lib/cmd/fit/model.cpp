@@ -29,7 +29,8 @@ using namespace mcg::fit;
 namespace {
 
 /// "motor.J_kg_m2" -> the INI section and key model_to_ini() wrote it under.
-std::optional<std::pair<std::string, std::string>> ini_place(const config::Ini& ini, const std::string& name) {
+std::optional<std::pair<std::string, std::string>> ini_place(const config::Ini& ini,
+                                                             const std::string& name) {
   const auto dot = name.find('.');
   if (dot == std::string::npos) return std::nullopt;
   const std::string section = name.substr(0, dot);
@@ -54,20 +55,25 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, Io& io) {
   for (std::size_t i = 0; i < n.names.size(); ++i) {
     const auto place = ini_place(ini, n.names[i]);
     const auto k = static_cast<Eigen::Index>(i);
-    if (place) ini.set(place->first, place->second, num6(n.values[k]), "fitted, " + se_comment(r.reported_se(i), unit_of(infos, n.names[i])));
+    if (place)
+      ini.set(place->first, place->second, num6(n.values[k]),
+              "fitted, " + se_comment(r.reported_se(i), unit_of(infos, n.names[i])));
   }
   for (const auto& [follower, leader] : problem.ties) {
     if (const auto place = ini_place(ini, follower)) {
-      ini.set(place->first, place->second, num6(model::get_parameter(r.model, follower)), "tied to " + leader);
+      ini.set(place->first, place->second, num6(model::get_parameter(r.model, follower)),
+              "tied to " + leader);
     }
   }
   const std::string sec = "fit.model";
   ini.set(sec, "source", fmt::format("{} {}", io.tool, k_version));
   ini.set(sec, "converged", r.trustworthy() ? "yes" : "no");
-  ini.set(sec, "reason", n.converged && !r.warnings.empty()
-                             ? fmt::format("{}, but the numbers are not trustworthy (see the warnings)", n.reason)
-                             : n.reason);
-  for (std::size_t w = 0; w < r.warnings.size(); ++w) ini.set(sec, fmt::format("warning{}", w + 1), r.warnings[w]);
+  ini.set(sec, "reason",
+          n.converged && !r.warnings.empty()
+              ? fmt::format("{}, but the numbers are not trustworthy (see the warnings)", n.reason)
+              : n.reason);
+  for (std::size_t w = 0; w < r.warnings.size(); ++w)
+    ini.set(sec, fmt::format("warning{}", w + 1), r.warnings[w]);
   ini.set(sec, "se_widening", num6(r.se_widening),
           "standard errors times this for the residuals' autocorrelation: sqrt((1 + rho) / (1 - rho))");
   ini.set(sec, "iterations", static_cast<double>(n.iterations));
@@ -84,16 +90,18 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, Io& io) {
   for (std::size_t i = 0; i < n.names.size(); ++i) {
     std::string row;
     for (std::size_t j = 0; j < n.names.size(); ++j) {
-      row += (j == 0 ? "" : " ") + fmt::format("{:.3f}", n.correlation(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)));
+      row += (j == 0 ? "" : " ") +
+             fmt::format("{:.3f}", n.correlation(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)));
     }
-    ini.set(sec, "correlation." + n.names[i], row, i == 0 ? "rows of the correlation matrix, columns in the order of free" : "");
+    ini.set(sec, "correlation." + n.names[i], row,
+            i == 0 ? "rows of the correlation matrix, columns in the order of free" : "");
   }
   for (std::size_t f = 0; f < r.runs.size(); ++f) {
     const auto& run = r.runs[f];
     ini.set(sec, fmt::format("file{}", f + 1), run.source);
     for (std::size_t k = 0; k < run.outputs.size(); ++k) {
-      ini.set(sec, fmt::format("file{}.fit_{}", f + 1, run.outputs[k]), fmt::format("{:.2f}", run.fit_percent[k]),
-              "% (NRMSE, as MATLAB compare)");
+      ini.set(sec, fmt::format("file{}.fit_{}", f + 1, run.outputs[k]),
+              fmt::format("{:.2f}", run.fit_percent[k]), "% (NRMSE, as MATLAB compare)");
       ini.set(sec, fmt::format("file{}.rms_{}", f + 1, run.outputs[k]), num6(run.rms[k]));
     }
   }
@@ -102,7 +110,8 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, Io& io) {
 
 /// One measured run of `mcg-fit model` as the options shape it.
 Run load_model_run(const std::string& path, const FitModelOptions& options, const model::Params& params) {
-  Run run = make_run(select_time(table::read_path(path), options.from_s, options.to_s), options.outputs, params);
+  Run run =
+      make_run(select_time(table::read_path(path), options.from_s, options.to_s), options.outputs, params);
   run.gear_ratio = options.gear_ratio;
   return run;
 }
@@ -111,7 +120,8 @@ std::vector<std::pair<std::string, std::string>> parse_ties(const std::vector<st
   std::vector<std::pair<std::string, std::string>> ties;
   for (const auto& item : items) {
     const auto eq = item.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size()) fail("--tie: expected FOLLOWER=LEADER: {}", quote(item));
+    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size())
+      fail("--tie: expected FOLLOWER=LEADER: {}", quote(item));
     ties.emplace_back(item.substr(0, eq), item.substr(eq + 1));
   }
   return ties;
@@ -124,7 +134,8 @@ void report_untrustworthy(const FitResult& r, const std::string& what, Diagnosti
 /// --list: every parameter with its value, unit and bounds.
 void list_parameters(const model::Model& base, const FitProblem& problem, std::ostream& out) {
   for (auto p : model::parameters(base)) {
-    if (const auto it = problem.bounds.find(p.name); it != problem.bounds.end()) std::tie(p.lower, p.upper) = it->second;
+    if (const auto it = problem.bounds.find(p.name); it != problem.bounds.end())
+      std::tie(p.lower, p.upper) = it->second;
     out << fmt::format("{} = {} ; {}, {}..{}\n", p.name, config::format_number(p.value), p.unit,
                        num6(p.lower), num6(p.upper));
   }
@@ -135,7 +146,8 @@ void evaluate(const model::Model& base, const FitProblem& problem, const FitMode
   std::vector<Run> runs;
   for (const auto& f : options.files) runs.push_back(load_model_run(f, options, base.params));
   model::Model m = base;
-  for (const auto& [follower, leader] : problem.ties) model::set_parameter(m, follower, model::get_parameter(m, leader));
+  for (const auto& [follower, leader] : problem.ties)
+    model::set_parameter(m, follower, model::get_parameter(m, leader));
   const auto fits = evaluate_model(m, runs, problem.sim);
   config::Ini res;
   const std::string sec = "fit.evaluate";
@@ -143,8 +155,8 @@ void evaluate(const model::Model& base, const FitProblem& problem, const FitMode
   for (std::size_t f = 0; f < fits.size(); ++f) {
     res.set(sec, fmt::format("file{}", f + 1), fits[f].source);
     for (std::size_t k = 0; k < fits[f].outputs.size(); ++k) {
-      res.set(sec, fmt::format("file{}.fit_{}", f + 1, fits[f].outputs[k]), fmt::format("{:.2f}", fits[f].fit_percent[k]),
-              "% (NRMSE, as MATLAB compare)");
+      res.set(sec, fmt::format("file{}.fit_{}", f + 1, fits[f].outputs[k]),
+              fmt::format("{:.2f}", fits[f].fit_percent[k]), "% (NRMSE, as MATLAB compare)");
       res.set(sec, fmt::format("file{}.rms_{}", f + 1, fits[f].outputs[k]), num6(fits[f].rms[k]));
     }
   }
@@ -182,8 +194,8 @@ struct Outcome {
 };
 
 /// The batch's CSV: one row per file, in input order.
-void write_batch(const std::vector<Outcome>& outcomes, const FitProblem& problem, const FitModelOptions& options,
-                 Io& io) {
+void write_batch(const std::vector<Outcome>& outcomes, const FitProblem& problem,
+                 const FitModelOptions& options, Io& io) {
   const std::size_t count = outcomes.size();
   std::vector<std::string> outputs = options.outputs;
   if (outputs.empty()) {
@@ -220,7 +232,8 @@ void write_batch(const std::vector<Outcome>& outcomes, const FitProblem& problem
       if (o.result) {
         const auto& run = o.result->runs[0];
         const auto it = std::find(run.outputs.begin(), run.outputs.end(), name);
-        if (it != run.outputs.end()) fit = run.fit_percent[static_cast<std::size_t>(it - run.outputs.begin())];
+        if (it != run.outputs.end())
+          fit = run.fit_percent[static_cast<std::size_t>(it - run.outputs.begin())];
       }
       row.push_back(fit);
     }
@@ -341,7 +354,8 @@ int FitModel::run(Io& io) {
     return 0;
   }
   if (options.files.empty()) fail("model: no input files");
-  if (!(options.from_s < options.to_s)) fail("--from {} s is not before --to {} s", options.from_s, options.to_s);
+  if (!(options.from_s < options.to_s))
+    fail("--from {} s is not before --to {} s", options.from_s, options.to_s);
   problem.model = base;
   problem.ties = parse_ties(options.tie);
   problem.sim.max_step_s = options.max_step_s;
@@ -351,7 +365,8 @@ int FitModel::run(Io& io) {
     if (std::none_of(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; })) {
       fail("unknown parameter {} (see {} model --list)", quote(name), io.tool);
     }
-    if (std::find(fixed.begin(), fixed.end(), name) != fixed.end()) fail("parameter {} is fixed (--fix) and free", quote(name));
+    if (std::find(fixed.begin(), fixed.end(), name) != fixed.end())
+      fail("parameter {} is fixed (--fix) and free", quote(name));
   }
   if (options.evaluate) {
     evaluate(base, problem, options, io);

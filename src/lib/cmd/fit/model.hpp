@@ -22,9 +22,9 @@ struct FitModelOptions {
   bool evaluate = false;             ///< score the given model on the runs, no fit
   double from_s = -std::numeric_limits<double>::infinity();  ///< rows with t >= from_s ...
   double to_s = std::numeric_limits<double>::infinity();     ///< ... and t <= to_s of each run
-  double gear_ratio = 1.0;           ///< motor turns per turn of the measured shaft
-  unsigned threads = 0;              ///< 0: every core
-  double max_step_s = 2.5e-4;        ///< integrator step bound during the fit
+  double gear_ratio = 1.0;                                   ///< motor turns per turn of the measured shaft
+  unsigned threads = 0;                                      ///< 0: every core
+  double max_step_s = 2.5e-4;                                ///< integrator step bound during the fit
   int max_evaluations = 4000;
 };
 

@@ -34,7 +34,8 @@ std::string tf_command(const std::string& tool, const TfFitOptions& o, const std
   return cmd + (file == "-" ? "" : " " + file);
 }
 
-void check_phase_residual(const FrequencyResponse& fr, const FitTfOptions& options, const TfFit& fit, Io& io) {
+void check_phase_residual(const FrequencyResponse& fr, const FitTfOptions& options, const TfFit& fit,
+                          Io& io) {
   if (options.fit.fit_delay || !(fit.rms_phase_deg > k_tf_phase_warn_deg)) return;
   std::vector<TfFitOptions> alternatives;
   TfFitOptions delayed = options.fit;
@@ -59,12 +60,11 @@ void check_phase_residual(const FrequencyResponse& fr, const FitTfOptions& optio
     }
   }
   if (best.empty()) return;
-  io.diag.warning(fmt::format(
-      "the fit leaves {:.3g} degrees RMS of phase (sampled data lag: a zero-order hold alone "
-      "by half a sample period); `{}` leaves {:.3g}",
-      fit.rms_phase_deg, best, best_rms));
+  io.diag.warning(
+      fmt::format("the fit leaves {:.3g} degrees RMS of phase (sampled data lag: a zero-order hold alone "
+                  "by half a sample period); `{}` leaves {:.3g}",
+                  fit.rms_phase_deg, best, best_rms));
 }
-
 
 /// The fit's `[plant] maps` and the words for its comment: the response's units (its metadata or
 /// --units), canonical when they are a plant's; refused when neither says.
