@@ -1,27 +1,27 @@
 // mcg-sim --board: the emulated board behind a pseudo-terminal, paced by the wall clock.
+#include <fmt/format.h>
 #include <poll.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <array>
-#include <string_view>
-#include <utility>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <ostream>
+#include <string_view>
+#include <utility>
 #include <vector>
 
-#include <fmt/format.h>
-
 #include "board/board.hpp"
-#include "common/error.hpp"   // mcg::fail
+#include "common/error.hpp"  // mcg::fail
+#include "common/poll_timeout.hpp"
 #include "common/quote.hpp"
-#include "config/ini.hpp"     // Ini
-#include "link/interrupt.hpp" // InterruptGuard
-#include "link/port.hpp"      // EmulatedPortEntry
-#include "link/pty.hpp"       // PtyLink
-#include "mcg_protocol.h"     // MCG_SYNC, MCG_FRAME_OVERHEAD
+#include "config/ini.hpp"      // Ini
+#include "link/interrupt.hpp"  // InterruptGuard
+#include "link/port.hpp"       // EmulatedPortEntry
+#include "link/pty.hpp"        // PtyLink
+#include "mcg_protocol.h"      // MCG_SYNC, MCG_FRAME_OVERHEAD
 
 namespace mcg::board {
 
@@ -156,7 +156,7 @@ void serve(const ServeOptions& options, std::ostream& err) {
     wall_s = std::chrono::duration<double>(Clock::now() - start).count();
     const double wait_s = static_cast<double>(ticks + 1) * tick_s - wall_s;
     pollfd p{pty.fd(), POLLIN, 0};
-    ::poll(&p, 1, wait_s > 0.0 ? static_cast<int>(std::ceil(wait_s * 1e3)) : 0);
+    ::poll(&p, 1, poll_timeout_ms(wait_s));
   }
 }
 

@@ -8,21 +8,21 @@
 
 #include <algorithm>
 #include <charconv>
-#include <ctime>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <limits>
 #include <mutex>
-#include <numbers>
 #include <optional>
 #include <sstream>
 #include <thread>
 
 #include "common/error.hpp"
 #include "common/quote.hpp"
+#include "common/units.hpp"
 #include "config/ini.hpp"
 #include "link/capture_meta.hpp"
 #include "link/connection.hpp"
@@ -657,12 +657,12 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
               if (!std::isfinite(r.duty)) plant.reset();
               if (!plant && std::isfinite(r.rpm)) {
                 plant.emplace(model, model::SimOptions{}, drive.clutch);
-                plant->start_at(r.rpm * std::numbers::pi / 30.0);
+                plant->start_at(rad_s_from_rpm(r.rpm));
               }
               double rpm_model = std::numeric_limits<double>::quiet_NaN();
               if (plant) {
                 plant->step(k_sample_s, drive);
-                rpm_model = plant->state().omega_rad_s * 30.0 / std::numbers::pi;
+                rpm_model = rpm_from_rad_s(plant->state().omega_rad_s);
               }
               state.add({r.t_s, r.rpm, rpm_model, r.rpm_cmd, r.duty});
               write_row(r);

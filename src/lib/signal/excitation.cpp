@@ -1,29 +1,22 @@
 // Excitation generators: piecewise-constant schedules, sweeps, multisines, shift registers.
 #include "signal/excitation.hpp"
 
-#include "common/checked.hpp"
-#include "common/error.hpp"
-
 #include <algorithm>
 #include <array>
-#include "common/demand.hpp"
 #include <charconv>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <string>
+
+#include "common/checked.hpp"
+#include "common/demand.hpp"
+#include "common/error.hpp"
+#include "common/text.hpp"
+#include "common/units.hpp"
 
 namespace mcg::signal {
 
 namespace {
-
-constexpr double k_pi = std::numbers::pi;
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-  return s;
-}
 
 bool parse_double(std::string_view text, double& value) {
   text = trim(text);

@@ -1,16 +1,17 @@
 // Emulation of the board's digital controller and the closed loop around the plant.
 #include "sim/controller.hpp"
 
-#include <algorithm>
-#include "common/checked.hpp"
-#include "common/demand.hpp"
-#include <cmath>
+#include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <numbers>
 
 #include "board/core.hpp"  // FirmwareCore
+#include "common/checked.hpp"
+#include "common/demand.hpp"
 #include "common/error.hpp"
 #include "config/ini.hpp"
 #include "mcg_protocol.h"  // MCG_REG_*, MCG_MODE_*
@@ -150,18 +151,28 @@ class EquationController final : public LoopController {
 
 }  // namespace
 
-bool board_takes_command(double rpm_cmd) {
-  // The register's range from its row of the protocol's one table.
-  struct Range {
-    unsigned id;
-    double lo, hi;
-  };
-#define MCG_RANGE_ROW(NAME, name, access, lo, hi, ...) Range{MCG_REG_##NAME, lo, hi},
-  static constexpr Range k_rows[] = {MCG_REGISTERS(MCG_RANGE_ROW)};
+namespace {
+
+/// The rpm_cmd register's range from its row of the protocol's one table.
+struct RegisterRange {
+  unsigned id;
+  double lo, hi;
+};
+#define MCG_RANGE_ROW(NAME, name, access, lo, hi, ...) RegisterRange{MCG_REG_##NAME, lo, hi},
+constexpr RegisterRange k_register_ranges[] = {MCG_REGISTERS(MCG_RANGE_ROW)};
 #undef MCG_RANGE_ROW
-  const Range& r = k_rows[MCG_REG_RPM_CMD - 1u];
-  static_assert(k_rows[MCG_REG_RPM_CMD - 1u].id == MCG_REG_RPM_CMD);
+constexpr RegisterRange k_command_range = k_register_ranges[MCG_REG_RPM_CMD - 1u];
+static_assert(k_command_range.id == MCG_REG_RPM_CMD);
+
+}  // namespace
+
+bool board_takes_command(double rpm_cmd) {
+  const RegisterRange& r = k_command_range;
   return rpm_cmd == 0.0 || (rpm_cmd == std::floor(rpm_cmd) && rpm_cmd >= r.lo && rpm_cmd <= r.hi);
+}
+
+std::string board_command_range_text() {
+  return fmt::format("{}..{}", k_command_range.lo, k_command_range.hi);
 }
 
 std::unique_ptr<LoopController> board_loop_controller(const boardunits::BoardFixedPoint& q) {

@@ -317,7 +317,7 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   double duty0 = 0.0;
   const auto begin_output = [&](double rpm0, double t_rpm0) {
     if (rpm0 != 0.0) {
-      omega0_rad_s = rpm0 * std::numbers::pi / 30.0;
+      omega0_rad_s = rad_s_from_rpm(rpm0);
       meta.set("initial_state",
                fmt::format("the motor at {} rpm (rpm_measured at t = {}){}, t = {}", config::format_number(rpm0),
                            config::format_number(t_rpm0),
@@ -377,7 +377,7 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
       s = plant->state();
       drive = model::Drive{drive_is_duty ? drive_value * supply : drive_value, clutch_state, r_load};
     }
-    const double rpm_true = s.omega_rad_s * 30.0 / std::numbers::pi;
+    const double rpm_true = rpm_from_rad_s(s.omega_rad_s);
     const double rpm = encoder ? rpm_estimator.push(t, s.theta_rad) : rpm_true;
     double i_meas = s.i_A;
     double v_gen = s.v_gen_V;
@@ -451,9 +451,10 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
            config::format_number(r_load));
     }
     if (closed && on_board && !board_takes_command(drive_value)) {
-      fail("{}:{}: column 'rpm_cmd': {} is not a command the board takes (0 = off, or a whole rpm in "
-           "120..720; --loop equation takes any)",
-           source, reader.line(), config::format_number(drive_value));
+      fail(
+          "{}:{}: column 'rpm_cmd': {} is not a command the board takes (0 = off, or a whole rpm in "
+          "{}; --loop equation takes any)",
+          source, reader.line(), config::format_number(drive_value), board_command_range_text());
     }
     t_checked = t;
     first_checked = false;
