@@ -20,6 +20,7 @@
 #include <sstream>
 #include <thread>
 
+#include "boardunits/fixed_point.hpp"  // board_mode
 #include "common/error.hpp"
 #include "common/quote.hpp"
 #include "common/units.hpp"
@@ -177,7 +178,9 @@ std::string reg(const ConsoleState& s, const std::string& name) {
 
 std::string closed_loop_warning(const std::map<std::string, std::string>& registers) {
   const auto it = registers.find("mode");
-  if (it == registers.end() || (it->second != "p" && it->second != "pi" && it->second != "pid")) return {};
+  if (it == registers.end()) return {};
+  const std::optional<std::int16_t> mode_id = boardunits::board_mode(it->second);
+  if (!mode_id || *mode_id == MCG_MODE_OPEN) return {};
   const std::string& mode = it->second;
   const auto gain = [&](const char* name) -> std::optional<double> {
     const auto g = registers.find(name);

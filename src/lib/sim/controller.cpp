@@ -64,9 +64,9 @@ class BoardController final : public LoopController {
     // at its first command.
     if (m_core.apply(MCG_REG_MODE, m_mode) != MCG_ST_OK) {
       fail("the board refuses mode {} with every gain zero (it would hold its duty whatever the speed)",
-           m_mode == MCG_MODE_P    ? "p"
-           : m_mode == MCG_MODE_PI ? "pi"
-                                   : "pid");
+           m_mode >= 0 && m_mode < MCG_MODE_COUNT
+               ? boardunits::k_board_modes[static_cast<std::size_t>(m_mode)]
+               : std::string_view("unknown"));
     }
     m_core.write(MCG_REG_MODE, MCG_MODE_OPEN);
   }
@@ -176,15 +176,15 @@ std::string board_command_range_text() {
 }
 
 std::unique_ptr<LoopController> board_loop_controller(const boardunits::BoardFixedPoint& q) {
-  std::vector<std::pair<std::uint8_t, std::int16_t>> registers{{MCG_REG_COEF_FRAC, static_cast<std::int16_t>(q.coef_frac)}};
-  if (q.mode == "p") {
-    registers.emplace_back(MCG_REG_KP, static_cast<std::int16_t>(q.regs.at(0)));
-  } else {
-    registers.emplace_back(MCG_REG_B0, static_cast<std::int16_t>(q.regs.at(0)));
-    registers.emplace_back(MCG_REG_B1, static_cast<std::int16_t>(q.regs.at(1)));
-    registers.emplace_back(MCG_REG_B2, static_cast<std::int16_t>(q.regs.at(2)));
+  std::vector<std::pair<std::uint8_t, std::int16_t>> registers;
+  std::int16_t mode = MCG_MODE_OPEN;
+  for (const boardunits::BoardRegisterValue& r : boardunits::board_registers(q)) {
+    if (r.id == MCG_REG_MODE) {
+      mode = r.raw;
+    } else {
+      registers.emplace_back(r.id, r.raw);
+    }
   }
-  const auto mode = static_cast<std::int16_t>(q.mode == "p" ? MCG_MODE_P : q.mode == "pi" ? MCG_MODE_PI : MCG_MODE_PID);
   return std::make_unique<BoardController>(mode, registers);
 }
 
