@@ -64,7 +64,7 @@ class BoardController final : public LoopController {
     // at its first command.
     if (m_core.apply(MCG_REG_MODE, m_mode) != MCG_ST_OK) {
       fail("the board refuses mode {} with every gain zero (it would hold its duty whatever the speed)",
-           m_mode >= 0 && m_mode < MCG_MODE_COUNT
+           static_cast<std::uint16_t>(m_mode) < MCG_MODE_COUNT
                ? boardunits::k_board_modes[static_cast<std::size_t>(m_mode)]
                : std::string_view("unknown"));
     }
