@@ -36,13 +36,13 @@ std::vector<BoardRegisterValue> board_registers(const BoardFixedPoint& q) {
   const bool p = *mode == MCG_MODE_P;
   MCG_DEMAND(q.regs.size() == (p ? 1u : 3u) && q.wanted.size() == q.regs.size());
   std::vector<BoardRegisterValue> out{
-      {MCG_REG_COEF_FRAC, static_cast<std::int16_t>(q.coef_frac), double(q.coef_frac)}};
+      {MCG_REG_COEF_FRAC, static_cast<std::int16_t>(q.coef_frac), static_cast<double>(q.coef_frac)}};
   static constexpr std::uint8_t k_gains[] = {MCG_REG_B0, MCG_REG_B1, MCG_REG_B2};
   for (std::size_t k = 0; k < q.regs.size(); ++k) {
     out.push_back(
         {p ? std::uint8_t{MCG_REG_KP} : k_gains[k], static_cast<std::int16_t>(q.regs[k]), q.wanted[k]});
   }
-  out.push_back({MCG_REG_MODE, *mode, double(*mode)});
+  out.push_back({MCG_REG_MODE, *mode, static_cast<double>(*mode)});
   return out;
 }
 
