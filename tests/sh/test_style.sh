@@ -19,8 +19,10 @@ find src firmware tests bench -type f \( -name '*.c' -o -name '*.h' -o -name '*.
   n=$(LC_ALL=C.UTF-8 awk -v m="$limit" 'length($0) > m { c++ } END { print c + 0 }' "$f")
   [ "$n" -gt 0 ] && echo "$f $n"
 done > "$work/long.txt"
-over=$(awk 'NR == FNR && /^#/ { next } NR == FNR { allowed[$1] = $2; next } ($2 > allowed[$1] + 0) { print $1 ": " $2 " lines over the limit, "
-  allowed[$1] + 0 " allowed" }' tests/style/long_lines.txt "$work/long.txt")
+over=$(awk 'NR == FNR && /^#/ { next }
+  NR == FNR { allowed[$1] = $2; next }
+  $2 > allowed[$1] + 0 { printf "%s: %d lines over the limit, %d allowed\n", $1, $2, allowed[$1] + 0 }' \
+  tests/style/long_lines.txt "$work/long.txt")
 check "no file has more lines over $limit columns than tests/style/long_lines.txt allows" \
   eval '[ -z "$over" ] || { echo "$over" | sed "s/^/  /"; false; }'
 
