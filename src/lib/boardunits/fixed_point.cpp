@@ -34,13 +34,17 @@ std::vector<BoardRegisterValue> board_registers(const BoardFixedPoint& q) {
   const std::optional<std::int16_t> mode = board_mode(q.mode);
   MCG_DEMAND(mode && *mode != MCG_MODE_OPEN);
   const bool p = *mode == MCG_MODE_P;
-  MCG_DEMAND(q.regs.size() == (p ? 1u : 3u) && q.wanted.size() == q.regs.size());
+  MCG_DEMAND(q.regs.size() == (p ? 1u : 3u));
+  // A set of registers read back (no design behind it) wants what it holds.
+  const auto wanted = [&](std::size_t k) {
+    return k < q.wanted.size() ? q.wanted[k] : std::ldexp(static_cast<double>(q.regs[k]), -q.coef_frac);
+  };
   std::vector<BoardRegisterValue> out{
       {MCG_REG_COEF_FRAC, static_cast<std::int16_t>(q.coef_frac), static_cast<double>(q.coef_frac)}};
   static constexpr std::uint8_t k_gains[] = {MCG_REG_B0, MCG_REG_B1, MCG_REG_B2};
   for (std::size_t k = 0; k < q.regs.size(); ++k) {
     out.push_back(
-        {p ? std::uint8_t{MCG_REG_KP} : k_gains[k], static_cast<std::int16_t>(q.regs[k]), q.wanted[k]});
+        {p ? std::uint8_t{MCG_REG_KP} : k_gains[k], static_cast<std::int16_t>(q.regs[k]), wanted(k)});
   }
   out.push_back({MCG_REG_MODE, *mode, static_cast<double>(*mode)});
   return out;

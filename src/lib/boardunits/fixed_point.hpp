@@ -50,7 +50,8 @@ struct BoardFixedPoint {
 };
 
 /// One register value of a controller on the board: its id (MCG_REG_*), the int16 it holds, and
-/// the value before rounding (BoardFixedPoint::wanted for a gain; the same number otherwise).
+/// the value before rounding (BoardFixedPoint::wanted for a gain, or raw 2^-F without it; the
+/// same number otherwise).
 struct BoardRegisterValue {
   std::uint8_t id;
   std::int16_t raw;
