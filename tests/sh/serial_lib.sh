@@ -1,40 +1,7 @@
-# Shared by the test_serial*.sh suites: a work directory, background processes that are always
-# ended, bounded waits, and checks that count failures.
+# Shared by the test_serial*.sh suites, over lib.sh: bounded waits, the emulated board, the
+# console in tmux.
 set -u
-export LC_ALL=C TZ=UTC
-work=$(mktemp -d)
-bg_pids=()
-failures=0
-checks=0
-
-cleanup() {
-  for pid in "${bg_pids[@]}"; do kill "$pid" 2> /dev/null; done
-  wait 2> /dev/null
-  rm -rf "$work"
-}
-trap cleanup EXIT
-
-# check DESCRIPTION COMMAND...: runs COMMAND, counts a failure when it fails.
-check() {
-  local what=$1
-  shift
-  checks=$((checks + 1))
-  if "$@"; then
-    echo "ok   $what"
-  else
-    echo "FAIL $what"
-    failures=$((failures + 1))
-  fi
-}
-
-# same FILE TEXT: FILE holds exactly TEXT (plus the final newline).
-same() {
-  if [ "$(cat "$1")" != "$2" ]; then
-    echo "  expected: $2"
-    echo "  got:      $(cat "$1")"
-    return 1
-  fi
-}
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
 # wait_for PATH: waits up to 10 s for PATH to exist.
 wait_for() {
@@ -108,8 +75,3 @@ shows() {
 # title_rpm, title_model: the measured and the model's speed in the console's title line.
 title_rpm() { pane | head -1 | sed -n 's/.* rpm \([0-9-]*\) .*/\1/p'; }
 title_model() { pane | head -1 | sed -n 's/.* model \([0-9-]*\) .*/\1/p'; }
-
-finish() {
-  echo "$(basename "$0"): $((checks - failures)) of $checks checks passed"
-  [ "$failures" = 0 ]
-}

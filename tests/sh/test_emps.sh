@@ -12,27 +12,25 @@ src=$2
 data="$src/tests/data/real/emps/emps_estimation.csv"
 [[ -x "$tools/mcg-fit" ]] || { echo "skipped: mcg-fit not built"; exit 125; }
 export PATH="$tools:$PATH"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/lib.sh"
 
 mcg-fit friction --linear --torque force_N --position qm_m --fit-inertia --offset --no-static --order 1 \
   "$data" >"$work/fit.ini"
 
-failures=0
-# check KEY PUBLISHED: value and standard error from "KEY = value  ; +- se UNIT"
-check() {
+# published KEY PUBLISHED: value and standard error from "KEY = value  ; +- se UNIT"
+published() {
   local key=$1 published=$2 line value se
-  line=$(grep "^$key = " "$work/fit.ini") || { echo "FAIL $key: not written"; failures=$((failures + 1)); return; }
+  line=$(grep "^$key = " "$work/fit.ini") || { fail "$key: not written"; return; }
   value=$(awk '{ print $3 }' <<<"$line")
   se=$(awk '{ print $6 }' <<<"$line")
   if awk -v v="$value" -v s="$se" -v p="$published" 'BEGIN { d = v - p; if (d < 0) d = -d; exit !(s > 0 && d <= 2 * s) }'; then
+    pass
     echo "ok   $key = $value +- $se (published $published)"
   else
-    echo "FAIL $key = $value +- $se: published $published is not within two standard errors"
-    failures=$((failures + 1))
+    fail "$key = $value +- $se: published $published is not within two standard errors"
   fi
 }
-check state0.total_Tc_N 20.3935
-check state0.total_visc1_N_s_m 203.5034
-check state0.offset_N -3.1648
-[[ $failures -eq 0 ]]
+published state0.total_Tc_N 20.3935
+published state0.total_visc1_N_s_m 203.5034
+published state0.offset_N -3.1648
+finish emps

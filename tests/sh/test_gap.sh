@@ -16,9 +16,8 @@ export PATH="$tools:$PATH"
 for t in mcg-sweep mcg-sim mcg-fit; do
   [[ -x "$tools/$t" ]] || { echo "skipped: $t not built"; exit 125; }
 done
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-failures=0
+source "$(dirname "$0")/lib.sh"
+source "$(dirname "$0")/gap_lib.sh"
 
 # measure EFFECTS SEED: stdin (an input table) -> stdout (a measured run)
 measure() {
@@ -33,17 +32,8 @@ measure() {
 check() {
   local name=$1 expected=$2 where=${3:-}
   shift $(($# < 3 ? $# : 3))
-  local out="$work/$name.csv"
-  if ! mcg-fit gap --train "$work/$name-train.csv" --validate "$work/$name-validate.csv" "$@" >"$out" 2>"$work/$name.err"; then
-    echo "FAIL $name: mcg-fit gap failed: $(tail -1 "$work/$name.err")"
-    failures=$((failures + 1))
-    return
-  fi
-  # First data row: effect (column 1) and gap_shrink_pct (column 7).
-  local row effect shrink
-  row=$(grep -v '^#' "$out" | sed -n 2p)
-  effect=$(cut -d, -f1 <<<"$row")
-  shrink=$(cut -d, -f7 <<<"$row")
+  local effect shrink
+  diagnose "$name" "$@" || return 0
   if [[ "$effect" != "$expected" ]]; then
     echo "FAIL $name: diagnosis '$effect', expected '$expected'"
     failures=$((failures + 1))

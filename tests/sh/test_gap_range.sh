@@ -27,9 +27,8 @@ export PATH="$tools:$PATH"
 for t in mcg-sweep mcg-sim mcg-fit; do
   [[ -x "$tools/$t" ]] || { echo "skipped: $t not built"; exit 125; }
 done
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-failures=0
+source "$(dirname "$0")/lib.sh"
+source "$(dirname "$0")/gap_lib.sh"
 seed=1
 
 # measure EFFECTS SEED NOISE_A: stdin (an input table) -> stdout (a measured run)
@@ -89,16 +88,8 @@ xfail() {
 # check NAME EXPECTED EFFECTS: the diagnosis of $work/NAME-{train,validate}.csv
 check() {
   local name=$1 expected=$2
-  local out="$work/$name.csv"
-  if ! mcg-fit gap --train "$work/$name-train.csv" --validate "$work/$name-validate.csv" >"$out" 2>"$work/$name.err"; then
-    echo "FAIL $name: mcg-fit gap failed: $(tail -1 "$work/$name.err")"
-    failures=$((failures + 1))
-    return
-  fi
-  local row effect shrink
-  row=$(grep -v '^#' "$out" | sed -n 2p)
-  effect=$(cut -d, -f1 <<<"$row")
-  shrink=$(cut -d, -f7 <<<"$row")
+  local effect shrink
+  diagnose "$name" || return 0
   if [[ "$effect" != "$expected" ]]; then
     xfail "$name" "$name: diagnosis '$effect' (gap shrink $shrink %), expected '$expected' for ${3:-no effect}"
   elif [[ "$expected" != none && "$expected" != param_mismatch ]] && ! awk -v s="$shrink" 'BEGIN { exit !(s >= 60) }'; then

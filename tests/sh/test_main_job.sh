@@ -7,10 +7,7 @@
 set -u
 tools=$(cd "$1" && pwd)
 src=$(cd "$2" && pwd)
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-failures=0
-fail() { echo "FAIL $*"; failures=$((failures + 1)); }
+source "$(dirname "$0")/lib.sh"
 
 "$src/scripts/main-job.sh" "$tools" "$work/out" > "$work/summary.txt" 2> "$work/err.txt"
 status=$?

@@ -14,10 +14,7 @@ export PATH="$tools:$PATH"
 for t in mcg-sweep mcg-sim mcg-fit; do
   [[ -x "$tools/$t" ]] || { echo "skipped: $t not built"; exit 125; }
 done
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-failures=0
-fail() { echo "FAIL $*"; failures=$((failures + 1)); }
+source "$(dirname "$0")/lib.sh"
 
 # motor_ini R L K J Ts Tc c1: a 12 V motor alone
 motor_ini() {

@@ -6,14 +6,8 @@ set -u
 tool_dir=$1
 export PATH="$tool_dir:$PATH" LC_ALL=C
 command -v gnuplot >/dev/null || { echo "gnuplot missing: skipped"; exit 125; }
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/lib.sh"
 cd "$work" || exit 1
-passed=0
-failed=0
-check() {
-  if eval "$2"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "FAIL: $1"; fi
-}
 magic() { head -c "$2" "$1" | od -An -tx1 | tr -d ' \n'; }
 
 # A step with a first-order speed and a current, both measured and "simulated".
@@ -23,43 +17,42 @@ mcg-sweep step --level 12 --at 0.1 --then 6@0.5 --duration 1 --clutch 2 --r-load
 awk -F, 'BEGIN {OFS = ","} /^#/ || /^t/ {print; next} {$5 = $5 * 1.05; print}' step.csv >sim.csv
 
 mcg-plot-gnuplot -y rpm --y2 i -o step.png <step.csv
-check "PNG written with the PNG signature" '[ "$(magic step.png 8)" = 89504e470d0a1a0a ]'
+expect "PNG written with the PNG signature" '[ "$(magic step.png 8)" = 89504e470d0a1a0a ]'
 mcg-plot-gnuplot -y rpm,v -o step.svg <step.csv
-check "SVG written" 'grep -q "<svg" step.svg && grep -q "rpm (rev/min)" step.svg'
+expect "SVG written" 'grep -q "<svg" step.svg && grep -q "rpm (rev/min)" step.svg'
 mcg-plot-gnuplot -y rpm -o step.pdf step.csv --overlay sim.csv
-check "PDF written" '[ "$(head -c 4 step.pdf)" = "%PDF" ]'
+expect "PDF written" '[ "$(head -c 4 step.pdf)" = "%PDF" ]'
 
 mcg-plot-gnuplot -y rpm --term dumb --size 90,25 <step.csv >step.txt
-check "text plot on stdout" '[ "$(wc -l <step.txt)" -ge 20 ] && grep -q "t (s)" step.txt'
-check "title from the excitation metadata" 'grep -q "step on v: 12 V at 0.1 s" step.txt'
-check "legend names the column" 'grep -q "rpm" step.txt'
+expect "text plot on stdout" '[ "$(wc -l <step.txt)" -ge 20 ] && grep -q "t (s)" step.txt'
+expect "title from the excitation metadata" 'grep -q "step on v: 12 V at 0.1 s" step.txt'
+expect "legend names the column" 'grep -q "rpm" step.txt'
 
 mcg-sweep multisine --f0 1 --f1 100 --lines 10 --duration 3 |
   awk -F, '/^#/ {print; next} /^t/ {print $0 ",omega"; next} {h[NR] = $2; printf "%s,%.17g\n", $0, (NR > 3 ? h[NR - 3] : 0)}' |
   mcg-sweep bode >bode.csv
 mcg-plot-gnuplot --bode -o bode.png <bode.csv
-check "Bode PNG" '[ "$(magic bode.png 8)" = 89504e470d0a1a0a ]'
+expect "Bode PNG" '[ "$(magic bode.png 8)" = 89504e470d0a1a0a ]'
 mcg-plot-gnuplot --bode --term dumb <bode.csv >bode.txt
 # Two panels: two frames, each with its own frequency axis label (one panel has one).
-check "Bode text has both panels" '[ "$(grep -c "frequency (Hz)" bode.txt)" -eq 2 ] && [ "$(grep -Ec "^ +[-+0-9.e]+ \+-+\+ *$" bode.txt)" -eq 4 ]'
+expect "Bode text has both panels" '[ "$(grep -c "frequency (Hz)" bode.txt)" -eq 2 ] && [ "$(grep -Ec "^ +[-+0-9.e]+ \+-+\+ *$" bode.txt)" -eq 4 ]'
 
 # Hostile input: a header, metadata title, --title and file name built to break out of a
 # gnuplot string and call system(). Nothing may be created but the plots.
 printf '%s\n' "# title: x' ; system('touch pwned1') ; print '" \
   't,x"; system("touch pwned2"); ",`touch pwned3`,@GPVAL_PWD' '0,1,2,3' '1,2,3,4' >"evil'\"\`touch pwned4\`.csv"
 mcg-plot-gnuplot -o evil.png "evil'\"\`touch pwned4\`.csv" --overlay "evil'\"\`touch pwned4\`.csv"
-check "hostile table plots" '[ "$(magic evil.png 8)" = 89504e470d0a1a0a ]'
+expect "hostile table plots" '[ "$(magic evil.png 8)" = 89504e470d0a1a0a ]'
 mcg-plot-gnuplot --term dumb --title "$(printf 'ok\nsystem("touch pwned5")\n')" <"evil'\"\`touch pwned4\`.csv" >evil.txt
-check "newline in --title stays text" 'grep -q "oksystem" evil.txt'
+expect "newline in --title stays text" 'grep -q "oksystem" evil.txt'
 mcg-plot-gnuplot --term dumb --title "'; system('touch pwned6'); '" <"evil'\"\`touch pwned4\`.csv" >/dev/null
 gnuplot -e 'system("touch control")' >/dev/null
-check "a real system() call would have been seen" '[ -e control ]'
-check "nothing ran" '[ -z "$(ls -d pwned1 pwned2 pwned3 pwned4 pwned5 pwned6 2>/dev/null)" ]'
+expect "a real system() call would have been seen" '[ -e control ]'
+expect "nothing ran" '[ -z "$(ls -d pwned1 pwned2 pwned3 pwned4 pwned5 pwned6 2>/dev/null)" ]'
 
 # gnuplot reports its own errors; the tool then fails with one line.
 printf 't,x\n0,1\n' >one.csv
 mcg-plot-gnuplot --logy -y x -o one.png <one.csv 2>err.txt >/dev/null
-check "a single point still plots" '[ "$(magic one.png 8)" = 89504e470d0a1a0a ]'
+expect "a single point still plots" '[ "$(magic one.png 8)" = 89504e470d0a1a0a ]'
 
-echo "plot: $passed passed, $failed failed"
-[ "$failed" = 0 ]
+finish "plot"

@@ -13,18 +13,9 @@ for p in gnuplot tmux Xvfb xwd xwdtopnm pnmtopng ppmhist; do
   command -v "$p" >/dev/null || { echo "skipped: $p missing"; exit 125; }
 done
 gnuplot -e "set print '-'; print GPVAL_TERMINALS" | grep -qw x11 || { echo "skipped: gnuplot without x11"; exit 125; }
-work=$(mktemp -d)
+source "$(dirname "$0")/lib.sh"
 session=mcg-live-$$
-xvfb_pid=
-cleanup() {
-  tmux -L "$session" kill-server 2>/dev/null
-  [[ -n "$xvfb_pid" ]] && kill "$xvfb_pid" 2>/dev/null
-  wait 2>/dev/null
-  rm -rf "$work"
-}
-trap cleanup EXIT
-failures=0
-fail() { echo "FAIL $*"; failures=$((failures + 1)); }
+trap 'tmux -L "$session" kill-server 2>/dev/null; cleanup' EXIT
 
 # A 4 s run, sent at about real time (50 rows, then 50 ms).
 mcg-sweep prbs --bias 6 --amp 3 --clock 0.1 --duration 4 --seed 5 | mcg-sim >"$work/run.csv"
@@ -98,6 +89,7 @@ for display in $(seq 90 110); do
 done
 Xvfb ":$display" -screen 0 1100x700x24 -nolisten tcp 2>"$work/xvfb.err" &
 xvfb_pid=$!
+bg_pids+=("$xvfb_pid")
 for _ in $(seq 50); do
   [[ -e /tmp/.X11-unix/X$display ]] && break
   sleep 0.1

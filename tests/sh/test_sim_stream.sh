@@ -6,14 +6,8 @@
 set -u
 tool_dir=$1
 export PATH="$tool_dir:$PATH" LC_ALL=C
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/lib.sh"
 cd "$work" || exit 1
-passed=0
-failed=0
-check() {
-  if eval "$2"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "FAIL: $1"; fi
-}
 
 # Feeds header and rows one at a time to a coprocess mcg-sim; after each row, reads the
 # output until that row's line is there (10 s without it: the filter held it back).
@@ -51,25 +45,24 @@ lockstep() {
   echo "t,v,clutch,r_load"
   for k in $(seq 0 40); do echo "$(awk -v k="$k" 'BEGIN {printf "%.3f", k * 0.005}'),12,2,5.6"; done
 } >open.csv
-check "open loop: one output row per input row, while the input waits" 'lockstep open.csv open.live'
+expect "open loop: one output row per input row, while the input waits" 'lockstep open.csv open.live'
 mcg-sim <open.csv >open.whole
-check "open loop: the live table equals the whole-file table" 'cmp -s open.live open.whole'
-check "open loop: the speed rises" 'awk -F, '"'"'/^[0-9]/ {r = $6} END {exit !(r > 50)}'"'"' open.live'
+expect "open loop: the live table equals the whole-file table" 'cmp -s open.live open.whole'
+expect "open loop: the speed rises" 'awk -F, '"'"'/^[0-9]/ {r = $6} END {exit !(r > 50)}'"'"' open.live'
 
 {
   echo "t,rpm_cmd"
   for k in $(seq 0 30); do echo "$(awk -v k="$k" 'BEGIN {printf "%.3f", k * 0.002}'),300"; done
 } >closed.csv
-check "closed loop: one output row per input row, while the input waits" 'lockstep closed.csv closed.live --encoder'
+expect "closed loop: one output row per input row, while the input waits" 'lockstep closed.csv closed.live --encoder'
 mcg-sim --encoder <closed.csv >closed.whole
-check "closed loop: the live table equals the whole-file table" 'cmp -s closed.live closed.whole'
+expect "closed loop: the live table equals the whole-file table" 'cmp -s closed.live closed.whole'
 
 # A bad row mid-stream: the rows before it are out, then the error.
 printf 't,v\n0,1\n0.001,1\n0.001,1\n' | mcg-sim >bad.out 2>bad.err
 status=$?
-check "bad row: exit 1" '[ "$status" = 1 ]'
-check "bad row: the two good rows are written" '[ "$(grep -c "^0" bad.out)" = 2 ]'
-check "bad row: the error names the line" 'grep -qx "mcg-sim: error: <stdin>:4: column '"'"'t'"'"': 0.001 does not increase (previous row: 0.001)" bad.err'
+expect "bad row: exit 1" '[ "$status" = 1 ]'
+expect "bad row: the two good rows are written" '[ "$(grep -c "^0" bad.out)" = 2 ]'
+expect "bad row: the error names the line" 'grep -qx "mcg-sim: error: <stdin>:4: column '"'"'t'"'"': 0.001 does not increase (previous row: 0.001)" bad.err'
 
-echo "sim stream: $passed passed, $failed failed"
-[ "$failed" = 0 ]
+finish "sim stream"

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "model/model.hpp"
+#include "support/inputs.hpp"
 
 namespace mcg::model {
 namespace {
@@ -15,17 +16,6 @@ Model asymmetric() {
   Model m;
   m.effects.push_back(parse_effect("friction_asymmetry:dT_Nm=0.0012"));
   return m;
-}
-
-Inputs constant(double v, double duration_s) {
-  Inputs in;
-  for (std::size_t k = 0; k <= static_cast<std::size_t>(std::llround(duration_s / 1e-3)); ++k) {
-    in.t_s.push_back(static_cast<double>(k) * 1e-3);
-    in.v_V.push_back(v);
-    in.clutch.push_back(0.0);
-    in.r_load_ohm.push_back(k_open_circuit);
-  }
-  return in;
 }
 
 /// Steady speed of the motor alone at voltage v > 0 against a kinetic level F(w) + offset:
@@ -43,12 +33,12 @@ double steady_speed(const Machine& m, double v, double offset_Nm) {
 TEST(ModelEffectFrictionAsymmetry, SteadySpeedsDifferByDirectionAsTheLevelsSay) {
   const Machine& m = builtin_rig().motor;
   const double v = 6.0;
-  const Outputs fwd = simulate(asymmetric(), constant(v, 1.5));
-  const Outputs rev = simulate(asymmetric(), constant(-v, 1.5));
+  const Outputs fwd = simulate(asymmetric(), test::constant_inputs(v, 1.5));
+  const Outputs rev = simulate(asymmetric(), test::constant_inputs(-v, 1.5));
   EXPECT_NEAR(fwd.omega_rad_s.back(), steady_speed(m, v, k_dT_Nm), 1e-3);
   EXPECT_NEAR(-rev.omega_rad_s.back(), steady_speed(m, v, -k_dT_Nm), 1e-3);
   // Without the effect both directions run at the symmetric speed.
-  const Outputs sym = simulate(Model{}, constant(-v, 1.5));
+  const Outputs sym = simulate(Model{}, test::constant_inputs(-v, 1.5));
   EXPECT_NEAR(-sym.omega_rad_s.back(), steady_speed(m, v, 0.0), 1e-3);
   EXPECT_GT(-rev.omega_rad_s.back() - fwd.omega_rad_s.back(), 1.0);
 }
@@ -59,7 +49,7 @@ TEST(ModelEffectFrictionAsymmetry, BreakawayAtTsPlusDtForwardAndTsMinusDtInRever
   const double v_fwd = (m.friction.Ts_Nm + k_dT_Nm) * m.R_ohm / m.Kt_Nm_A;
   const double v_rev = (m.friction.Ts_Nm - k_dT_Nm) * m.R_ohm / m.Kt_Nm_A;
   auto moves = [&](double v) {
-    const Outputs out = simulate(asymmetric(), constant(v, 0.3));
+    const Outputs out = simulate(asymmetric(), test::constant_inputs(v, 0.3));
     return std::abs(out.omega_rad_s.back()) > 0.0;
   };
   EXPECT_FALSE(moves(0.98 * v_fwd));

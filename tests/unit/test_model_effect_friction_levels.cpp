@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "model/model.hpp"
+#include "support/inputs.hpp"
 
 namespace mcg::model {
 namespace {
@@ -20,17 +21,6 @@ Model frictionless_with_levels() {
   return m;
 }
 
-Inputs constant(double v, double duration_s) {
-  Inputs in;
-  for (std::size_t k = 0; k <= static_cast<std::size_t>(std::llround(duration_s / 1e-3)); ++k) {
-    in.t_s.push_back(static_cast<double>(k) * 1e-3);
-    in.v_V.push_back(v);
-    in.clutch.push_back(0.0);
-    in.r_load_ohm.push_back(k_open_circuit);
-  }
-  return in;
-}
-
 TEST(ModelEffectFrictionLevels, SteadySpeedUnderTheAddedCoulombAndViscousLevels) {
   // Kt (v - Ke w) / R = Tc + c1 w  =>  w = (Kt v / R - Tc) / (Kt Ke / R + c1), both directions.
   const Model m = frictionless_with_levels();
@@ -38,7 +28,7 @@ TEST(ModelEffectFrictionLevels, SteadySpeedUnderTheAddedCoulombAndViscousLevels)
   for (double v : {7.0, -7.0}) {
     const double w =
         (mm.Kt_Nm_A * std::abs(v) / mm.R_ohm - k_Tc_Nm) / (mm.Kt_Nm_A * mm.Ke_V_s_rad / mm.R_ohm + k_c1);
-    EXPECT_NEAR(simulate(m, constant(v, 1.5)).omega_rad_s.back(), std::copysign(w, v), 1e-6 * w);
+    EXPECT_NEAR(simulate(m, test::constant_inputs(v, 1.5)).omega_rad_s.back(), std::copysign(w, v), 1e-6 * w);
   }
 }
 
@@ -46,12 +36,12 @@ TEST(ModelEffectFrictionLevels, BreakawayAtTheAddedStaticLevel) {
   const Model m = frictionless_with_levels();
   const Machine& mm = m.params.motor;
   const double v_break = (k_Tc_Nm + k_excess_Nm) * mm.R_ohm / mm.Kt_Nm_A;
-  EXPECT_EQ(simulate(m, constant(0.98 * v_break, 0.3)).omega_rad_s.back(), 0.0);
-  EXPECT_GT(simulate(m, constant(1.02 * v_break, 0.3)).omega_rad_s.back(), 0.0);
+  EXPECT_EQ(simulate(m, test::constant_inputs(0.98 * v_break, 0.3)).omega_rad_s.back(), 0.0);
+  EXPECT_GT(simulate(m, test::constant_inputs(1.02 * v_break, 0.3)).omega_rad_s.back(), 0.0);
   // Without the effect the frictionless motor turns at any voltage.
   Model bare = m;
   bare.effects.clear();
-  EXPECT_GT(simulate(bare, constant(0.01, 0.3)).omega_rad_s.back(), 0.0);
+  EXPECT_GT(simulate(bare, test::constant_inputs(0.01, 0.3)).omega_rad_s.back(), 0.0);
 }
 
 }  // namespace

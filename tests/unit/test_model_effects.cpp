@@ -9,22 +9,11 @@
 #include "common/error.hpp"
 #include "config/ini.hpp"
 #include "model/model.hpp"
+#include "support/inputs.hpp"
 #include "test_support_error.hpp"
 
 namespace mcg::model {
 namespace {
-
-Inputs constant(double v, double duration_s, double dt_s, int clutch, double r_load = k_open_circuit) {
-  Inputs in;
-  const auto n = static_cast<std::size_t>(std::llround(duration_s / dt_s)) + 1;
-  for (std::size_t k = 0; k < n; ++k) {
-    in.t_s.push_back(static_cast<double>(k) * dt_s);
-    in.v_V.push_back(v);
-    in.clutch.push_back(clutch);
-    in.r_load_ohm.push_back(r_load);
-  }
-  return in;
-}
 
 Model with(const std::string& spec) {
   Model m;
@@ -118,7 +107,7 @@ TEST(ModelEffects, ParseErrorsNameTheBadText) {
 
 /// Steady state of the motor alone at v: returns (w, i).
 std::pair<double, double> steady(const Model& m, double v) {
-  const Outputs out = simulate(m, constant(v, 1.5, 1e-3, 0), {});
+  const Outputs out = simulate(m, test::constant_inputs(v, 1.5, 1e-3, 0), {});
   return {out.omega_rad_s.back(), out.i_A.back()};
 }
 
@@ -150,7 +139,8 @@ TEST(ModelEffects, SupplySagDropsWithDutyAndCurrent) {
 TEST(ModelEffects, HbridgeDeadbandAndOnResistance) {
   const Params p = builtin_rig();
   // Inside the deadband nothing reaches the motor.
-  const Outputs dead = simulate(with("hbridge:deadband=0.05,R_on_ohm=0.1"), constant(0.9, 0.2, 1e-3, 0), {});
+  const Outputs dead =
+      simulate(with("hbridge:deadband=0.05,R_on_ohm=0.1"), test::constant_inputs(0.9, 0.2, 1e-3, 0), {});
   EXPECT_EQ(dead.i_A.back(), 0.0);
   EXPECT_EQ(dead.omega_rad_s.back(), 0.0);
   // Outside: d' = 0.5 - 0.05, and two switches in the path.
@@ -160,7 +150,7 @@ TEST(ModelEffects, HbridgeDeadbandAndOnResistance) {
 
 TEST(ModelEffects, DeadTimeShiftsTheResponseExactly) {
   // A 3 ms delay of a step at 0.100 s equals the undelayed step at 0.103 s.
-  Inputs a = constant(0.0, 0.3, 1e-3, 2);
+  Inputs a = test::constant_inputs(0.0, 0.3, 1e-3, 2);
   Inputs b = a;
   for (std::size_t k = 0; k < a.t_s.size(); ++k) {
     a.v_V[k] = a.t_s[k] >= 0.1 - 1e-9 ? 8.0 : 0.0;
@@ -186,8 +176,8 @@ TEST(ModelEffects, ParamMismatchScalesTheNominalParameters) {
   }
   explicit_model.params.clutch_disengaged.Tc_Nm *= 1.2;
   explicit_model.params.clutch_engaged.Tc_Nm *= 1.2;
-  const Outputs a = simulate(scaled, constant(7.0, 0.3, 1e-3, 2, 5.6), {});
-  const Outputs b = simulate(explicit_model, constant(7.0, 0.3, 1e-3, 2, 5.6), {});
+  const Outputs a = simulate(scaled, test::constant_inputs(7.0, 0.3, 1e-3, 2, 5.6), {});
+  const Outputs b = simulate(explicit_model, test::constant_inputs(7.0, 0.3, 1e-3, 2, 5.6), {});
   EXPECT_EQ(a.rpm, b.rpm);
 }
 
@@ -197,11 +187,11 @@ TEST(ModelEffects, CoggingShiftsTheBreakawayWithPosition) {
   const Params p = builtin_rig();
   const double v_break = (p.motor.friction.Ts_Nm - 2.2e-3) * p.motor.R_ohm / p.motor.Kt_Nm_A;
   const Model m = with("cogging:T_c_Nm=0.0022,N_per_rev=9,phase_rad=1.5707963267948966");
-  EXPECT_EQ(simulate(m, constant(v_break * 0.99, 0.2, 1e-3, 0), {}).theta_rad.back(), 0.0);
-  EXPECT_GT(simulate(m, constant(v_break * 1.01, 0.2, 1e-3, 0), {}).theta_rad.back(), 0.01);
+  EXPECT_EQ(simulate(m, test::constant_inputs(v_break * 0.99, 0.2, 1e-3, 0), {}).theta_rad.back(), 0.0);
+  EXPECT_GT(simulate(m, test::constant_inputs(v_break * 1.01, 0.2, 1e-3, 0), {}).theta_rad.back(), 0.01);
   // At speed the ripple averages out: the mean speed is close to the nominal one.
-  const Outputs fast = simulate(m, constant(8.0, 1.0, 1e-4, 0), {});
-  const Outputs nominal = simulate(Model{}, constant(8.0, 1.0, 1e-4, 0), {});
+  const Outputs fast = simulate(m, test::constant_inputs(8.0, 1.0, 1e-4, 0), {});
+  const Outputs nominal = simulate(Model{}, test::constant_inputs(8.0, 1.0, 1e-4, 0), {});
   double mean = 0.0;
   for (std::size_t k = 5000; k < fast.rpm.size(); ++k) mean += fast.rpm[k] - nominal.rpm[k];
   EXPECT_NEAR(mean / 5001.0, 0.0, 1.0);
@@ -211,7 +201,7 @@ TEST(ModelEffects, ThermalRaisesTheResistanceOfAStalledWinding) {
   // Stalled (motor alone, 0.3 V < breakaway 0.375 V): dT settles where
   // dT = R_th i^2 R0 (1 + alpha dT) with i = v / (R0 (1 + alpha dT)).
   Model m = with("thermal:R_th_K_W=50,tau_th_s=0.5,alpha_per_K=0.00393");
-  const Outputs out = simulate(m, constant(0.3, 10.0, 1e-2, 0), {});
+  const Outputs out = simulate(m, test::constant_inputs(0.3, 10.0, 1e-2, 0), {});
   const double R0 = builtin_rig().motor.R_ohm;
   double dT = 0.0;
   for (int it = 0; it < 100; ++it) dT = 50.0 * 0.3 * 0.3 / (R0 * (1.0 + 0.00393 * dT));

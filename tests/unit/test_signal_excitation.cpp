@@ -51,6 +51,18 @@ TEST(SignalSchedule, HoldsInitialValueUntilFirstChange) {
   EXPECT_EQ(schedule_value(7, c, 2.0), 2.0);
 }
 
+TEST(SignalSchedule, ACursorActsWithinHalfANanosecondOfTheChangeAsTheValueDoes) {
+  const std::vector<Change> c{{1, 0.5}, {2, 1.5}};
+  ScheduleCursor cursor(7, c);
+  EXPECT_EQ(cursor.at(0.0), 7.0);
+  EXPECT_EQ(cursor.at(0.5 - 1e-9), 7.0);
+  EXPECT_EQ(cursor.at(0.5 - 1e-10), 1.0);
+  EXPECT_EQ(cursor.at(1.5), 2.0);
+  for (const double t : {0.0, 0.5 - 1e-9, 0.5 - 1e-10, 1.0, 1.5, 9.0}) {
+    EXPECT_EQ(schedule_value(7, c, t), ScheduleCursor(7, c).at(t)) << t;
+  }
+}
+
 TEST(SignalGrid, CoversDurationWithWholeSteps) {
   const auto t = time_grid(0.001, 1.0);
   ASSERT_EQ(t.size(), 1000U);

@@ -17,6 +17,7 @@
 #include "board/board.hpp"
 #include "common/diagnostics.hpp"
 #include "common/error.hpp"   // mcg::fail
+#include "common/poll_timeout.hpp"
 #include "common/quote.hpp"
 #include "config/ini.hpp"     // Ini
 #include "link/interrupt.hpp" // InterruptGuard
@@ -143,7 +144,7 @@ void serve(const ServeOptions& options, Diagnostics& diag) {
     wall_s = std::chrono::duration<double>(Clock::now() - start).count();
     const double wait_s = static_cast<double>(ticks + 1) * tick_s - wall_s;
     pollfd p{pty.fd(), POLLIN, 0};
-    ::poll(&p, 1, wait_s > 0.0 ? static_cast<int>(std::ceil(wait_s * 1e3)) : 0);
+    ::poll(&p, 1, poll_timeout_ms(wait_s));
   }
 }
 

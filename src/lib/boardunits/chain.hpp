@@ -25,6 +25,8 @@ static_assert(k_board_counts_per_rev == MCG_COUNTS_PER_REV, "mcg_protocol.h and 
 inline constexpr const char* k_board_encoder_text = "512 lines, x4 quadrature decoding = 2048 counts/rev";
 /// The board's duty unit: 1/1000 of full scale.
 inline constexpr double k_board_duty_full = MCG_DUTY_FULL;
+/// The resistor the rig's load relay switches across the generator, ohm (the report's 5.6 ohm).
+inline constexpr double k_load_resistor_ohm = 5.6;
 
 /// The report's chain (Figure 17-1), in which its controllers are written: duty in PWM counts
 /// (922 at 100 %), PWM logic level 5 V, H-bridge gain 4 (so the supply is 20 V), and the error

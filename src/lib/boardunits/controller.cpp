@@ -1,16 +1,16 @@
 // The [controller] section: parse, write, and the board's registers for it.
 #include "boardunits/controller.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
 
-#include <fmt/format.h>
-
 #include "common/checked.hpp"
 #include "common/error.hpp"
 #include "config/ini.hpp"
-#include "mcg_protocol.h"  // MCG_COEF_FRAC_BITS_MAX
+#include "mcg_protocol.h"  // MCG_COEF_FRAC_BITS_MAX, MCG_MODE_*
 
 namespace mcg::boardunits {
 
@@ -36,7 +36,8 @@ BoardFixedPoint fixed_point_from_ini(const config::Ini& ini, const Controller& c
   }
   BoardFixedPoint q;
   q.mode = ini.get(k_fixed, "mode").value_or("");
-  if (q.mode != "p" && q.mode != "pi" && q.mode != "pid") ini.reject(k_fixed, "mode", "not p, pi or pid");
+  const std::optional<std::int16_t> mode = board_mode(q.mode);
+  if (!mode || *mode == MCG_MODE_OPEN) ini.reject(k_fixed, "mode", "not p, pi or pid");
   q.coef_frac = *to_integer(frac, 0, static_cast<int>(MCG_COEF_FRAC_BITS_MAX));
   q.factor = c.units().factor();
   const auto reg = [&](const char* key) {
@@ -46,12 +47,12 @@ BoardFixedPoint fixed_point_from_ini(const config::Ini& ini, const Controller& c
     q.wanted.push_back(std::ldexp(v, -q.coef_frac));
     q.b.push_back(std::ldexp(v, -q.coef_frac) / q.factor);
   };
-  if (q.mode == "p") {
+  if (*mode == MCG_MODE_P) {
     reg("kp");
     q.a = {1.0};
   } else {
     for (const char* key : {"b0", "b1", "b2"}) reg(key);
-    if (q.mode == "pi") q.b.pop_back();
+    if (*mode == MCG_MODE_PI) q.b.pop_back();
     q.a = {1.0, -1.0};
   }
   return q;

@@ -1,14 +1,14 @@
 // Quantisation of a designed controller into the board's registers.
 #include "boardunits/fixed_point.hpp"
 
+#include <cmath>
+#include <cstddef>
+
 #include "common/checked.hpp"
 #include "common/demand.hpp"
 #include "common/error.hpp"
 #include "config/ini.hpp"
-#include "mcg_protocol.h"  // MCG_COEF_FRAC_BITS_MAX, MCG_ERR_LIMIT, MCG_ERR_FRAC_BITS
-
-#include <cmath>
-#include <cstddef>
+#include "mcg_protocol.h"  // MCG_COEF_FRAC_BITS_MAX, MCG_ERR_LIMIT, MCG_ERR_FRAC_BITS, MCG_MODE_*, MCG_REG_*
 
 namespace mcg::boardunits {
 
@@ -18,7 +18,37 @@ constexpr double k_coef_max = 32767.0;   ///< int16 register
 constexpr double k_e_max_q8 = MCG_ERR_LIMIT;    ///< |e| bound in Q8 pulses per tick (-8191 <= e <= r <= 6291)
 constexpr double k_acc_limit = 2147483647.0;
 
+static_assert(k_board_modes[MCG_MODE_OPEN] == "open" && k_board_modes[MCG_MODE_P] == "p" &&
+              k_board_modes[MCG_MODE_PI] == "pi" && k_board_modes[MCG_MODE_PID] == "pid");
+
 }  // namespace
+
+std::optional<std::int16_t> board_mode(std::string_view name) {
+  for (std::size_t k = 0; k < k_board_modes.size(); ++k) {
+    if (k_board_modes[k] == name) return static_cast<std::int16_t>(k);
+  }
+  return std::nullopt;
+}
+
+std::vector<BoardRegisterValue> board_registers(const BoardFixedPoint& q) {
+  const std::optional<std::int16_t> mode = board_mode(q.mode);
+  MCG_DEMAND(mode && *mode != MCG_MODE_OPEN);
+  const bool p = *mode == MCG_MODE_P;
+  MCG_DEMAND(q.regs.size() == (p ? 1u : 3u));
+  // A set of registers read back (no design behind it) wants what it holds.
+  const auto wanted = [&](std::size_t k) {
+    return k < q.wanted.size() ? q.wanted[k] : std::ldexp(static_cast<double>(q.regs[k]), -q.coef_frac);
+  };
+  std::vector<BoardRegisterValue> out{
+      {MCG_REG_COEF_FRAC, static_cast<std::int16_t>(q.coef_frac), static_cast<double>(q.coef_frac)}};
+  static constexpr std::uint8_t k_gains[] = {MCG_REG_B0, MCG_REG_B1, MCG_REG_B2};
+  for (std::size_t k = 0; k < q.regs.size(); ++k) {
+    out.push_back(
+        {p ? std::uint8_t{MCG_REG_KP} : k_gains[k], static_cast<std::int16_t>(q.regs[k]), wanted(k)});
+  }
+  out.push_back({MCG_REG_MODE, *mode, static_cast<double>(*mode)});
+  return out;
+}
 
 double ControllerUnits::factor() const {
   return input_scale * (k_ms_per_min / k_board_counts_per_rev) * (k_board_duty_full / duty_full_scale);
@@ -33,7 +63,7 @@ std::optional<BoardFixedPoint> board_fixed_point(const std::vector<double>& b, c
   if ((!incremental && b.size() != 1) || (incremental && b.size() < 2) || b.size() > 3) return std::nullopt;
 
   BoardFixedPoint q;
-  q.mode = !incremental ? "p" : b.size() == 3 ? "pid" : "pi";
+  q.mode = k_board_modes[!incremental ? MCG_MODE_P : b.size() == 3 ? MCG_MODE_PID : MCG_MODE_PI];
   q.factor = units.factor();
   const double scale = q.factor / a[0];
   std::vector<double> g;

@@ -2,14 +2,22 @@
 // CONTROLLER AND FIXED POINT; docs/formats.md, [fixed_point]).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "boardunits/chain.hpp"
 
 namespace mcg::boardunits {
+
+/// The board's controller modes by name: k_board_modes[MCG_MODE_x] is mode x's name (the mode
+/// register's values, checked against mcg_protocol.h in fixed_point.cpp).
+inline constexpr std::array<std::string_view, MCG_MODE_COUNT> k_board_modes{"open", "p", "pi", "pid"};
+/// The MCG_MODE_* value of a mode's name; nullopt for a name that is no mode.
+std::optional<std::int16_t> board_mode(std::string_view name);
 
 /// A controller's units: e = input_scale · rpm error (counts per sample), y in duty counts with
 /// duty_full_scale counts at 100 %. The defaults are the report's chain.
@@ -40,6 +48,19 @@ struct BoardFixedPoint {
   std::vector<double> a;            ///< (1) for P, (1, −1) for PI and PID
   double acc_max = 0.0;             ///< worst-case |U[n−1] + Σ c_q e|: 1000·2^(F+8) + 8191·Σ|c_q|
 };
+
+/// One register value of a controller on the board: its id (MCG_REG_*), the int16 it holds, and
+/// the value before rounding (BoardFixedPoint::wanted for a gain, or raw 2^-F without it; the
+/// same number otherwise).
+struct BoardRegisterValue {
+  std::uint8_t id;
+  std::int16_t raw;
+  double wanted;
+};
+
+/// The registers that hold `q` on the board, in the order a load writes them: coef_frac, kp (mode
+/// p) or b0, b1, b2 (pi, pid), then mode, written last because it switches the controller on.
+std::vector<BoardRegisterValue> board_registers(const BoardFixedPoint& q);
 
 /// The registers for the difference equation Σ a_k y[n−k] = Σ b_k e[n−k] in `units`: F is the
 /// largest F <= 12 keeping every |c_q| <= 32767 (as mcg-serial chooses it). Returns nullopt

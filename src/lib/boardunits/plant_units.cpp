@@ -1,11 +1,11 @@
 // Plant units: parsing the spellings, the canonical text, the conversion to rad/s per V.
 #include "boardunits/plant_units.hpp"
 
-#include "common/demand.hpp"
-
 #include <algorithm>
 #include <cctype>
-#include <numbers>
+
+#include "common/demand.hpp"
+#include "common/units.hpp"
 
 namespace mcg::boardunits {
 
@@ -72,7 +72,7 @@ std::string units_words(const PlantUnits& units) {
 
 double omega_per_v_factor(const PlantUnits& units, const LoopChain& chain) {
   MCG_DEMAND(!units.loop);
-  double f = units.out == PlantOutput::rpm ? 2.0 * std::numbers::pi / 60.0 : 1.0;
+  double f = units.out == PlantOutput::rpm ? k_rad_s_per_rpm : 1.0;
   if (units.in == PlantInput::duty) f /= chain.pwm_logic_v * chain.hbridge_gain;
   return f;
 }

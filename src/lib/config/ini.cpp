@@ -1,11 +1,6 @@
 // INI parameter sets.
 #include "config/ini.hpp"
 
-#include "common/error.hpp"
-#include "common/line_reader.hpp"
-#include "common/quote.hpp"
-#include "table/table.hpp"
-
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -19,15 +14,15 @@
 #include <ostream>
 #include <sstream>
 
+#include "common/error.hpp"
+#include "common/line_reader.hpp"
+#include "common/quote.hpp"
+#include "common/text.hpp"
+#include "table/table.hpp"
+
 namespace mcg::config {
 
 namespace {
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-  return s;
-}
 
 /// Strips a trailing "; comment" or "# comment" that follows a blank.
 std::string_view strip_comment(std::string_view s) {
@@ -63,23 +58,23 @@ Ini Ini::parse(std::istream& in, const std::string& source) {
   std::string_view raw;
   while (lines.next(raw)) {
     const std::size_t line_no = lines.line();
-    std::string_view line = trim(raw);
+    std::string_view line = trim_line(raw);
     if (line.empty() || line.front() == ';' || line.front() == '#') continue;
     if (line.front() == '[') {
       const auto close = line.find(']');
       if (close == std::string_view::npos) fail("{}:{}: section header without ']'", source, line_no);
-      if (!trim(strip_comment(line.substr(close + 1))).empty()) {
+      if (!trim_line(strip_comment(line.substr(close + 1))).empty()) {
         fail("{}:{}: text after the section header", source, line_no);
       }
-      section = std::string(trim(line.substr(1, close - 1)));
+      section = std::string(trim_line(line.substr(1, close - 1)));
       if (section.empty()) fail("{}:{}: empty section name", source, line_no);
       continue;
     }
     const auto eq = line.find('=');
     if (eq == std::string_view::npos) fail("{}:{}: expected 'key = value', found {}", source, line_no, quote(line));
-    const std::string_view key = trim(line.substr(0, eq));
+    const std::string_view key = trim_line(line.substr(0, eq));
     if (key.empty()) fail("{}:{}: empty key", source, line_no);
-    const std::string_view value = trim(strip_comment(line.substr(eq + 1)));
+    const std::string_view value = trim_line(strip_comment(line.substr(eq + 1)));
     const std::string origin = fmt::format("{}:{}", source, line_no);
     if (const std::size_t* first = ini.index_of(section, key)) {
       fail("{}: [{}] {}: given twice (first at {})", origin, printable(section), printable(key),

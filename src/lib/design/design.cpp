@@ -1,13 +1,13 @@
 // Exact controller design on the loop's frequency response.
 #include "design/design.hpp"
 
-#include "common/error.hpp"
-#include "config/ini.hpp"
-
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <optional>
+
+#include "common/error.hpp"
+#include "common/units.hpp"
+#include "config/ini.hpp"
 
 namespace mcg::design {
 
@@ -16,8 +16,6 @@ using linsys::LoopEval;
 using linsys::Poly;
 
 namespace {
-
-constexpr double k_pi = std::numbers::pi;
 
 double rad(double deg) { return deg * k_pi / 180.0; }
 double deg(double r) { return r * 180.0 / k_pi; }

@@ -1,6 +1,7 @@
 // The rig model (src/lib/model) linearised at an operating point: a plant for mcg-design.
 #pragma once
 
+#include "common/units.hpp"  // rad_s_from_rpm, k_pi: the operating point and frequencies
 #include "linsys/tf.hpp"
 #include "model/model.hpp"
 

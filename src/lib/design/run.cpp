@@ -34,7 +34,6 @@ using Chain = boardunits::LoopChain;
 
 namespace {
 
-constexpr double k_pi = std::numbers::pi;
 /// The report's identified plant, ω_internal/V_in in rad/s per V (Figure 16-1).
 constexpr const char* k_report_plant = "16.557/((s/65+1)*(s/950+1))";
 
@@ -132,7 +131,7 @@ bool read_plant(const PlantOptions& o, ResolvedPlant& r) {
     const std::optional<double> rpm = flag(o.speed_rpm) ? flag(o.speed_rpm) : ini.number("plant", "speed_rpm");
     if (!rpm) fail("--speed-rpm: required for the linearised rig (or speed_rpm in [plant])");
     const double r_load = flag(o.r_load_ohm).value_or(ini.number("plant", "r_load_ohm").value_or(INFINITY));
-    r.raw = linearise_rig(model::from_ini(ini), clutch, *rpm * 2.0 * k_pi / 60.0, r_load);
+    r.raw = linearise_rig(model::from_ini(ini), clutch, rad_s_from_rpm(*rpm), r_load);
     r.raw_where = fmt::format("rig model linearised at clutch {}, {} rpm, r_load {} ohm", clutch,
                               format_number(*rpm), format_number(r_load));
     domain = Domain::s;

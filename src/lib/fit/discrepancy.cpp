@@ -1,8 +1,6 @@
 // The catalog-free discrepancy fit (see discrepancy.hpp for the method).
 #include "fit/discrepancy.hpp"
 
-#include "common/checked.hpp"
-
 #include <fmt/format.h>
 
 #include <Eigen/Dense>
@@ -11,6 +9,8 @@
 #include <limits>
 #include <numbers>
 
+#include "common/checked.hpp"
+#include "common/units.hpp"
 #include "fit/gap_parts.hpp"
 #include "fit/nls.hpp"  // covariance_statistics
 #include "model/effects/compiled.hpp"
@@ -54,9 +54,7 @@ Measured measured_of(const Run& run) {
   Measured m;
   const std::size_t rows = run.inputs.t_s.size();
   for (std::size_t o = 0; o < run.outputs.size(); ++o) {
-    const double per = run.outputs[o] == "rpm"     ? std::numbers::pi / 30.0
-                       : run.outputs[o] == "omega" ? 1.0
-                                                   : 0.0;
+    const double per = run.outputs[o] == "rpm" ? k_rad_s_per_rpm : run.outputs[o] == "omega" ? 1.0 : 0.0;
     if (per > 0.0) {
       m.w.resize(rows);
       for (std::size_t n = 0; n < rows; ++n) m.w[n] = run.measured[o][n] * per * run.gear_ratio;

@@ -1,16 +1,16 @@
 // Friction from quasi-steady windows (Coulomb and viscous) and starts from rest (static).
 #include "fit/friction.hpp"
 
-#include "common/error.hpp"
-#include "fit/nls.hpp"
-
-#include <Eigen/QR>
 #include <fmt/format.h>
 
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <numbers>
+
+#include "common/error.hpp"
+#include "common/units.hpp"
+#include "fit/nls.hpp"
 
 namespace mcg::fit {
 
@@ -84,7 +84,7 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
     }
   } else if (table.has("rpm") || !table.has("omega")) {
     omega = table.col("rpm");
-    for (double& w : omega) w *= 2.0 * std::numbers::pi / 60.0;
+    for (double& w : omega) w *= k_rad_s_per_rpm;
   } else {
     omega = table.col("omega");
   }

@@ -227,42 +227,46 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
                                            [](const auto& c) { return c.name == "none"; });
   const double before_rpm = at_or_nan(none.rms, s.rpm);
   const double before_i = at_or_nan(none.rms, s.i);
-  out << "# source: mcg-fit gap\n";
-  out << "# diagnosis: " << report.diagnosis << "\n";
+  table::Writer w(out);
+  w.meta("source", "mcg-fit gap");
+  w.meta("diagnosis", report.diagnosis);
   if (report.partial)
-    out << "# partial: the time budget ran out; the ranking is of the candidates fitted so far\n";
-  if (!report.split_note.empty()) out << "# split: " << report.split_note << "\n";
+    w.meta("partial", "the time budget ran out; the ranking is of the candidates fitted so far");
+  if (!report.split_note.empty()) w.meta("split", report.split_note);
   for (const auto& f : report.floors) {
-    out << fmt::format("# noise_floor_{}: {} (measurement chain {}, from the data {})\n", f.output,
-                       number(f.floor), number(f.noise.chain), number(f.noise.data));
+    w.meta("noise_floor_" + f.output,
+           fmt::format("{} (measurement chain {}, from the data {})", number(f.floor), number(f.noise.chain),
+                       number(f.noise.data)));
   }
-  out << "# validation_samples: " << report.validation_samples << "\n";
+  w.meta("validation_samples", std::to_string(report.validation_samples));
   if (report.discrepancy) {
     const DiscrepancyResult& d = *report.discrepancy;
-    for (const auto& t : d.terms) out << "# discrepancy_term: " << t.equation << "\n";
+    for (const auto& t : d.terms) w.meta("discrepancy_term", t.equation);
     if (d.terms.empty()) {
-      out << "# discrepancy: " << d.note << "\n";
+      w.meta("discrepancy", d.note);
     } else {
-      out << fmt::format(
-          "# discrepancy: explains {} % of the torque residual in validation; validation rpm RMS {} -> {}\n",
-          number(d.validation_explained_pct, 3), number(d.rms_before_rpm), number(d.rms_after_rpm));
+      w.meta("discrepancy",
+             fmt::format("explains {} % of the torque residual in validation; validation rpm RMS {} -> {}",
+                         number(d.validation_explained_pct, 3), number(d.rms_before_rpm),
+                         number(d.rms_after_rpm)));
     }
   }
-  out << "effect,rms_before_rpm,rms_after_rpm,shrink_pct,gap_before_rpm,gap_after_rpm,gap_shrink_pct,"
-         "rms_before_i_A,rms_after_i_A,train_rms_rpm,score,fpe,n_params,n_added,params,significant,status,"
-         "flags\n";
+  w.header({"effect", "rms_before_rpm", "rms_after_rpm", "shrink_pct", "gap_before_rpm", "gap_after_rpm",
+            "gap_shrink_pct", "rms_before_i_A", "rms_after_i_A", "train_rms_rpm", "score", "fpe", "n_params",
+            "n_added", "params", "significant", "status", "flags"});
   for (const auto& c : report.candidates) {
     const double after_rpm = at_or_nan(c.rms, s.rpm);
     const double gap_before = above_noise(before_rpm, s.floor_rpm);
     const double gap_after = above_noise(after_rpm, s.floor_rpm);
     const double shrink = 100.0 * (before_rpm - after_rpm) / before_rpm;
     const double gap_shrink = gap_before > 0.0 ? 100.0 * (gap_before - gap_after) / gap_before : k_nan;
-    out << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", c.name, number(before_rpm, 6),
-                       number(after_rpm, 6), number(shrink, 4), number(gap_before, 6), number(gap_after, 6),
-                       number(gap_shrink, 4), number(before_i, 6), number(at_or_nan(c.rms, s.i), 6),
-                       number(c.train_rms_rpm, 6), number(c.score, 6), number(c.fpe, 6), c.free.size(),
-                       c.added_parameters, params_text(c), c.significant ? 1 : 0, c.status, flags_text(c));
+    w.text_row({c.name, number(before_rpm, 6), number(after_rpm, 6), number(shrink, 4), number(gap_before, 6),
+                number(gap_after, 6), number(gap_shrink, 4), number(before_i, 6),
+                number(at_or_nan(c.rms, s.i), 6), number(c.train_rms_rpm, 6), number(c.score, 6),
+                number(c.fpe, 6), std::to_string(c.free.size()), std::to_string(c.added_parameters),
+                params_text(c), c.significant ? "1" : "0", c.status, flags_text(c)});
   }
+  w.finish();
 }
 
 void write_gap_text(std::ostream& out, const GapReport& report) {

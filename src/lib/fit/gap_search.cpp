@@ -10,12 +10,12 @@
 #include <limits>
 #include <map>
 #include <mutex>
-#include <numbers>
 #include <optional>
 
 #include "common/demand.hpp"
 #include "common/error.hpp"
 #include "common/parallel.hpp"
+#include "common/units.hpp"
 #include "fit/friction.hpp"
 #include "fit/gap_parts.hpp"
 
@@ -128,7 +128,7 @@ table::Table friction_table(const Run& run, const std::vector<std::vector<double
   for (std::size_t o = 0; o < run.outputs.size(); ++o) {
     if (run.outputs[o] == "rpm" || run.outputs[o] == "omega") {
       std::vector<double> rpm = series[o];
-      const double factor = run.gear_ratio * (run.outputs[o] == "omega" ? 30.0 / std::numbers::pi : 1.0);
+      const double factor = run.gear_ratio * (run.outputs[o] == "omega" ? k_rpm_per_rad_s : 1.0);
       for (double& x : rpm) x *= factor;
       t.set("rpm", std::move(rpm));
     } else if (run.outputs[o] == "i") {
@@ -746,7 +746,7 @@ std::vector<double> angle_orders(const model::Model& model, const std::vector<Ru
     for (std::size_t n = 1; n < y.size(); ++n) {
       const double dt = run.inputs.t_s[n] - run.inputs.t_s[n - 1];
       if (std::isfinite(y[n]) && std::isfinite(y[n - 1]))
-        theta += 0.5 * (y[n] + y[n - 1]) * dt * std::numbers::pi / 30.0;
+        theta += rad_s_from_rpm(0.5 * (y[n] + y[n - 1]) * dt);
       const double r = y[n] - sim[o][n];
       if (!std::isfinite(r) || y[n] == 0.0) continue;
       for (std::size_t order = 2; order <= k_max_angle_order; ++order) {

@@ -1,8 +1,6 @@
 // Grey-box fit: simulation error minimised with Levenberg-Marquardt over named parameters.
 #include "fit/greybox.hpp"
 
-#include "common/error.hpp"
-
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -12,6 +10,9 @@
 #include <set>
 #include <string_view>
 #include <tuple>
+
+#include "common/error.hpp"
+#include "common/units.hpp"
 
 namespace mcg::fit {
 
@@ -157,7 +158,7 @@ table::Table select_time(const table::Table& table, double from_s, double to_s) 
 table::Table with_rpm(table::Table table) {
   if (table.has("rpm") || !table.has("omega")) return table;
   std::vector<double> rpm = table.col("omega");
-  for (double& x : rpm) x *= 30.0 / std::numbers::pi;
+  for (double& x : rpm) x *= k_rpm_per_rad_s;
   table.set("rpm", std::move(rpm));
   return table;
 }

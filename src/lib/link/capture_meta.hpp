@@ -26,13 +26,10 @@ struct StreamRow;
 /// The encoder behind every count the board reports (mcg-csv(5) `encoder`).
 inline constexpr const char* k_encoder_text = boardunits::k_board_encoder_text;
 
-/// The resistor the rig's load relay switches across the generator, ohm (the report's 5.6 ohm).
-inline constexpr double k_load_resistor_ohm = 5.6;
-
 /// Where the board's outputs go: the H-bridge supply (duty -> v) and the load relay's resistor.
 struct RigOptions {
   std::vector<std::string> configs;         ///< --config: the rig's INI (as mcg-sim's; supply_V)
-  double r_load_ohm = k_load_resistor_ohm;  ///< --r-load: the relay's resistor, ohm
+  double r_load_ohm = boardunits::k_load_resistor_ohm;  ///< --r-load: the relay's resistor, ohm
 };
 
 struct Rig {

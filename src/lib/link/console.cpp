@@ -8,21 +8,22 @@
 
 #include <algorithm>
 #include <charconv>
-#include <ctime>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <limits>
 #include <mutex>
-#include <numbers>
 #include <optional>
 #include <sstream>
 #include <thread>
 
+#include "boardunits/fixed_point.hpp"  // board_mode
 #include "common/error.hpp"
 #include "common/quote.hpp"
+#include "common/units.hpp"
 #include "config/ini.hpp"
 #include "link/capture_meta.hpp"
 #include "link/connection.hpp"
@@ -177,7 +178,9 @@ std::string reg(const ConsoleState& s, const std::string& name) {
 
 std::string closed_loop_warning(const std::map<std::string, std::string>& registers) {
   const auto it = registers.find("mode");
-  if (it == registers.end() || (it->second != "p" && it->second != "pi" && it->second != "pid")) return {};
+  if (it == registers.end()) return {};
+  const std::optional<std::int16_t> mode_id = boardunits::board_mode(it->second);
+  if (!mode_id || *mode_id == MCG_MODE_OPEN) return {};
   const std::string& mode = it->second;
   const auto gain = [&](const char* name) -> std::optional<double> {
     const auto g = registers.find(name);
@@ -657,12 +660,12 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
               if (!std::isfinite(r.duty)) plant.reset();
               if (!plant && std::isfinite(r.rpm)) {
                 plant.emplace(model, model::SimOptions{}, drive.clutch);
-                plant->start_at(r.rpm * std::numbers::pi / 30.0);
+                plant->start_at(rad_s_from_rpm(r.rpm));
               }
               double rpm_model = std::numeric_limits<double>::quiet_NaN();
               if (plant) {
                 plant->step(k_sample_s, drive);
-                rpm_model = plant->state().omega_rad_s * 30.0 / std::numbers::pi;
+                rpm_model = rpm_from_rad_s(plant->state().omega_rad_s);
               }
               state.add({r.t_s, r.rpm, rpm_model, r.rpm_cmd, r.duty});
               write_row(r);

@@ -2,6 +2,7 @@
 #include "link/owner.hpp"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <poll.h>
 #include <signal.h>
 #include <sys/socket.h>
@@ -19,13 +20,12 @@
 #include <optional>
 #include <vector>
 
-#include <fmt/format.h>
-
-#include "common/error.hpp"    // mcg::fail
+#include "common/error.hpp"  // mcg::fail
+#include "common/poll_timeout.hpp"
 #include "link/capture_meta.hpp"  // config_register_names
-#include "link/frame.hpp"      // Decoder, encode
-#include "link/registers.hpp"  // require_register
-#include "mcg_protocol.h"      // MCG_CMD_*, MCG_MSG_*
+#include "link/frame.hpp"         // Decoder, encode
+#include "link/registers.hpp"     // require_register
+#include "mcg_protocol.h"         // MCG_CMD_*, MCG_MSG_*
 
 namespace mcg::link {
 
@@ -70,8 +70,6 @@ constexpr double k_refresh_s = 2.0;
 /// after register has the line to itself).
 constexpr double k_client_quiet_s = 0.3;
 
-int poll_ms(double timeout_s) { return static_cast<int>(std::clamp(std::ceil(timeout_s * 1e3), 0.0, 3.6e6)); }
-
 sockaddr_un socket_address(const std::string& path) {
   sockaddr_un addr{};
   addr.sun_family = AF_UNIX;
@@ -89,7 +87,7 @@ class SocketPort final : public Port {
 
   std::size_t read_some(std::span<std::uint8_t> buf, double timeout_s) override {
     pollfd p{m_fd, POLLIN, 0};
-    const int ready = ::poll(&p, 1, poll_ms(timeout_s));
+    const int ready = ::poll(&p, 1, poll_timeout_ms(timeout_s));
     if (ready < 0) {
       if (errno == EINTR) return 0;
       fail("{}: waiting for input: {}", m_name, std::strerror(errno));
@@ -107,7 +105,7 @@ class SocketPort final : public Port {
       const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
       if (left <= 0.0) fail("{}: write timed out after {} s (the port's owner does not read)", m_name, timeout_s);
       pollfd p{m_fd, POLLOUT, 0};
-      const int ready = ::poll(&p, 1, poll_ms(left));
+      const int ready = ::poll(&p, 1, poll_timeout_ms(left));
       if (ready < 0 && errno != EINTR) fail("{}: waiting to write: {}", m_name, std::strerror(errno));
       if (ready <= 0) continue;
       const ssize_t n = ::send(m_fd, bytes.data(), bytes.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
@@ -533,7 +531,7 @@ struct PortOwner::Impl {
         timeout_s = std::clamp(gap_s - (now_s() - last_sent_s), 0.0, timeout_s);
       }
       if (fds[2].fd < 0) timeout_s = std::min(timeout_s, 0.002);
-      const int ready = ::poll(fds.data(), fds.size(), poll_ms(timeout_s));
+      const int ready = ::poll(fds.data(), fds.size(), poll_timeout_ms(timeout_s));
       if (ready < 0 && errno != EINTR) fail("control socket: poll: {}", std::strerror(errno));
       if (ready > 0 && fds[0].revents != 0 && !finishing) {
         finishing = true;

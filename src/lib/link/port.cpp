@@ -3,6 +3,7 @@
 
 #include <dirent.h>
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <libserialport.h>
 #include <poll.h>
 #include <signal.h>
@@ -13,28 +14,23 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <charconv>
-#include <cstdio>
-#include <cstdlib>
-#include <fstream>
-#include <string_view>
 #include <cerrno>
+#include <charconv>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <string_view>
 
-#include <fmt/format.h>
+#include "common/poll_timeout.hpp"
 
 namespace mcg::link {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-int poll_timeout_ms(double timeout_s) {
-  if (timeout_s <= 0.0) return 0;
-  return static_cast<int>(std::min(std::ceil(timeout_s * 1e3), 3.6e6));
-}
 
 speed_t termios_speed(int baud) {
   switch (baud) {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <string>
 
+#include "boardunits/fixed_point.hpp"  // k_board_modes
 #include "common/checked.hpp"
 #include "common/error.hpp"  // mcg::fail
 #include "config/ini.hpp"    // format_number
@@ -31,7 +32,7 @@ constexpr bool ids_in_table_order() {
 }
 static_assert(ids_in_table_order(), "MCG_REGISTERS: one row per id 0x01..MCG_REG_COUNT-1, in id order");
 
-constexpr std::array<std::string_view, MCG_MODE_COUNT> k_modes{"open", "p", "pi", "pid"};
+constexpr const auto& k_modes = boardunits::k_board_modes;
 constexpr std::array<std::string_view, 3> k_seq_states{"stop", "play", "loop"};
 constexpr std::array<std::string_view, 4> k_flags{"saturated", "logging", "log_full", "seq"};
 

@@ -1,17 +1,15 @@
 // Margins by root finding on the exact frequency response; closed-loop poles; gain ranges.
 #include "linsys/analysis.hpp"
 
-#include "common/error.hpp"
-
 #include <algorithm>
 #include <cmath>
-#include <numbers>
+
+#include "common/error.hpp"
+#include "common/units.hpp"
 
 namespace mcg::linsys {
 
 namespace {
-
-constexpr double k_pi = std::numbers::pi;
 
 /// Bisection of f on [a, b] with f(a), f(b) of opposite sign, to the last representable bit.
 template <typename F>

@@ -1,13 +1,14 @@
 // The measurement metadata grammar (see measurement.hpp).
 #include "measurement/measurement.hpp"
 
-#include "common/error.hpp"
-#include "config/ini.hpp"
-#include "table/table.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <vector>
+
+#include "common/error.hpp"
+#include "common/text.hpp"
+#include "config/ini.hpp"
+#include "table/table.hpp"
 
 namespace mcg::measurement {
 
@@ -21,12 +22,6 @@ std::string_view next_word(std::string_view& s) {
   const std::string_view word = s.substr(0, n);
   s.remove_prefix(n);
   return word;
-}
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-  return s;
 }
 
 /// The clauses of `text`: split at commas outside parentheses.

@@ -1,9 +1,9 @@
 // Open-loop simulation of a table of rows, and the checks on its inputs.
-#include "common/demand.hpp"
 #include <cmath>
-#include <numbers>
 
+#include "common/demand.hpp"
 #include "common/error.hpp"
+#include "common/units.hpp"
 #include "config/ini.hpp"
 #include "model/model.hpp"
 
@@ -17,7 +17,7 @@ void Outputs::resize(std::size_t rows) {
 
 void Outputs::store(std::size_t row, const State& s) {
   omega_rad_s[row] = s.omega_rad_s;
-  rpm[row] = s.omega_rad_s * 30.0 / std::numbers::pi;
+  rpm[row] = rpm_from_rad_s(s.omega_rad_s);
   theta_rad[row] = s.theta_rad;
   omega_gen_rad_s[row] = s.omega_gen_rad_s;
   i_A[row] = s.i_A;

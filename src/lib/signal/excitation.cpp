@@ -1,29 +1,22 @@
 // Excitation generators: piecewise-constant schedules, sweeps, multisines, shift registers.
 #include "signal/excitation.hpp"
 
-#include "common/checked.hpp"
-#include "common/error.hpp"
-
 #include <algorithm>
 #include <array>
-#include "common/demand.hpp"
 #include <charconv>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <string>
+
+#include "common/checked.hpp"
+#include "common/demand.hpp"
+#include "common/error.hpp"
+#include "common/text.hpp"
+#include "common/units.hpp"
 
 namespace mcg::signal {
 
 namespace {
-
-constexpr double k_pi = std::numbers::pi;
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-  return s;
-}
 
 bool parse_double(std::string_view text, double& value) {
   text = trim(text);
@@ -74,12 +67,7 @@ std::vector<Change> parse_schedule(std::string_view text, std::string_view optio
 }
 
 double schedule_value(double initial, std::span<const Change> changes, double t_s) {
-  double value = initial;
-  for (const Change& c : changes) {
-    if (c.time_s > t_s) break;
-    value = c.value;
-  }
-  return value;
+  return ScheduleCursor(initial, changes).at(t_s);
 }
 
 std::optional<std::size_t> grid_samples(double dt_s, double duration_s) {
@@ -103,13 +91,8 @@ std::vector<double> step_signal(std::span<const double> t_s, double level, doubl
   std::vector<Change> changes{{level, at_s}};
   changes.insert(changes.end(), then.begin(), then.end());
   std::vector<double> x(t_s.size());
-  std::size_t next = 0;
-  double value = 0.0;
-  for (std::size_t k = 0; k < t_s.size(); ++k) {
-    // Half a nanosecond of slack so that 0.1 s lands on the sample that prints as 0.1.
-    while (next < changes.size() && changes[next].time_s <= t_s[k] + 5e-10) value = changes[next++].value;
-    x[k] = value;
-  }
+  ScheduleCursor value(0.0, changes);
+  for (std::size_t k = 0; k < t_s.size(); ++k) x[k] = value.at(t_s[k]);
   return x;
 }
 

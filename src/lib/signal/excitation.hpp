@@ -32,7 +32,26 @@ struct Change {
 /// may be `inf`). Throws mcg::Error naming `option` and the offending item.
 std::vector<Change> parse_schedule(std::string_view text, std::string_view option);
 
-/// Value at `t_s` of a schedule that holds `initial` until its first change.
+/// A schedule read at times that never decrease (the rows of a table): holds `initial` until its
+/// first change. A change acts from the first time t_s with change.time_s <= t_s + 0.5 ns, so
+/// that a change at 0.1 s lands on the sample that prints as 0.1.
+class ScheduleCursor {
+ public:
+  ScheduleCursor(double initial, std::span<const Change> changes) : m_value(initial), m_changes(changes) {}
+  /// The value at t_s (not before the previous call's t_s).
+  double at(double t_s) {
+    while (m_next < m_changes.size() && m_changes[m_next].time_s <= t_s + 5e-10)
+      m_value = m_changes[m_next++].value;
+    return m_value;
+  }
+
+ private:
+  double m_value;
+  std::span<const Change> m_changes;
+  std::size_t m_next = 0;
+};
+
+/// Value at `t_s` of a schedule that holds `initial` until its first change (ScheduleCursor's rule).
 double schedule_value(double initial, std::span<const Change> changes, double t_s);
 
 /// Samples of dt_s in [0, duration): floor(duration_s / dt_s) (a duration within 1e-9 of a

@@ -3,22 +3,20 @@
 // (one million samples in well under the 0.5 s goal; see bench/bench_bode.cpp).
 #include "signal/spectrum.hpp"
 
-#include "common/checked.hpp"
-#include "common/error.hpp"
-
-#include <unsupported/Eigen/FFT>
-
 #include <algorithm>
-#include "common/demand.hpp"
 #include <cmath>
 #include <limits>
-#include <numbers>
+#include <unsupported/Eigen/FFT>
+
+#include "common/checked.hpp"
+#include "common/demand.hpp"
+#include "common/error.hpp"
+#include "common/units.hpp"
 
 namespace mcg::signal {
 
 namespace {
 
-constexpr double k_pi = std::numbers::pi;
 constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 
 double mean_of(std::span<const double> v) {

@@ -314,19 +314,11 @@ void generate(Generator generator, const GeneratorOptions& o, std::ostream& out)
   for (const auto& [key, value] : e.meta.entries()) w.meta(key, value);
   w.header({"t", o.column, "clutch", "r_load"});
   w.set_digits(std::size_t{1}, 12);
-  std::size_t next_clutch = 0;
-  std::size_t next_r_load = 0;
-  double clutch_now = o.clutch;
-  double r_load_now = o.r_load_ohm;
+  ScheduleCursor clutch_now(o.clutch, clutch);
+  ScheduleCursor r_load_now(o.r_load_ohm, r_load);
   for (std::size_t k = 0; k < e.x.size(); ++k) {
     const double t = static_cast<double>(k) * o.dt_s;
-    while (next_clutch < clutch.size() && clutch[next_clutch].time_s <= t + 5e-10) {
-      clutch_now = clutch[next_clutch++].value;
-    }
-    while (next_r_load < r_load.size() && r_load[next_r_load].time_s <= t + 5e-10) {
-      r_load_now = r_load[next_r_load++].value;
-    }
-    w.row({t, o.bias + e.x[k], clutch_now, r_load_now});
+    w.row({t, o.bias + e.x[k], clutch_now.at(t), r_load_now.at(t)});
   }
   w.finish();
 }

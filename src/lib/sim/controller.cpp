@@ -1,16 +1,17 @@
 // Emulation of the board's digital controller and the closed loop around the plant.
 #include "sim/controller.hpp"
 
-#include <algorithm>
-#include "common/checked.hpp"
-#include "common/demand.hpp"
-#include <cmath>
+#include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <numbers>
 
 #include "board/core.hpp"  // FirmwareCore
+#include "common/checked.hpp"
+#include "common/demand.hpp"
 #include "common/error.hpp"
 #include "config/ini.hpp"
 #include "mcg_protocol.h"  // MCG_REG_*, MCG_MODE_*
@@ -63,9 +64,9 @@ class BoardController final : public LoopController {
     // at its first command.
     if (m_core.apply(MCG_REG_MODE, m_mode) != MCG_ST_OK) {
       fail("the board refuses mode {} with every gain zero (it would hold its duty whatever the speed)",
-           m_mode == MCG_MODE_P    ? "p"
-           : m_mode == MCG_MODE_PI ? "pi"
-                                   : "pid");
+           static_cast<std::uint16_t>(m_mode) < MCG_MODE_COUNT
+               ? boardunits::k_board_modes[static_cast<std::size_t>(m_mode)]
+               : std::string_view("unknown"));
     }
     m_core.write(MCG_REG_MODE, MCG_MODE_OPEN);
   }
@@ -150,30 +151,40 @@ class EquationController final : public LoopController {
 
 }  // namespace
 
-bool board_takes_command(double rpm_cmd) {
-  // The register's range from its row of the protocol's one table.
-  struct Range {
-    unsigned id;
-    double lo, hi;
-  };
-#define MCG_RANGE_ROW(NAME, name, access, lo, hi, ...) Range{MCG_REG_##NAME, lo, hi},
-  static constexpr Range k_rows[] = {MCG_REGISTERS(MCG_RANGE_ROW)};
+namespace {
+
+/// The rpm_cmd register's range from its row of the protocol's one table.
+struct RegisterRange {
+  unsigned id;
+  double lo, hi;
+};
+#define MCG_RANGE_ROW(NAME, name, access, lo, hi, ...) RegisterRange{MCG_REG_##NAME, lo, hi},
+constexpr RegisterRange k_register_ranges[] = {MCG_REGISTERS(MCG_RANGE_ROW)};
 #undef MCG_RANGE_ROW
-  const Range& r = k_rows[MCG_REG_RPM_CMD - 1u];
-  static_assert(k_rows[MCG_REG_RPM_CMD - 1u].id == MCG_REG_RPM_CMD);
+constexpr RegisterRange k_command_range = k_register_ranges[MCG_REG_RPM_CMD - 1u];
+static_assert(k_command_range.id == MCG_REG_RPM_CMD);
+
+}  // namespace
+
+bool board_takes_command(double rpm_cmd) {
+  const RegisterRange& r = k_command_range;
   return rpm_cmd == 0.0 || (rpm_cmd == std::floor(rpm_cmd) && rpm_cmd >= r.lo && rpm_cmd <= r.hi);
 }
 
+std::string board_command_range_text() {
+  return fmt::format("{}..{}", k_command_range.lo, k_command_range.hi);
+}
+
 std::unique_ptr<LoopController> board_loop_controller(const boardunits::BoardFixedPoint& q) {
-  std::vector<std::pair<std::uint8_t, std::int16_t>> registers{{MCG_REG_COEF_FRAC, static_cast<std::int16_t>(q.coef_frac)}};
-  if (q.mode == "p") {
-    registers.emplace_back(MCG_REG_KP, static_cast<std::int16_t>(q.regs.at(0)));
-  } else {
-    registers.emplace_back(MCG_REG_B0, static_cast<std::int16_t>(q.regs.at(0)));
-    registers.emplace_back(MCG_REG_B1, static_cast<std::int16_t>(q.regs.at(1)));
-    registers.emplace_back(MCG_REG_B2, static_cast<std::int16_t>(q.regs.at(2)));
+  std::vector<std::pair<std::uint8_t, std::int16_t>> registers;
+  std::int16_t mode = MCG_MODE_OPEN;
+  for (const boardunits::BoardRegisterValue& r : boardunits::board_registers(q)) {
+    if (r.id == MCG_REG_MODE) {
+      mode = r.raw;
+    } else {
+      registers.emplace_back(r.id, r.raw);
+    }
   }
-  const auto mode = static_cast<std::int16_t>(q.mode == "p" ? MCG_MODE_P : q.mode == "pi" ? MCG_MODE_PI : MCG_MODE_PID);
   return std::make_unique<BoardController>(mode, registers);
 }
 

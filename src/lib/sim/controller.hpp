@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "boardunits/controller.hpp"  // Controller, the [controller] section
+#include "common/units.hpp"           // rpm_from_rad_s, rad_s_from_rpm
 #include "model/model.hpp"
 #include "sim/encoder.hpp"
 
@@ -70,6 +71,8 @@ std::unique_ptr<LoopController> equation_loop_controller(const Controller& contr
 /// Whether `rpm_cmd` is a command the board runs: 0 (controller off) or what its rpm_cmd register
 /// holds (a whole rpm, 120..720).
 bool board_takes_command(double rpm_cmd);
+/// The range of board_takes_command's whole rpm for messages, from the protocol's table: "120..720".
+std::string board_command_range_text();
 
 /// The closed loop advanced one row at a time, as the rows arrive (row n acts over
 /// [t_n, t_{n+1}); its end is known only when row n+1 comes). Ticks at t_0 + k dt_s; at each

@@ -359,8 +359,8 @@ void check_row(const table::Reader& reader, const Columns& c, const RunOptions& 
   if (c.closed && on_board && !board_takes_command(drive_value)) {
     fail(
         "{}:{}: column 'rpm_cmd': {} is not a command the board takes (0 = off, or a whole rpm in "
-        "120..720; --loop equation takes any)",
-        source, reader.line(), config::format_number(drive_value));
+        "{}; --loop equation takes any)",
+        source, reader.line(), config::format_number(drive_value), board_command_range_text());
   }
 }
 
@@ -396,7 +396,7 @@ class Simulation {
     const int clutch_state = static_cast<int>(clutch);
     double duty = 0.0;
     const model::State s = advance(t, drive_value, clutch_state, r_load, duty);
-    const double rpm_true = s.omega_rad_s * 30.0 / std::numbers::pi;
+    const double rpm_true = rpm_from_rad_s(s.omega_rad_s);
     const double rpm = m_encoder ? m_estimator.push(t, s.theta_rad) : rpm_true;
     double i_meas = s.i_A;
     double v_gen = s.v_gen_V;
@@ -565,7 +565,7 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   double duty0 = 0.0;
   const auto begin_output = [&](double rpm0, double t_rpm0) {
     if (rpm0 != 0.0) {
-      sim.start_at(rpm0 * std::numbers::pi / 30.0, duty0);
+      sim.start_at(rad_s_from_rpm(rpm0), duty0);
       meta.set(
           "initial_state",
           fmt::format("the motor at {} rpm (rpm_measured at t = {}){}, t = {}", config::format_number(rpm0),

@@ -1,24 +1,25 @@
 // CSV reader and writer per the data contract.
 #include "table/table.hpp"
 
-#include "common/error.hpp"
-#include "common/parallel.hpp"
-#include "common/tool.hpp"
-
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <array>
-#include <cstdint>
-#include "common/demand.hpp"
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <istream>
-#include <unordered_set>
 #include <limits>
 #include <ostream>
+#include <unordered_set>
+
+#include "common/demand.hpp"
+#include "common/error.hpp"
+#include "common/parallel.hpp"
+#include "common/text.hpp"
+#include "common/tool.hpp"
 
 namespace mcg::table {
 
@@ -95,12 +96,6 @@ char* format_general(char* p, double v, int digits) {
   return std::to_chars(p, p + 25, v, std::chars_format::general, digits).ptr;
 }
 
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-  return s;
-}
-
 /// Shortens a field for an error message so one line stays one readable line.
 /// The header's names for a message, each through printable(); a long header is cut after
 /// 16 names with the count of the rest.
@@ -158,7 +153,7 @@ std::string Metadata::where(std::string_view source, std::string_view key) const
 }
 
 bool parse_number(std::string_view text, double& value) {
-  text = trim(text);
+  text = trim_line(text);
   if (text.empty()) {
     value = std::numeric_limits<double>::quiet_NaN();
     return true;
@@ -181,7 +176,7 @@ namespace {
 /// Parses data line `line` (its '\r' removed) into `row` (one value a column); false with the
 /// message for "source:line: " in `error` when it is no row of this header.
 bool parse_line(std::string_view line, const std::vector<std::string>& columns, double* row, std::string& error) {
-  const std::string_view t = trim(line);
+  const std::string_view t = trim_line(line);
   if (!t.empty() && t.front() == '#') {
     error = "metadata line after the header";
     return false;
@@ -200,7 +195,7 @@ bool parse_line(std::string_view line, const std::vector<std::string>& columns, 
       return false;
     }
     if (!parse_number(field, row[column])) {
-      error = fmt::format("column {}: invalid number {}", quote(columns[column]), quote(trim(field)));
+      error = fmt::format("column {}: invalid number {}", quote(columns[column]), quote(trim_line(field)));
       return false;
     }
     ++column;
@@ -258,13 +253,13 @@ Reader::Reader(std::istream& in, std::string source) : m_lines(in, std::move(sou
   std::string_view line;
   while (true) {
     if (!m_lines.next(line)) fail("{}: empty input: no header line", src);
-    const std::string_view t = trim(line);
+    const std::string_view t = trim_line(line);
     if (t.empty()) continue;
     if (t.front() != '#') break;
-    std::string_view body = trim(t.substr(1));
+    std::string_view body = trim_line(t.substr(1));
     const auto colon = body.find(':');
-    const std::string_view key = colon == std::string_view::npos ? body : trim(body.substr(0, colon));
-    m_meta.set(key, colon == std::string_view::npos ? std::string_view() : trim(body.substr(colon + 1)));
+    const std::string_view key = colon == std::string_view::npos ? body : trim_line(body.substr(0, colon));
+    m_meta.set(key, colon == std::string_view::npos ? std::string_view() : trim_line(body.substr(colon + 1)));
     m_meta.note_line(key, m_lines.line());
   }
   const std::size_t at = m_lines.line();
@@ -273,7 +268,8 @@ Reader::Reader(std::istream& in, std::string source) : m_lines(in, std::move(sou
   std::size_t start = 0;
   while (true) {
     const auto comma = line.find(',', start);
-    const std::string_view name = trim(line.substr(start, comma == std::string_view::npos ? line.npos : comma - start));
+    const std::string_view name =
+        trim_line(line.substr(start, comma == std::string_view::npos ? line.npos : comma - start));
     if (m_columns.size() == k_max_columns) {
       fail("{}:{}: header: more than {} columns", src, at, k_max_columns);
     }
@@ -513,6 +509,17 @@ void Writer::row(std::span<const double> values) {
   }
   *p++ = '\n';
   m_buffer.resize(static_cast<std::size_t>(p - m_buffer.data()));
+  flush_if_full();
+}
+
+void Writer::text_row(const std::vector<std::string>& cells) {
+  MCG_DEMAND(cells.size() == m_names.size());
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    MCG_DEMAND(cells[c].find_first_of("\n\r") == std::string::npos);
+    if (c) m_buffer += ',';
+    m_buffer += cells[c];
+  }
+  m_buffer += '\n';
   flush_if_full();
 }
 

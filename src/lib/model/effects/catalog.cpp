@@ -8,8 +8,9 @@
 #include <limits>
 #include <ostream>
 
-#include "common/error.hpp"
 #include "common/edit_distance.hpp"
+#include "common/error.hpp"
+#include "common/text.hpp"
 #include "config/ini.hpp"
 #include "model/effects/compiled.hpp"
 #include "model/model.hpp"
@@ -151,12 +152,6 @@ std::string known_keys(const EffectSpec& spec) {
     out += p.name;
   }
   return out;
-}
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-  return s;
 }
 
 }  // namespace

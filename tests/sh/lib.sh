@@ -1,0 +1,57 @@
+# Shared by the shell suites (source it first): a work directory and background processes that
+# are always cleaned up, checks that count failures, and the summary line with the exit status.
+export LC_ALL=C TZ=UTC
+work=$(mktemp -d)
+bg_pids=()
+failures=0
+checks=0
+
+cleanup() {
+  local pid
+  for pid in "${bg_pids[@]}"; do kill "$pid" 2> /dev/null; done
+  wait 2> /dev/null
+  rm -rf "$work"
+}
+trap cleanup EXIT
+
+# check DESCRIPTION COMMAND...: runs COMMAND, counts a failure when it fails
+# (a shell expression: check DESCRIPTION eval 'EXPRESSION').
+check() {
+  local what=$1
+  shift
+  checks=$((checks + 1))
+  if "$@"; then
+    echo "ok   $what"
+  else
+    echo "FAIL $what"
+    failures=$((failures + 1))
+  fi
+}
+
+# fail MESSAGE: counts a failure found without check.
+fail() {
+  checks=$((checks + 1))
+  failures=$((failures + 1))
+  echo "FAIL $*"
+}
+
+# same FILE TEXT: FILE holds exactly TEXT (plus the final newline).
+same() {
+  if [ "$(cat "$1")" != "$2" ]; then
+    echo "  expected: $2"
+    echo "  got:      $(cat "$1")"
+    return 1
+  fi
+}
+
+# finish [NAME]: the summary line; the suite's status (the last command of a suite).
+finish() {
+  echo "${1:-$(basename "$0")}: $((checks - failures)) of $checks checks passed"
+  [ "$failures" = 0 ]
+}
+
+# expect DESCRIPTION EXPRESSION: check DESCRIPTION eval EXPRESSION.
+expect() { check "$1" eval "$2"; }
+
+# pass: counts a check that passed without check (its failures go through fail).
+pass() { checks=$((checks + 1)); }
