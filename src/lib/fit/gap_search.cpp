@@ -223,7 +223,7 @@ model::Model grid_start(const std::vector<model::Model>& bases, const model::Eff
 
 /// The nominal scales a gauge is pinned on, most reliably measured first.
 constexpr std::array<std::string_view, 3> k_gauge_pins{"param_mismatch.R_scale", "param_mismatch.Kt_scale",
-                                                      "param_mismatch.J_scale"};
+                                                       "param_mismatch.J_scale"};
 
 /// True when `flags` correlate nominal scale `key` beyond k_max_correlation with a parameter of
 /// an added effect: the trade a gauge pin on `key` breaks.
@@ -335,7 +335,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   c.status = out_of_time         ? std::string(k_out_of_time) + ", fit stopped early"
              : fit.nls.converged ? "fitted"
                                  : "fitted, budget spent";
-  if (!pinned.empty()) c.status += fmt::format(", {} pinned at the given value (a gauge)", fmt::join(pinned, " "));
+  if (!pinned.empty())
+    c.status += fmt::format(", {} pinned at the given value (a gauge)", fmt::join(pinned, " "));
   c.evaluated = true;
   const Evaluation ev = evaluate(c.model, data, floors);
   c.score = ev.score;
