@@ -67,6 +67,27 @@ run_case() {
 }
 
 run_case none none "" "steps_load 2" "prbs_at 7 2 0 5"
+
+# No effect, but sensors noisier than the metadata states: white noise of 8 rpm and 10 mA
+# added after the chain (seeded). The floors come from the residual of the model as given
+# (8.5 rpm and 10.6 mA against the chain's 2.4 rpm and 3.3 mA), not from the metadata, so
+# the verdict is none (it was unexplained: 22.7 against about 2 for noise alone).
+noisier() {
+  awk -F, -v OFS=, -v seed="$1" 'BEGIN { srand(seed); pi = atan2(0, -1) }
+    /^#/ || /^t,/ { print; next }
+    { $6 += 8 * sqrt(-2 * log(1 - rand())) * cos(2 * pi * rand()); $5 = $6 * pi / 30
+      $8 += 0.01 * sqrt(-2 * log(1 - rand())) * cos(2 * pi * rand()); print }'
+}
+steps_load 2 | measure "" 11 | noisier 3 >"$work/noisier-train.csv"
+prbs_at 7 2 0 5 | measure "" 12 | noisier 4 >"$work/noisier-validate.csv"
+check noisier none
+floor_rpm=$(grep -o '^noise floor rpm: [0-9.]*' "$work/noisier.err" | awk '{ print $4 }')
+if awk -v f="$floor_rpm" 'BEGIN { exit !(f > 7.5 && f < 9.5) }'; then
+  echo "ok   noisier: rpm floor $floor_rpm from the residual (8 rpm added, 2.4 stated)"
+else
+  echo "FAIL noisier: rpm floor '$floor_rpm', expected the added 8 rpm with the chain's 2.4"
+  failures=$((failures + 1))
+fi
 run_case dead_time dead_time "dead_time:tau_d_s=0.0025" "prbs_at 8 2.5 0 1" "steps_load 2"
 run_case supply_sag supply_sag "supply_sag:R_s_ohm=2.3" "steps_load 2" "prbs_at 9 3 2 2"
 run_case brush_drop brush_drop "brush_drop:V_b_V=1.1" "stairs_low 6 1" "chirp_at 7 2 2"

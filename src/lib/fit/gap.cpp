@@ -68,9 +68,19 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   Evaluation before = evaluate(model, data, report.floors);
   // Measurement noise is part of every model's residual: a data estimate above the RMS of
   // the model as given has caught signal (steps, fast excitation), and the chain stands.
+  // Noise above what the chain states (a noisier sensor, interference the metadata cannot
+  // know) shows in the model's residual, where the excitation's steps no longer count: the
+  // residual's own estimate stands when it exceeds the chain by k_gap_data_floor_factor.
   bool reverted = false;
   for (std::size_t f = 0; f < outputs; ++f) {
     OutputFloor& of = report.floors[f];
+    const double residual = residual_noise(data, before, of.output);
+    if (of.noise.chain > 0.0 && residual > k_gap_data_floor_factor * of.noise.chain) {
+      of.noise.data = residual;
+      of.floor = residual;
+      reverted = true;
+      continue;
+    }
     if (of.noise.chain > 0.0 && of.floor > of.noise.chain && of.floor > before.rms[f]) {
       of.floor = std::max(of.noise.chain, 1e-3 * before.rms[f]);
       reverted = true;

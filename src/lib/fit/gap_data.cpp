@@ -2,6 +2,7 @@
 // measurement chain of each run and the noise floors it implies.
 #include "fit/gap_parts.hpp"
 
+#include "common/demand.hpp"
 #include "common/error.hpp"
 #include "measurement/measurement.hpp"
 #include "table/table.hpp"
@@ -66,6 +67,28 @@ std::size_t validation_count(const GapData& data) {
   std::size_t n = 0;
   for (const ScoredRun& sr : data.validate) n += sr.run.inputs.t_s.size() - sr.first_scored;
   return n;
+}
+
+double residual_noise(const GapData& data, const Evaluation& ev, const std::string& output) {
+  MCG_DEMAND(ev.simulated.size() == data.validate.size());
+  double sum_sq = 0.0;
+  std::size_t count = 0;
+  for (std::size_t r = 0; r < data.validate.size(); ++r) {
+    const ScoredRun& sr = data.validate[r];
+    const auto it = std::find(sr.run.outputs.begin(), sr.run.outputs.end(), output);
+    if (it == sr.run.outputs.end()) continue;
+    const auto o = static_cast<std::size_t>(it - sr.run.outputs.begin());
+    const auto& y = sr.run.measured[o];
+    const auto& sim = ev.simulated[r][o];
+    const auto residual = [&](std::size_t n) { return y[n] - sim[n]; };
+    for (std::size_t n = sr.first_scored + 1; n + 1 < y.size(); ++n) {
+      const double d = residual(n + 1) - 2.0 * residual(n) + residual(n - 1);
+      if (!std::isfinite(d)) continue;
+      sum_sq += d * d;
+      ++count;
+    }
+  }
+  return count > 0 ? std::sqrt(sum_sq / static_cast<double>(count) / 6.0) : 0.0;
 }
 
 std::vector<OutputFloor> noise_floors(const GapData& data) {

@@ -44,6 +44,14 @@ struct Evaluation {
 };
 Evaluation evaluate(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors);
 
+/// The measurement noise of `output` seen in the residual of `ev` (the model as given): the
+/// RMS of the residual's second difference over the scored validation rows, divided by
+/// sqrt(6) (exact for white noise). The model removes the excitation's steps that the
+/// measured signal's own estimate catches, and a gap is slow beside the sampling, so it adds
+/// little: an estimate near the residual's RMS says the residual is white. 0 when the runs
+/// do not measure `output`.
+double residual_noise(const GapData& data, const Evaluation& ev, const std::string& output);
+
 /// True when some run measures the motor current (the only output that tells R from Kt).
 bool measures_current(const std::vector<Run>& runs);
 

@@ -1,6 +1,7 @@
 // The gap diagnosis' search: how a model is scored, how each candidate is fitted (the
 // nominal refit, one effect, mixtures by forward selection), and the order in which they are tried.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <array>
@@ -220,6 +221,23 @@ model::Model grid_start(const std::vector<model::Model>& bases, const model::Eff
   return best_model;
 }
 
+/// The nominal scales a gauge is pinned on, most reliably measured first.
+constexpr std::array<std::string_view, 3> k_gauge_pins{"param_mismatch.R_scale", "param_mismatch.Kt_scale",
+                                                       "param_mismatch.J_scale"};
+
+/// True when `flags` correlate nominal scale `key` beyond k_max_correlation with a parameter of
+/// an added effect: the trade a gauge pin on `key` breaks.
+bool gauge_trade(const std::vector<FitFlag>& flags, std::string_view key) {
+  return std::any_of(flags.begin(), flags.end(), [&](const FitFlag& f) {
+    if (f.kind != FitFlag::Kind::correlated) return false;
+    const bool has_key = std::find(f.names.begin(), f.names.end(), key) != f.names.end();
+    const bool has_effect = std::any_of(f.names.begin(), f.names.end(), [](const std::string& n) {
+      return !n.starts_with("param_mismatch.");
+    });
+    return has_key && has_effect;
+  });
+}
+
 GapCandidate run_job(const Job& job, const GapData& data, const std::vector<OutputFloor>& floors,
                      const GapSettings& settings, unsigned jacobian_threads,
                      const std::vector<double>& orders) {
@@ -276,12 +294,38 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   problem.model = start;
   problem.free = job.free;
   problem.nls.max_evaluations = budget(job.free.size());
-  const FitResult fit = fit_model(problem);
-  c.model = fit.model;
-  c.free = job.free;
-  for (Eigen::Index k = 0; k < fit.nls.values.size(); ++k) {
-    c.values.push_back(fit.nls.values[k]);
-    c.std_errors.push_back(fit.nls.std_errors[k]);
+  FitResult fit = fit_model(problem);
+  const auto take = [&](const FitResult& r, const std::vector<std::string>& free) {
+    c.model = r.model;
+    c.free = free;
+    c.values.clear();
+    c.std_errors.clear();
+    for (Eigen::Index k = 0; k < r.nls.values.size(); ++k) {
+      c.values.push_back(r.nls.values[k]);
+      c.std_errors.push_back(r.nls.std_errors[k]);
+    }
+    c.warnings = r.warnings;
+    c.flags = r.flags;
+  };
+  take(fit, job.free);
+  // A gauge the data cannot fix: an added effect that trades exactly against the nominal
+  // scales (a drive dead band wider than one drive level leaves the volt unmeasured, so Kt, R,
+  // J and friction scale with it). The effect's shape is determined, the common scale is not:
+  // pin the nominal scale a datasheet measures best (R by ohmmeter, then Kt, then J) at the
+  // given value, one at a time, until the rest is determined, and say so in the status.
+  std::vector<std::string> pinned;
+  for (const std::string_view pin : k_gauge_pins) {
+    const std::string key(pin);
+    if (c.determined() || !gauge_trade(c.flags, key)) continue;
+    std::vector<std::string> free = c.free;
+    std::erase(free, key);
+    problem.model = c.model;
+    model::set_parameter(problem.model, key, 1.0);
+    problem.free = free;
+    problem.nls.max_evaluations = budget(free.size());
+    fit = fit_model(problem);
+    take(fit, free);
+    pinned.push_back(key);
   }
   for (const auto& e : job.effects) {
     if (const model::EffectSpec* plan = find_plan(e)) c.added_parameters += plan->plan.free.size();
@@ -291,8 +335,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   c.status = out_of_time         ? std::string(k_out_of_time) + ", fit stopped early"
              : fit.nls.converged ? "fitted"
                                  : "fitted, budget spent";
-  c.warnings = fit.warnings;
-  c.flags = fit.flags;
+  if (!pinned.empty())
+    c.status += fmt::format(", {} pinned at the given value (a gauge)", fmt::join(pinned, " "));
   c.evaluated = true;
   const Evaluation ev = evaluate(c.model, data, floors);
   c.score = ev.score;
