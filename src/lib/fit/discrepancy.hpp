@@ -41,4 +41,9 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
                                   const std::vector<double>& angle_orders,
                                   const std::vector<OutputFloor>& floors);
 
+/// Catalog effects whose shape a surviving term has, started from the term's values: an
+/// angle harmonic of the torque -> cogging with its order, amplitude and phase; a drop
+/// against the current -> brush_drop. Effects `reference` already has are left out.
+std::vector<model::Effect> catalog_seeds(const DiscrepancyResult& result, const model::Model& reference);
+
 }  // namespace mcg::fit

@@ -239,7 +239,12 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
   out << "# validation_samples: " << report.validation_samples << "\n";
   if (report.discrepancy) {
     const DiscrepancyResult& d = *report.discrepancy;
-    for (const auto& t : d.terms) out << "# discrepancy_term: " << t.equation << "\n";
+    for (const auto& t : d.terms) out << "# discrepancy_term: " << t.equation << "  (" << t.reading << ")\n";
+    for (const auto& t : d.dropped) out << "# discrepancy_dropped: " << t << " (the held-out runs do not gain)\n";
+    for (const auto& sd : d.seeds) {
+      out << fmt::format("# discrepancy_seed: {} (validation rpm RMS {}{})\n", sd.effect, number(sd.rms_rpm),
+                         sd.closes ? ", closes the gap" : "");
+    }
     if (d.terms.empty()) {
       out << "# discrepancy: " << d.note << "\n";
     } else {
@@ -302,7 +307,12 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
           "motor shaft, w in rad/s at the motor, theta in rad:\n",
           d.terms.size(), d.library_size);
       for (const auto& t : d.terms) {
-        out << fmt::format("  {}   (+- {:.2g} {})\n", t.equation, t.std_error, t.unit);
+        out << fmt::format("  {}   (+- {:.2g} {})   {}\n", t.equation, t.std_error, t.unit, t.reading);
+      }
+      for (const auto& t : d.dropped) out << "  left out, the held-out runs do not gain: " << t << "\n";
+      for (const auto& sd : d.seeds) {
+        out << fmt::format("  seeds the catalog: {} (validation rpm RMS {:.2f}{})\n", sd.effect, sd.rms_rpm,
+                           sd.closes ? ", closes the gap" : "");
       }
       out << fmt::format(
           "  explains {:.0f} % of the torque residual in training, {:.0f} % in validation; added to the "
