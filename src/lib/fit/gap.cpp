@@ -85,6 +85,9 @@ void seed_catalog(GapReport& report, const GapData& data, const GapSettings& set
   const GapCandidate reference = report.candidates.front();
   const double excess = before_score - static_cast<double>(outputs);
   for (const model::Effect& seed : catalog_seeds(*report.discrepancy, reference.model)) {
+    if (std::find(settings.excluded.begin(), settings.excluded.end(), seed.name) != settings.excluded.end()) {
+      continue;
+    }
     const model::EffectSpec* spec = model::find_effect(seed.name);
     FitProblem problem;
     problem.model = reference.model;
