@@ -248,15 +248,43 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
   }
   const model::Machine& mm = reference.params.motor;
   std::vector<Candidate> library = {
-      {"1", "N m", b_const, {0.0, 0.0, 0.0, 1.0}, 0.0, "a constant torque: a load, or an offset of a measured current"},
+      {"1",
+       "N m",
+       b_const,
+       {0.0, 0.0, 0.0, 1.0},
+       0.0,
+       "a constant torque: a load, or an offset of a measured current"},
       {"sign(w)", "N m", b_sign, {eps, 0.0, 0.0, 1.0}, 0.0, "against the motion: Coulomb friction"},
       {"w", "N m s/rad", b_w, {0.0, 0.0, 0.0, 1.0}, 0.0, "proportional to speed: viscous friction"},
-      {"w|w|", "N m s^2/rad^2", b_w_abs_w, {0.0, 0.0, 0.0, 1.0}, 0.0, "quadratic in speed: windage, a fan or fluid drag"},
-      {"w^3", "N m s^3/rad^3", b_w3, {0.0, 0.0, 0.0, 1.0}, 0.0, "cubic in speed: drag rising faster than quadratic"},
-      {"i", "N m/A", b_i, {0.0, 0.0, 0.0, 1.0}, 0.0, "scales with the current: a torque-constant error or a current-sensor gain"},
-      {"|i| sign(w)", "N m/A", b_abs_i, {eps, 0.0, 0.0, 1.0}, 0.0,
+      {"w|w|",
+       "N m s^2/rad^2",
+       b_w_abs_w,
+       {0.0, 0.0, 0.0, 1.0},
+       0.0,
+       "quadratic in speed: windage, a fan or fluid drag"},
+      {"w^3",
+       "N m s^3/rad^3",
+       b_w3,
+       {0.0, 0.0, 0.0, 1.0},
+       0.0,
+       "cubic in speed: drag rising faster than quadratic"},
+      {"i",
+       "N m/A",
+       b_i,
+       {0.0, 0.0, 0.0, 1.0},
+       0.0,
+       "scales with the current: a torque-constant error or a current-sensor gain"},
+      {"|i| sign(w)",
+       "N m/A",
+       b_abs_i,
+       {eps, 0.0, 0.0, 1.0},
+       0.0,
        "friction that grows with the load the current carries"},
-      {"-(Kt/R) tanh(i/0.01)", "V", b_drop, {mm.Kt_Nm_A / mm.R_ohm, 0.0, 0.0, 1.0}, 0.0,
+      {"-(Kt/R) tanh(i/0.01)",
+       "V",
+       b_drop,
+       {mm.Kt_Nm_A / mm.R_ohm, 0.0, 0.0, 1.0},
+       0.0,
        "a voltage drop against the current in the motor circuit: brush contact drop"},
   };
   // Stribeck-like drops at a twentieth and a fifth of the top speed, exponential and Gaussian.
@@ -265,15 +293,24 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
     const std::string reading = "friction falling from rest with speed: Stribeck";
     library.push_back(
         {fmt::format("sign(w) exp(-|w|/{:.3g})", ws), "N m", b_stribeck, {eps, ws, 1.0, 1.0}, 0.0, reading});
-    library.push_back({fmt::format("sign(w) exp(-(w/{:.3g})^2)", ws), "N m", b_stribeck, {eps, ws, 2.0, 1.0},
-                       0.0, reading});
+    library.push_back({fmt::format("sign(w) exp(-(w/{:.3g})^2)", ws),
+                       "N m",
+                       b_stribeck,
+                       {eps, ws, 2.0, 1.0},
+                       0.0,
+                       reading});
   }
   // Friction levels that fade over a run, on a grid of a tenth, a third and all of its span.
   for (double share : {0.1, 0.33, 1.0}) {
     const double tau = share * t_span;
     if (!(tau > 0.0)) continue;
-    library.push_back({fmt::format("sign(w) exp(-t/{:.3g})", tau), "N m", b_decay, {eps, tau, 0.0, 1.0}, 0.0,
-                       fmt::format("a friction level that fades during the run (tau {:.3g} s): warm-up", tau)});
+    library.push_back(
+        {fmt::format("sign(w) exp(-t/{:.3g})", tau),
+         "N m",
+         b_decay,
+         {eps, tau, 0.0, 1.0},
+         0.0,
+         fmt::format("a friction level that fades during the run (tau {:.3g} s): warm-up", tau)});
   }
   // Angle harmonics: once per revolution always, and the residual's strongest orders; each
   // as a torque and as a current-scaled torque.
@@ -287,16 +324,24 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
                      : fmt::format("{:g} per revolution: cogging or a load periodic in the angle", order);
     library.push_back(
         {fmt::format("sin({:g} theta)", order), "N m", b_sin, {order, 0.0, 0.0, 1.0}, order, per});
-    library.push_back({fmt::format("cos({:g} theta)", order), "N m", b_sin,
-                       {order, std::numbers::pi / 2.0, 0.0, 1.0}, order, per});
+    library.push_back({fmt::format("cos({:g} theta)", order),
+                       "N m",
+                       b_sin,
+                       {order, std::numbers::pi / 2.0, 0.0, 1.0},
+                       order,
+                       per});
   }
   for (double order : orders) {
     const std::string per = fmt::format(
         "scales with the current, {:g} per revolution: torque ripple (Kt varying with the angle)", order);
     library.push_back(
         {fmt::format("i sin({:g} theta)", order), "N m/A", b_i_sin, {order, 0.0, 0.0, 1.0}, order, per});
-    library.push_back({fmt::format("i cos({:g} theta)", order), "N m/A", b_i_sin,
-                       {order, std::numbers::pi / 2.0, 0.0, 1.0}, order, per});
+    library.push_back({fmt::format("i cos({:g} theta)", order),
+                       "N m/A",
+                       b_i_sin,
+                       {order, std::numbers::pi / 2.0, 0.0, 1.0},
+                       order,
+                       per});
   }
   out.library_size = library.size();
 
@@ -343,10 +388,9 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
       if (rss - fit.rss < k_discrepancy_threshold * rss0) continue;
       // A harmonic stands clear by its amplitude (its sin or cos part alone may be near 0).
       const auto j0 = static_cast<Eigen::Index>(active.size());
-      const bool clear =
-          library[k].order != 0.0
-              ? std::hypot(fit.x[j0], fit.x[j0 + 1]) >= 3.0 * std::max(fit.se[j0], fit.se[j0 + 1])
-              : std::abs(fit.x[j0]) >= 3.0 * fit.se[j0];
+      const bool clear = library[k].order != 0.0 ? std::hypot(fit.x[j0], fit.x[j0 + 1]) >=
+                                                       3.0 * std::max(fit.se[j0], fit.se[j0 + 1])
+                                                 : std::abs(fit.x[j0]) >= 3.0 * fit.se[j0];
       if (!clear) continue;
       options.emplace_back(fit.rss, std::move(trial));
       solutions.push_back(std::move(fit.x));
@@ -373,15 +417,15 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
   }
   // The selected terms as a model: coefficients in physical units with their standard errors,
   // sin/cos pairs combined into one harmonic, largest part of the fitted residual first.
-  auto described = [&](const std::vector<std::size_t>& set, model::Model& m, std::vector<DiscrepancyTerm>& terms,
-                       double& train_pct, double& validation_pct) {
+  auto described = [&](const std::vector<std::size_t>& set, model::Model& m,
+                       std::vector<DiscrepancyTerm>& terms, double& train_pct, double& validation_pct) {
     const Eigen::MatrixXd A = matrix_of(phi, set);
     const Solved fit = solve(A, Y);
     const Eigen::VectorXd& coef = fit.x;
     train_pct = 100.0 * (1.0 - fit.rss / Y.squaredNorm());
-    validation_pct = yv.empty() ? 0.0
-                                : 100.0 * (1.0 - (Yv - matrix_of(phiv, set) * coef).squaredNorm() /
-                                                     Yv.squaredNorm());
+    validation_pct =
+        yv.empty() ? 0.0
+                   : 100.0 * (1.0 - (Yv - matrix_of(phiv, set) * coef).squaredNorm() / Yv.squaredNorm());
     m = reference;
     std::vector<std::pair<double, DiscrepancyTerm>> ranked;
     for (std::size_t j = 0; j < set.size(); ++j) {
@@ -419,7 +463,8 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
       m.shaft_terms.push_back({t.equation, nullptr, k, cand.basis});
       ranked.emplace_back((A.col(J) * coef[J]).norm(), t);
     }
-    std::stable_sort(ranked.begin(), ranked.end(), [](const auto& x, const auto& z) { return x.first > z.first; });
+    std::stable_sort(ranked.begin(), ranked.end(),
+                     [](const auto& x, const auto& z) { return x.first > z.first; });
     terms.clear();
     for (auto& [part, t] : ranked) terms.push_back(std::move(t));
   };

@@ -61,7 +61,8 @@ std::string shape_found(const DiscrepancyResult& d, const GapCandidate& best) {
   const double f2 = d.floor_rpm * d.floor_rpm;
   const double rest = d.rms_before_rpm * d.rms_before_rpm - f2;
   const double closed =
-      rest > 0.0 ? 100.0 * (d.rms_before_rpm * d.rms_before_rpm - d.rms_after_rpm * d.rms_after_rpm) / rest : 0.0;
+      rest > 0.0 ? 100.0 * (d.rms_before_rpm * d.rms_before_rpm - d.rms_after_rpm * d.rms_after_rpm) / rest
+                 : 0.0;
   std::string out = "; the discrepancy finds";
   for (std::size_t k = 0; k < d.terms.size(); ++k) {
     const DiscrepancyTerm& t = d.terms[k];
@@ -107,13 +108,14 @@ void seed_catalog(GapReport& report, const GapData& data, const GapSettings& set
       continue;
     }
     const Evaluation ev = evaluate(fit.model, data, report.floors);
-    const bool determined = std::none_of(fit.flags.begin(), fit.flags.end(),
-                                         [](const FitFlag& f) { return f.undetermined(); });
+    const bool determined =
+        std::none_of(fit.flags.begin(), fit.flags.end(), [](const FitFlag& f) { return f.undetermined(); });
     DiscrepancySeed result;
     result.effect = model::format_effect(*fit.model.effect(seed.name));
     result.rms_rpm = ev.rms[floor_index(report.floors, "rpm")];
-    result.closes = determined && (ev.score <= (1.0 + k_gap_near_noise) * static_cast<double>(outputs) ||
-                                   (excess > 0.0 && (before_score - ev.score) / excess >= k_gap_explained_share));
+    result.closes =
+        determined && (ev.score <= (1.0 + k_gap_near_noise) * static_cast<double>(outputs) ||
+                       (excess > 0.0 && (before_score - ev.score) / excess >= k_gap_explained_share));
     report.discrepancy->seeds.push_back(result);
     if (!result.closes || report.diagnosis != "unexplained") continue;
     GapCandidate c;
@@ -139,9 +141,9 @@ void seed_catalog(GapReport& report, const GapData& data, const GapSettings& set
     c.warnings = fit.warnings;
     c.flags = fit.flags;
     report.reason = fmt::format(
-        "the discrepancy's {} term, as {} started from its values and fitted, closes the gap (validation "
-        "rpm RMS {:.3g} -> {:.3g})",
-        report.discrepancy->terms.front().basis, seed.name, report.discrepancy->rms_before_rpm, result.rms_rpm);
+        "{} started from the discrepancy term of its shape and fitted closes the gap (validation rpm RMS "
+        "{:.3g} -> {:.3g}): {}",
+        seed.name, report.discrepancy->rms_before_rpm, result.rms_rpm, result.effect);
     report.diagnosis = c.name;
     report.candidates.insert(report.candidates.begin(), std::move(c));
   }

@@ -173,9 +173,9 @@ struct DiscrepancyTerm {
 
 /// A catalog effect started from a discrepancy term's values, fitted and scored.
 struct DiscrepancySeed {
-  std::string effect;        ///< format_effect() of the fitted effect
-  double rms_rpm = 0.0;      ///< validation speed RMS of the model with it (and the other terms)
-  bool closes = false;       ///< it explains the gap (the decision's acceptance rule)
+  std::string effect;    ///< format_effect() of the fitted effect
+  double rms_rpm = 0.0;  ///< validation speed RMS of the model with it (and the other terms)
+  bool closes = false;   ///< it explains the gap (the decision's acceptance rule)
 };
 
 struct DiscrepancyResult {
@@ -192,7 +192,7 @@ struct DiscrepancyResult {
   double rms_after_rpm = 0.0;    ///< ... and with the terms
   double floor_rpm = 0.0;
   std::string note;              ///< why nothing was fitted, when `terms` is empty
-  std::vector<std::string> dropped;  ///< terms selected but left out: the held-out runs did not gain
+  std::vector<std::string> dropped;    ///< terms selected but left out: the held-out runs did not gain
   std::vector<DiscrepancySeed> seeds;  ///< catalog effects seeded from the terms
 };
 

@@ -240,7 +240,8 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
   if (report.discrepancy) {
     const DiscrepancyResult& d = *report.discrepancy;
     for (const auto& t : d.terms) out << "# discrepancy_term: " << t.equation << "  (" << t.reading << ")\n";
-    for (const auto& t : d.dropped) out << "# discrepancy_dropped: " << t << " (the held-out runs do not gain)\n";
+    for (const auto& t : d.dropped)
+      out << "# discrepancy_dropped: " << t << " (the held-out runs do not gain)\n";
     for (const auto& sd : d.seeds) {
       out << fmt::format("# discrepancy_seed: {} (validation rpm RMS {}{})\n", sd.effect, number(sd.rms_rpm),
                          sd.closes ? ", closes the gap" : "");
