@@ -353,9 +353,11 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
   for (const ScoredRun& sr : data.validate) windows(c, sr.run, sr.first_scored, library, w_max, yv, phiv);
   out.train_windows = y.size();
   out.validation_windows = yv.size();
-  if (y.size() < 3 * library.size()) {
-    out.note = fmt::format("too few windows in which the shaft turns ({} of 20 ms; {} needed)", y.size(),
-                           3 * library.size());
+  // Forward selection fits a few columns at a time: the windows must outnumber the library and
+  // be enough (k_discrepancy_min_windows) to tell a term from noise at three standard errors.
+  const std::size_t needed = std::max(k_discrepancy_min_windows, library.size() + 1);
+  if (y.size() < needed) {
+    out.note = fmt::format("too few windows in which the shaft turns ({} of 20 ms; {} needed)", y.size(), needed);
     return out;
   }
   const Eigen::Map<const Eigen::VectorXd> Y(y.data(), static_cast<Eigen::Index>(y.size()));
