@@ -115,7 +115,7 @@ run_case outside_brush_drop unexplained "brush_drop:V_b_V=1.1" "stairs_low 6 1" 
 # Outside the catalog, the shape of what is missing: the catalog-free discrepancy fit names
 # a position ripple at its order, and a direction-dependent friction as a constant torque.
 run_case outside_cogging unexplained "cogging:T_c_Nm=0.0019,N_per_rev=11,phase_rad=-1.2" "stairs_low 2.5 0" \
-  "prbs_at 2.2 0.8 0 4" "N m sin(11 theta - 1.2" --exclude cogging
+  "prbs_at 2.2 0.8 0 4" "sin(11 theta - 1.2" --exclude cogging
 prbs_reversing() { mcg-sweep prbs --bias 0 --amp 6 --clock 0.02 --duration 3 --clutch 2 --seed "$1"; }
 chirp_reversing() { mcg-sweep chirp --bias 0 --amp 7 --f0 0.5 --f1 20 --duration 3 --clutch 2; }
 run_case outside_asymmetry unexplained "friction_asymmetry:dT_Nm=0.0011" "prbs_reversing 1" "chirp_reversing" \

@@ -19,28 +19,53 @@ namespace mcg::fit {
 
 namespace {
 
-using Basis = double (*)(const std::array<double, 4>&, double, double);
+// Library bases, T = basis(k, theta, w, i, t) with the coefficient in k[3] (model::ShaftTerm's
+// convention): the shaft's angle and speed, the motor current and the time of the run.
+using Basis = double (*)(const std::array<double, 4>&, double, double, double, double);
 
-// Shaft-torque bases: k[3] is the coefficient (model::ShaftTerm's convention).
-double b_const(const std::array<double, 4>& k, double, double) { return k[3]; }
-double b_sign(const std::array<double, 4>& k, double, double w) { return k[3] * std::tanh(w / k[0]); }
-double b_w(const std::array<double, 4>& k, double, double w) { return k[3] * w; }
-double b_w_abs_w(const std::array<double, 4>& k, double, double w) { return k[3] * w * std::abs(w); }
-double b_w3(const std::array<double, 4>& k, double, double w) { return k[3] * w * w * w; }
-double b_stribeck(const std::array<double, 4>& k, double, double w) {
+double b_const(const std::array<double, 4>& k, double, double, double, double) { return k[3]; }
+double b_sign(const std::array<double, 4>& k, double, double w, double, double) {
+  return k[3] * std::tanh(w / k[0]);
+}
+double b_w(const std::array<double, 4>& k, double, double w, double, double) { return k[3] * w; }
+double b_w_abs_w(const std::array<double, 4>& k, double, double w, double, double) {
+  return k[3] * w * std::abs(w);
+}
+double b_w3(const std::array<double, 4>& k, double, double w, double, double) { return k[3] * w * w * w; }
+double b_stribeck(const std::array<double, 4>& k, double, double w, double, double) {
   return k[3] * std::tanh(w / k[0]) * std::exp(-std::pow(std::abs(w) / k[1], k[2]));
 }
-double b_sin(const std::array<double, 4>& k, double theta, double) {
+double b_sin(const std::array<double, 4>& k, double theta, double, double, double) {
   return k[3] * std::sin(k[0] * theta + k[1]);
 }
+/// Kt i: a torque-constant error, or a gain error of a measured current.
+double b_i(const std::array<double, 4>& k, double, double, double i, double) { return k[3] * i; }
+/// |i| sign(w): friction that grows with the load the current carries.
+double b_abs_i(const std::array<double, 4>& k, double, double w, double i, double) {
+  return k[3] * std::abs(i) * std::tanh(w / k[0]);
+}
+/// i sin(N theta + phase): a torque constant that varies with the angle (commutation ripple).
+double b_i_sin(const std::array<double, 4>& k, double theta, double, double i, double) {
+  return k[3] * i * std::sin(k[0] * theta + k[1]);
+}
+/// sign(w) exp(-t/tau): a friction level that fades over the run (bearings warming up).
+double b_decay(const std::array<double, 4>& k, double, double w, double, double t) {
+  return k[3] * std::tanh(w / k[0]) * std::exp(-t / k[1]);
+}
+/// A voltage V (k[3]) against the current in the armature circuit, as the torque it costs:
+/// -(Kt/R) V tanh(i / 0.01 A), k[0] = Kt/R (brush_drop's shape).
+double b_drop(const std::array<double, 4>& k, double, double, double i, double) {
+  return -k[0] * k[3] * std::tanh(i / 0.01);
+}
 
-/// One library column: a shaft-torque basis with its numbers (k[3] = 1 to evaluate).
+/// One library column: a basis with its numbers (k[3] = 1 to evaluate).
 struct Candidate {
   std::string text;
   std::string unit;
   Basis basis = nullptr;
   std::array<double, 4> k{0.0, 0.0, 0.0, 1.0};
   double order = 0.0;  ///< harmonic order for sin/cos columns (paired), else 0
+  std::string reading;  ///< what it is physically
 };
 
 /// A run's measured motor speed (rad/s) and angle (rad), or empty when speed is not measured.
@@ -116,7 +141,8 @@ void windows(const model::Compiled& c, const Run& run, std::size_t first,
     const model::Friction& f = clutch == 2 ? c.rigid : c.motor_side[static_cast<std::size_t>(clutch)];
     const double w = m.w[n];
     const double dir = w > 0.0 ? 1.0 : -1.0;
-    double T = mm.Kt_Nm_A * i[n] - dir * c.kinetic(f, std::abs(w)) + c.extra_motor_torque(m.theta[n], w);
+    double T = mm.Kt_Nm_A * i[n] - dir * c.kinetic(f, std::abs(w)) +
+               c.extra_motor_torque(m.theta[n], w, i[n], in.t_s[n]);
     if (clutch == 2 && std::isfinite(in.r_load_ohm[n])) {
       T -= mg.Kt_Nm_A * mg.Ke_V_s_rad * w / (mg.R_ohm + in.r_load_ohm[n]);
     }
@@ -147,8 +173,8 @@ void windows(const model::Compiled& c, const Run& run, std::size_t first,
       integral += h * (torque(n) + torque(n + 1));
       for (std::size_t k = 0; k < library.size(); ++k) {
         const Candidate& cand = library[k];
-        row[k] +=
-            h * (cand.basis(cand.k, m.theta[n], m.w[n]) + cand.basis(cand.k, m.theta[n + 1], m.w[n + 1]));
+        row[k] += h * (cand.basis(cand.k, m.theta[n], m.w[n], i[n], in.t_s[n]) +
+                       cand.basis(cand.k, m.theta[n + 1], m.w[n + 1], i[n + 1], in.t_s[n + 1]));
       }
     }
     y.push_back(J * (m.w[b] - m.w[a]) - integral);
@@ -214,25 +240,106 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
     return out;
   }
   const double eps = 0.01 * w_max;
+  double t_span = 0.0;
+  for (const Run& run : data.train) {
+    if (!run.inputs.t_s.empty()) t_span = std::max(t_span, run.inputs.t_s.back());
+  }
+  const model::Machine& mm = reference.params.motor;
   std::vector<Candidate> library = {
-      {"1", "N m", b_const},          {"sign(w)", "N m", b_sign, {eps, 0.0, 0.0, 1.0}},
-      {"w", "N m s/rad", b_w},        {"w|w|", "N m s^2/rad^2", b_w_abs_w},
-      {"w^3", "N m s^3/rad^3", b_w3},
+      {"1",
+       "N m",
+       b_const,
+       {0.0, 0.0, 0.0, 1.0},
+       0.0,
+       "a constant torque: a load, or an offset of a measured current"},
+      {"sign(w)", "N m", b_sign, {eps, 0.0, 0.0, 1.0}, 0.0, "against the motion: Coulomb friction"},
+      {"w", "N m s/rad", b_w, {0.0, 0.0, 0.0, 1.0}, 0.0, "proportional to speed: viscous friction"},
+      {"w|w|",
+       "N m s^2/rad^2",
+       b_w_abs_w,
+       {0.0, 0.0, 0.0, 1.0},
+       0.0,
+       "quadratic in speed: windage, a fan or fluid drag"},
+      {"w^3",
+       "N m s^3/rad^3",
+       b_w3,
+       {0.0, 0.0, 0.0, 1.0},
+       0.0,
+       "cubic in speed: drag rising faster than quadratic"},
+      {"i",
+       "N m/A",
+       b_i,
+       {0.0, 0.0, 0.0, 1.0},
+       0.0,
+       "scales with the current: a torque-constant error or a current-sensor gain"},
+      {"|i| sign(w)",
+       "N m/A",
+       b_abs_i,
+       {eps, 0.0, 0.0, 1.0},
+       0.0,
+       "friction that grows with the load the current carries"},
+      {"-(Kt/R) tanh(i/0.01)",
+       "V",
+       b_drop,
+       {mm.Kt_Nm_A / mm.R_ohm, 0.0, 0.0, 1.0},
+       0.0,
+       "a voltage drop against the current in the motor circuit: brush contact drop"},
   };
   // Stribeck-like drops at a twentieth and a fifth of the top speed, exponential and Gaussian.
   for (double scale : {0.05, 0.2}) {
     const double ws = scale * w_max;
-    library.push_back({fmt::format("sign(w) exp(-|w|/{:.3g})", ws), "N m", b_stribeck, {eps, ws, 1.0, 1.0}});
+    const std::string reading = "friction falling from rest with speed: Stribeck";
     library.push_back(
-        {fmt::format("sign(w) exp(-(w/{:.3g})^2)", ws), "N m", b_stribeck, {eps, ws, 2.0, 1.0}});
+        {fmt::format("sign(w) exp(-|w|/{:.3g})", ws), "N m", b_stribeck, {eps, ws, 1.0, 1.0}, 0.0, reading});
+    library.push_back({fmt::format("sign(w) exp(-(w/{:.3g})^2)", ws),
+                       "N m",
+                       b_stribeck,
+                       {eps, ws, 2.0, 1.0},
+                       0.0,
+                       reading});
   }
+  // Friction levels that fade over a run, on a grid of a tenth, a third and all of its span.
+  for (double share : {0.1, 0.33, 1.0}) {
+    const double tau = share * t_span;
+    if (!(tau > 0.0)) continue;
+    library.push_back(
+        {fmt::format("sign(w) exp(-t/{:.3g})", tau),
+         "N m",
+         b_decay,
+         {eps, tau, 0.0, 1.0},
+         0.0,
+         fmt::format("a friction level that fades during the run (tau {:.3g} s): warm-up", tau)});
+  }
+  // Angle harmonics: once per revolution always, and the residual's strongest orders; each
+  // as a torque and as a current-scaled torque.
+  std::vector<double> orders = {1.0};
   for (double order : angle_orders) {
-    library.push_back({fmt::format("sin({:g} theta)", order), "N m", b_sin, {order, 0.0, 0.0, 1.0}, order});
+    if (order != 1.0) orders.push_back(order);
+  }
+  for (double order : orders) {
+    const std::string per =
+        order == 1.0 ? "once per revolution: an imbalance, a bent shaft or an eccentric load"
+                     : fmt::format("{:g} per revolution: cogging or a load periodic in the angle", order);
+    library.push_back(
+        {fmt::format("sin({:g} theta)", order), "N m", b_sin, {order, 0.0, 0.0, 1.0}, order, per});
     library.push_back({fmt::format("cos({:g} theta)", order),
                        "N m",
                        b_sin,
                        {order, std::numbers::pi / 2.0, 0.0, 1.0},
-                       order});
+                       order,
+                       per});
+  }
+  for (double order : orders) {
+    const std::string per = fmt::format(
+        "scales with the current, {:g} per revolution: torque ripple (Kt varying with the angle)", order);
+    library.push_back(
+        {fmt::format("i sin({:g} theta)", order), "N m/A", b_i_sin, {order, 0.0, 0.0, 1.0}, order, per});
+    library.push_back({fmt::format("i cos({:g} theta)", order),
+                       "N m/A",
+                       b_i_sin,
+                       {order, std::numbers::pi / 2.0, 0.0, 1.0},
+                       order,
+                       per});
   }
   out.library_size = library.size();
 
@@ -244,9 +351,11 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
   for (const ScoredRun& sr : data.validate) windows(c, sr.run, sr.first_scored, library, w_max, yv, phiv);
   out.train_windows = y.size();
   out.validation_windows = yv.size();
-  if (y.size() < 3 * library.size()) {
-    out.note = fmt::format("too few windows in which the shaft turns ({} of 20 ms; {} needed)", y.size(),
-                           3 * library.size());
+  // Forward selection fits a few columns at a time: the windows must outnumber the library and
+  // be enough (k_discrepancy_min_windows) to tell a term from noise at three standard errors.
+  const std::size_t needed = std::max(k_discrepancy_min_windows, library.size() + 1);
+  if (y.size() < needed) {
+    out.note = fmt::format("too few windows in which the shaft turns ({} of 20 ms; {} needed)", y.size(), needed);
     return out;
   }
   const Eigen::Map<const Eigen::VectorXd> Y(y.data(), static_cast<Eigen::Index>(y.size()));
@@ -277,10 +386,11 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
       if (library[k].order != 0.0) trial.push_back(k + 1);
       Solved fit = solve(matrix_of(phi, trial), Y);
       if (rss - fit.rss < k_discrepancy_threshold * rss0) continue;
-      bool clear = true;
-      for (Eigen::Index j = static_cast<Eigen::Index>(active.size()); j < fit.x.size(); ++j) {
-        clear = clear && std::abs(fit.x[j]) >= 3.0 * fit.se[j];
-      }
+      // A harmonic stands clear by its amplitude (its sin or cos part alone may be near 0).
+      const auto j0 = static_cast<Eigen::Index>(active.size());
+      const bool clear = library[k].order != 0.0 ? std::hypot(fit.x[j0], fit.x[j0 + 1]) >=
+                                                       3.0 * std::max(fit.se[j0], fit.se[j0 + 1])
+                                                 : std::abs(fit.x[j0]) >= 3.0 * fit.se[j0];
       if (!clear) continue;
       options.emplace_back(fit.rss, std::move(trial));
       solutions.push_back(std::move(fit.x));
@@ -305,61 +415,128 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
     out.note = "no term of the library explains a clear part of the torque residual";
     return out;
   }
-  // Final coefficients in physical units with their standard errors.
-  const Eigen::MatrixXd A = matrix_of(phi, active);
-  const Solved final_fit = solve(A, Y);
-  const Eigen::VectorXd& coef = final_fit.x;
-  out.train_explained_pct = 100.0 * (1.0 - final_fit.rss / Y.squaredNorm());
-  if (!yv.empty()) {
-    out.validation_explained_pct =
-        100.0 * (1.0 - (Yv - matrix_of(phiv, active) * coef).squaredNorm() / Yv.squaredNorm());
-  }
-  // Terms by their part of the fitted residual; sin/cos pairs combined into one harmonic.
-  std::vector<std::pair<double, DiscrepancyTerm>> ranked;
-  model::Model& m = out.model;
-  for (std::size_t j = 0; j < active.size(); ++j) {
-    const Candidate& cand = library[active[j]];
-    const auto J = static_cast<Eigen::Index>(j);
-    const double part = (A.col(J) * coef[J]).norm();
-    DiscrepancyTerm t;
-    t.basis = cand.text;
-    t.coefficient = coef[J];
-    t.std_error = final_fit.se[J];
-    t.unit = cand.unit;
-    if (cand.order != 0.0) {
-      if (cand.k[1] != 0.0) continue;  // the cos column joins its sin column below
-      double c_cos = 0.0;
-      double part_cos = 0.0;
-      for (std::size_t q = 0; q < active.size(); ++q) {
-        const Candidate& other = library[active[q]];
-        if (other.order == cand.order && other.k[1] != 0.0) {
-          c_cos = coef[static_cast<Eigen::Index>(q)];
-          part_cos = (A.col(static_cast<Eigen::Index>(q)) * c_cos).norm();
-        }
+  // The selected terms as a model: coefficients in physical units with their standard errors,
+  // sin/cos pairs combined into one harmonic, largest part of the fitted residual first.
+  auto described = [&](const std::vector<std::size_t>& set, model::Model& m,
+                       std::vector<DiscrepancyTerm>& terms, double& train_pct, double& validation_pct) {
+    const Eigen::MatrixXd A = matrix_of(phi, set);
+    const Solved fit = solve(A, Y);
+    const Eigen::VectorXd& coef = fit.x;
+    train_pct = 100.0 * (1.0 - fit.rss / Y.squaredNorm());
+    validation_pct =
+        yv.empty() ? 0.0
+                   : 100.0 * (1.0 - (Yv - matrix_of(phiv, set) * coef).squaredNorm() / Yv.squaredNorm());
+    m = reference;
+    std::vector<std::pair<double, DiscrepancyTerm>> ranked;
+    for (std::size_t j = 0; j < set.size(); ++j) {
+      const Candidate& cand = library[set[j]];
+      const auto J = static_cast<Eigen::Index>(j);
+      DiscrepancyTerm t;
+      t.basis = cand.text;
+      t.reading = cand.reading;
+      t.coefficient = coef[J];
+      t.std_error = fit.se[J];
+      t.unit = cand.unit;
+      if (cand.order != 0.0) {
+        if (cand.k[1] != 0.0) continue;  // the cos column joins its sin column, the next one
+        const double cs = coef[J];
+        const double cc = coef[J + 1];
+        const double amp = std::hypot(cs, cc);
+        const double ses = fit.se[J];
+        const double sec = fit.se[J + 1];
+        const std::string lead = cand.basis == b_i_sin ? "i " : "";
+        t.order = cand.order;
+        t.phase_rad = std::atan2(cc, cs);
+        t.coefficient = amp;
+        t.std_error = std::hypot(cs * ses, cc * sec) / amp;
+        t.phase_se_rad = std::hypot(cc * ses, cs * sec) / (amp * amp);
+        t.basis = fmt::format("{}sin({:g} theta + phase)", lead, cand.order);
+        t.equation = fmt::format("{} {} * {}sin({:g} theta {} rad)", signed_number(amp), cand.unit, lead,
+                                 cand.order, signed_number(t.phase_rad));
+        m.shaft_terms.push_back({t.equation, nullptr, {cand.order, t.phase_rad, 0.0, amp}, cand.basis});
+        ranked.emplace_back((A.col(J) * cs + A.col(J + 1) * cc).norm(), t);
+        continue;
       }
-      const double amp = std::hypot(coef[J], c_cos);
-      const double phase = std::atan2(c_cos, coef[J]);
-      t.basis = fmt::format("sin({:g} theta + phase)", cand.order);
-      t.coefficient = amp;
-      t.equation =
-          fmt::format("{} N m sin({:g} theta {} rad)", signed_number(amp), cand.order, signed_number(phase));
-      m.shaft_terms.push_back({t.equation, b_sin, {cand.order, phase, 0.0, amp}});
-      ranked.emplace_back(std::hypot(part, part_cos), t);
-      continue;
+      t.equation = fmt::format("{} {} * {}", signed_number(t.coefficient), t.unit, cand.text);
+      std::array<double, 4> k = cand.k;
+      k[3] = t.coefficient;
+      m.shaft_terms.push_back({t.equation, nullptr, k, cand.basis});
+      ranked.emplace_back((A.col(J) * coef[J]).norm(), t);
     }
-    t.equation = fmt::format("{} {} * {}", signed_number(t.coefficient), t.unit, cand.text);
-    std::array<double, 4> k = cand.k;
-    k[3] = t.coefficient;
-    m.shaft_terms.push_back({t.equation, cand.basis, k});
-    ranked.emplace_back(part, t);
-  }
-  std::stable_sort(ranked.begin(), ranked.end(),
-                   [](const auto& a, const auto& b) { return a.first > b.first; });
-  for (auto& [part, t] : ranked) out.terms.push_back(std::move(t));
-  // The terms in the model, simulated on the validation runs.
+    std::stable_sort(ranked.begin(), ranked.end(),
+                     [](const auto& x, const auto& z) { return x.first > z.first; });
+    terms.clear();
+    for (auto& [part, t] : ranked) terms.push_back(std::move(t));
+  };
+  // Kept only where the held-out runs gain: the model with the terms is simulated on the
+  // validation runs, and a term (a harmonic with its pair) whose removal, the rest refitted,
+  // does not raise the validation speed RMS leaves; the terms leave altogether when the
+  // model with them does not beat the reference there.
   out.rms_before_rpm = gap_detail::evaluate(reference, data, floors).rms[f_rpm];
-  out.rms_after_rpm = gap_detail::evaluate(m, data, floors).rms[f_rpm];
+  auto held_out = [&](const std::vector<std::size_t>& set) {
+    model::Model m;
+    std::vector<DiscrepancyTerm> terms;
+    double tp = 0.0;
+    double vp = 0.0;
+    described(set, m, terms, tp, vp);
+    return gap_detail::evaluate(m, data, floors).rms[f_rpm];
+  };
+  auto without = [&](const std::vector<std::size_t>& set, std::size_t j) {
+    std::vector<std::size_t> rest;
+    const bool pair = library[set[j]].order != 0.0;
+    for (std::size_t q = 0; q < set.size(); ++q) {
+      if (q != j && !(pair && q == j + 1)) rest.push_back(set[q]);
+    }
+    return rest;
+  };
+  double rms_all = held_out(active);
+  while (active.size() > 1) {
+    std::size_t drop = active.size();
+    double best = rms_all;
+    for (std::size_t j = 0; j < active.size(); ++j) {
+      if (library[active[j]].order != 0.0 && library[active[j]].k[1] != 0.0) continue;
+      const std::vector<std::size_t> rest = without(active, j);
+      if (rest.empty()) continue;
+      const double r = held_out(rest);
+      if (r <= best) {
+        best = r;
+        drop = j;
+      }
+    }
+    if (drop == active.size()) break;
+    out.dropped.push_back(library[active[drop]].text);
+    active = without(active, drop);
+    rms_all = best;
+  }
+  if (!(rms_all < out.rms_before_rpm)) {
+    out.note = fmt::format(
+        "the terms found ({}) do not lower the validation speed RMS once simulated with the model; none kept",
+        library[active.front()].text);
+    out.rms_after_rpm = out.rms_before_rpm;
+    return out;
+  }
+  described(active, out.model, out.terms, out.train_explained_pct, out.validation_explained_pct);
+  out.rms_after_rpm = rms_all;
   return out;
+}
+
+std::vector<model::Effect> catalog_seeds(const DiscrepancyResult& result, const model::Model& reference) {
+  std::vector<model::Effect> seeds;
+  for (const DiscrepancyTerm& t : result.terms) {
+    const bool torque_harmonic = t.order != 0.0 && t.basis.rfind("sin(", 0) == 0;
+    if (torque_harmonic && !reference.effect("cogging")) {
+      model::Effect e = model::default_effect("cogging");
+      e.set("T_c_Nm", std::min(t.coefficient, 0.02));
+      e.set("N_per_rev", t.order);
+      e.set("phase_rad", t.phase_rad);
+      seeds.push_back(std::move(e));
+    } else if (t.basis == "-(Kt/R) tanh(i/0.01)" && t.coefficient > 0.0 && !reference.effect("brush_drop")) {
+      model::Effect e = model::default_effect("brush_drop");
+      e.set("V_b_V", std::min(t.coefficient, 3.0));
+      seeds.push_back(std::move(e));
+    }
+  }
+  return seeds;
 }
 
 }  // namespace mcg::fit

@@ -31,6 +31,8 @@ namespace mcg::fit {
 /// A term joins when it removes at least this share of the torque residual the model leaves
 /// (||y||^2) and stands at least three standard errors from 0.
 inline constexpr double k_discrepancy_threshold = 0.05;
+/// Fewest windows of the weak form the fit runs on.
+inline constexpr std::size_t k_discrepancy_min_windows = 40;
 /// Window of the weak form, s.
 inline constexpr double k_discrepancy_window_s = 0.02;
 
@@ -40,5 +42,10 @@ inline constexpr double k_discrepancy_window_s = 0.02;
 DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& data,
                                   const std::vector<double>& angle_orders,
                                   const std::vector<OutputFloor>& floors);
+
+/// Catalog effects whose shape a surviving term has, started from the term's values: an
+/// angle harmonic of the torque -> cogging with its order, amplitude and phase; a drop
+/// against the current -> brush_drop. Effects `reference` already has are left out.
+std::vector<model::Effect> catalog_seeds(const DiscrepancyResult& result, const model::Model& reference);
 
 }  // namespace mcg::fit

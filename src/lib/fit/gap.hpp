@@ -166,6 +166,17 @@ struct DiscrepancyTerm {
   double coefficient = 0.0;  ///< in the unit of `unit`
   double std_error = 0.0;
   std::string unit;          ///< "N m", "N m s/rad", "kg m^2"
+  std::string reading;       ///< what it is physically: "once per revolution: an imbalance, ..."
+  double order = 0.0;        ///< cycles per revolution of an angle harmonic, else 0
+  double phase_rad = 0.0;    ///< its phase (coefficient = amplitude), with its standard error
+  double phase_se_rad = 0.0;
+};
+
+/// A catalog effect started from a discrepancy term's values, fitted and scored.
+struct DiscrepancySeed {
+  std::string effect;    ///< format_effect() of the fitted effect
+  double rms_rpm = 0.0;  ///< validation speed RMS of the model with it (and the other terms)
+  bool closes = false;   ///< it explains the gap (the decision's acceptance rule)
 };
 
 struct DiscrepancyResult {
@@ -182,6 +193,8 @@ struct DiscrepancyResult {
   double rms_after_rpm = 0.0;    ///< ... and with the terms
   double floor_rpm = 0.0;
   std::string note;              ///< why nothing was fitted, when `terms` is empty
+  std::vector<std::string> dropped;    ///< terms selected but left out: the held-out runs did not gain
+  std::vector<DiscrepancySeed> seeds;  ///< catalog effects seeded from the terms
 };
 
 /// The diagnosis.

@@ -241,7 +241,12 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
   w.meta("validation_samples", std::to_string(report.validation_samples));
   if (report.discrepancy) {
     const DiscrepancyResult& d = *report.discrepancy;
-    for (const auto& t : d.terms) w.meta("discrepancy_term", t.equation);
+    for (const auto& t : d.terms) w.meta("discrepancy_term", t.equation + "  (" + t.reading + ")");
+    for (const auto& t : d.dropped) w.meta("discrepancy_dropped", t + " (the held-out runs do not gain)");
+    for (const auto& sd : d.seeds) {
+      w.meta("discrepancy_seed", fmt::format("{} (validation rpm RMS {}{})", sd.effect, number(sd.rms_rpm),
+                                             sd.closes ? ", closes the gap" : ""));
+    }
     if (d.terms.empty()) {
       w.meta("discrepancy", d.note);
     } else {
@@ -306,7 +311,12 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
           "motor shaft, w in rad/s at the motor, theta in rad:\n",
           d.terms.size(), d.library_size);
       for (const auto& t : d.terms) {
-        out << fmt::format("  {}   (+- {:.2g} {})\n", t.equation, t.std_error, t.unit);
+        out << fmt::format("  {}   (+- {:.2g} {})   {}\n", t.equation, t.std_error, t.unit, t.reading);
+      }
+      for (const auto& t : d.dropped) out << "  left out, the held-out runs do not gain: " << t << "\n";
+      for (const auto& sd : d.seeds) {
+        out << fmt::format("  seeds the catalog: {} (validation rpm RMS {:.2f}{})\n", sd.effect, sd.rms_rpm,
+                           sd.closes ? ", closes the gap" : "");
       }
       out << fmt::format(
           "  explains {:.0f} % of the torque residual in training, {:.0f} % in validation; added to the "

@@ -173,6 +173,10 @@ struct ShaftTerm {
   std::string equation;  ///< how it reads, e.g. "0.0012 N m sin(11 theta + 0.3)"
   double (*basis)(const std::array<double, 4>& k, double theta_rad, double omega_rad_s) = nullptr;
   std::array<double, 4> k{};
+  /// Used instead of `basis` when set: a term that also depends on the motor current i_A
+  /// (torque ripple, load-dependent friction) or on the time t_s (a level that drifts).
+  double (*basis_it)(const std::array<double, 4>& k, double theta_rad, double omega_rad_s, double i_A,
+                     double t_s) = nullptr;
 };
 
 /// The model: nominal parameters plus active effects (each name at most once).

@@ -228,7 +228,7 @@ class PlantImpl {
   void drive_torques(const Vec& y, double t, Coupling coupling, double i_m, double i_g, double& Tm,
                      double& Tg) const {
     Tm = m_c.p.motor.Kt_Nm_A * i_m;
-    if (!m_c.motor_torque.empty()) Tm += m_c.extra_motor_torque(y[TH_M], y[W_M]);
+    if (!m_c.motor_torque.empty()) Tm += m_c.extra_motor_torque(y[TH_M], y[W_M], i_m, t);
     Tg = -m_c.p.generator.Kt_Nm_A * i_g;
     switch (coupling) {
       case Coupling::none:

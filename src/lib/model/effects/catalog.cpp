@@ -51,7 +51,7 @@ Compiled::Compiled(const Model& model) : p(model.params), delay_s(model.params.d
   for (const EffectSpec& spec : effect_catalog()) {
     if (const Effect* e = model.effect(spec.name)) spec.compile(*e, *this);
   }
-  for (const ShaftTerm& term : model.shaft_terms) motor_torque.push_back({term.basis, term.k});
+  for (const ShaftTerm& term : model.shaft_terms) motor_torque.push_back({term.basis, term.k, term.basis_it});
   motor_side[0] = p.motor.friction;
   motor_side[1] = p.motor.friction + p.clutch_disengaged;
   motor_side[2] = p.motor.friction + p.clutch_engaged;

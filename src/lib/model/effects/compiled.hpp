@@ -28,8 +28,13 @@ inline Friction operator+(const Friction& a, const Friction& b) {
 struct TorqueTerm {
   double (*fn)(const std::array<double, 4>& k, double theta_rad, double omega_rad_s) = nullptr;
   std::array<double, 4> k{};
+  /// Used instead of fn when set: a term of the motor current and time too (ShaftTerm::basis_it).
+  double (*fn_it)(const std::array<double, 4>& k, double theta_rad, double omega_rad_s, double i_A,
+                  double t_s) = nullptr;
 
-  double operator()(double theta_rad, double omega_rad_s) const { return fn(k, theta_rad, omega_rad_s); }
+  double operator()(double theta_rad, double omega_rad_s, double i_A, double t_s) const {
+    return fn_it ? fn_it(k, theta_rad, omega_rad_s, i_A, t_s) : fn(k, theta_rad, omega_rad_s);
+  }
 };
 
 struct Compiled {
@@ -83,9 +88,9 @@ struct Compiled {
   /// (otherwise a released body would be pulled back at once).
   double breakaway(const Friction& f) const { return f.Ts_Nm > f.Tc_Nm ? f.Ts_Nm : f.Tc_Nm; }
   /// Sum of the effects' torques on the motor shaft.
-  double extra_motor_torque(double theta_rad, double omega_rad_s) const {
+  double extra_motor_torque(double theta_rad, double omega_rad_s, double i_A, double t_s) const {
     double T = 0.0;
-    for (const TorqueTerm& term : motor_torque) T += term(theta_rad, omega_rad_s);
+    for (const TorqueTerm& term : motor_torque) T += term(theta_rad, omega_rad_s, i_A, t_s);
     return T;
   }
 };
