@@ -8,8 +8,8 @@ if wanted cli_battery; then
     s=$(sed -n 's/.*: \([0-9.]*\) s wall.*/\1/p' <<<"$line")
     mib=$(sed -n 's/.* \([0-9]*\) MiB peak.*/\1/p' <<<"$line")
     verdict=$(sed -n 's/.*MiB peak, \(exit [0-9]*\).*/\1/p' <<<"$line")
-    ok=$(awk -v s="${s:-1e9}" -v m="${mib:-1e9}" 'BEGIN { print (s <= 1 && m <= 64) ? "yes" : "missed" }')
-    row "\`mcg-sim\` on a $name, wall time and peak memory" whole-process "<= 1 s, <= 64 MiB" \
+    ok=$(awk -v s="${s:-1e9}" -v m="${mib:-1e9}" 'BEGIN { print (s <= 5 && m <= 64) ? "yes" : "missed" }')
+    row "\`mcg-sim\` on a $name, wall time and peak memory" whole-process "<= 5 s, <= 64 MiB" \
       "$s s, $mib MiB ($verdict)" "$ok"
   done <"$work/cli_battery.txt"
 fi
