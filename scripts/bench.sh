@@ -6,7 +6,7 @@
 # raw output of the in-library benchmarks follows the table.
 # Usage: bench.sh [SOAK_SECONDS]   (default 600: the 10-minute soak; 0 skips it)
 # BUILD_TYPE (Release), BENCH_BUILD_DIR (build-bench), BENCH_NO_BUILD=1: see below.
-# ROWS=design,sim limits the rows (names: csv sim sim_stream sim_scipy bode fit gap design firmware soak console, and those
+# ROWS=design,sim limits the rows (names: csv sim sim_stream sim_scipy bode fit gap design firmware soak console cli_battery, and those
 # of the scripts in scripts/bench.d/); run it on an idle machine, it measures wall time.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)

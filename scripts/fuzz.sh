@@ -4,14 +4,14 @@
 # JOBS at a time (default 2), under nice. New inputs go to build-fuzz/corpus/NAME (seeded from
 # tests/fuzz/corpus/NAME); a crash leaves its input in build-fuzz/findings/NAME/ and fails.
 # Usage: scripts/fuzz.sh [SECONDS] [NAME...]   (names: csv ini_model tf frames firmware serial_inputs margins
-#   capture_meta controller_ini bode_meta excitation csv_roundtrip)
+#   capture_meta controller_ini bode_meta excitation csv_roundtrip c2d)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 seconds=${1:-600}
 shift || true
 names=("$@")
 [ ${#names[@]} -gt 0 ] || names=(csv ini_model tf frames firmware serial_inputs margins capture_meta controller_ini
-  bode_meta excitation csv_roundtrip)
+  bode_meta excitation csv_roundtrip c2d)
 jobs=${JOBS:-2}
 build=${FUZZ_BUILD_DIR:-$root/build-fuzz}
 "$root/scripts/install-deps.sh" --fuzz
@@ -26,10 +26,14 @@ run_one() {
   nice -n 19 "$build/tests/fuzz/fuzz_$n" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 \
     -print_final_stats=1 -artifact_prefix="$findings/" "$corpus" "$root/tests/fuzz/corpus/$n" \
     > "$build/fuzz_$n.log" 2>&1 || rc=$?
-  local execs cov
+  local execs cov corp
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$build/fuzz_$n.log" | grep -o '[0-9]*$' || echo '?')
   cov=$(grep -o 'cov: [0-9]*' "$build/fuzz_$n.log" | tail -1 | grep -o '[0-9]*' || echo '?')
-  echo "fuzz_$n: ${seconds} s, $execs executions, coverage $cov edges, exit $rc ($(ls "$findings" | wc -l) findings)"
+  corp=$(grep -o 'corp: [0-9]*' "$build/fuzz_$n.log" | tail -1 | grep -o '[0-9]*' || echo '?')
+  local rate='?'
+  [[ $execs == [0-9]* ]] && rate=$((execs / seconds))
+  echo "fuzz_$n: ${seconds} s, $execs executions ($rate/s), coverage $cov edges," \
+    "corpus $corp inputs, exit $rc ($(ls "$findings" | wc -l) findings)"
   return $rc
 }
 

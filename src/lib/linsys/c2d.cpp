@@ -54,6 +54,33 @@ long whole_delay(const Tf& g, double dt_s, const std::string& what, const char* 
 /// on the unit circle, before c2d refuses it (see numerator()).
 constexpr double k_numerator_tolerance = 1e-6;
 
+/// det of an (n+1)×(n+1) matrix that is upper Hessenberg but for its dense last row and column,
+/// by Gaussian elimination with partial pivoting in O(n²): below the diagonal of column k only
+/// rows k + 1 and n can be nonzero, and so they stay (the pivots are those of a full LU).
+Complex bordered_hessenberg_det(Eigen::MatrixXcd& b) {
+  const Eigen::Index last = b.rows() - 1;
+  Complex det(1.0, 0.0);
+  for (Eigen::Index k = 0; k < last; ++k) {
+    Eigen::Index p = k;
+    if (k + 1 < last && std::abs(b(k + 1, k)) > std::abs(b(p, k))) p = k + 1;
+    if (std::abs(b(last, k)) > std::abs(b(p, k))) p = last;
+    if (p != k) {
+      b.row(k).swap(b.row(p));
+      det = -det;
+    }
+    const Complex pivot = b(k, k);
+    if (pivot == Complex(0.0, 0.0)) return {0.0, 0.0};
+    det *= pivot;
+    auto eliminate = [&](Eigen::Index r) {
+      const Complex f = b(r, k) / pivot;
+      if (f != Complex(0.0, 0.0)) b.row(r).segment(k, last + 1 - k) -= f * b.row(k).segment(k, last + 1 - k);
+    };
+    if (k + 1 < last) eliminate(k + 1);
+    eliminate(last);
+  }
+  return det * b(last, last);
+}
+
 /// P(z) = det [[zI − Φ, z·g0 + g1], [−C, d]] = det(zI − Φ)·(C(zI − Φ)^−1(z·g0 + g1) + d): the
 /// numerator over det(zI − Φ) of the sampled system, of degree <= n.
 ///
@@ -73,14 +100,27 @@ Poly numerator(const Eigen::MatrixXd& phi, const Eigen::VectorXd& g0, const Eige
   constexpr double k_two_pi = 2.0 * std::numbers::pi;
   // An offset that keeps the points off z = ±1, where integrators and Nyquist zeros sit.
   const double offset = 0.3 * k_two_pi / static_cast<double>(m);
+  // Φ = Q·H·Qᵀ with H upper Hessenberg, once: the bordered matrix with H, Qᵀg and C·Q has the
+  // same determinant (det Q² = 1), and its LU costs O(n²) a point instead of O(n³).
+  Eigen::MatrixXd h = phi;
+  Eigen::MatrixXd q = Eigen::MatrixXd::Identity(n, n);
+  if (n > 2) {
+    const Eigen::HessenbergDecomposition<Eigen::MatrixXd> hd(phi);
+    h = hd.matrixH();
+    q = hd.matrixQ();
+  }
+  const Eigen::VectorXcd g0q = (q.transpose() * g0).cast<Complex>();
+  const Eigen::VectorXcd g1q = (q.transpose() * g1).cast<Complex>();
+  const Eigen::RowVectorXcd cq = (c * q).cast<Complex>();
+  Eigen::MatrixXcd b(n + 1, n + 1);
   auto value_at = [&](Complex z) {
-    Eigen::MatrixXcd b = Eigen::MatrixXcd::Zero(n + 1, n + 1);
-    b.topLeftCorner(n, n) = -phi.cast<Complex>();
+    b.setZero();
+    b.topLeftCorner(n, n) = -h.cast<Complex>();
     b.topLeftCorner(n, n).diagonal().array() += z;
-    b.topRightCorner(n, 1) = g0.cast<Complex>() * z + g1.cast<Complex>();
-    b.bottomLeftCorner(1, n) = -c.cast<Complex>();
+    b.topRightCorner(n, 1) = g0q * z + g1q;
+    b.bottomLeftCorner(1, n) = -cq;
     b(n, n) = d;
-    return Complex(Eigen::PartialPivLU<Eigen::MatrixXcd>(b).determinant());
+    return bordered_hessenberg_det(b);
   };
   auto angle = [&](std::size_t k, double shift) {
     return offset + shift + k_two_pi * static_cast<double>(k) / static_cast<double>(m);

@@ -275,7 +275,7 @@ void model_to_ini(const Model& model, config::Ini& ini) {
       ini.set(section, key, value, unit);
       if (spec == nullptr) continue;
       const auto ps = std::find_if(spec->params.begin(), spec->params.end(),
-                                   [&](const auto& p) { return p.name == key; });
+                                   [&name = key](const auto& p) { return p.name == name; });
       if (ps != spec->params.end() && !(value >= ps->lower && value <= ps->upper)) {
         // Beyond the default range: the bounds that let it be read back.
         ini.set("bounds", effect.name + "." + key,
