@@ -51,8 +51,9 @@ uint8_t regs_read_staged(uint8_t reg, int16_t* value);
 /* A write as one atomic change, as the keypad makes it: an MCG_RS register is written into a fresh
  * copy of the active set and committed; any other is written. MCG_ST_OK or the refusal. */
 uint8_t regs_apply(uint8_t reg, int16_t value);
-/* 1 if v is within the static range of register reg (which must exist). */
-uint8_t regs_in_range(uint8_t reg, int32_t v);
+/* The static range of register reg (which must exist). */
+int16_t regs_min(uint8_t reg);
+int16_t regs_max(uint8_t reg);
 /* 1 if the register exists and is writable. */
 uint8_t regs_writable(uint8_t reg);
 void regs_init(void);
@@ -151,7 +152,7 @@ void excite_tick(void);
  * returns the target to exc_offset. */
 uint8_t excite_set_run(uint8_t run);
 /* Stores one setting (exc_kind .. exc_periods, range-checked by regs_write). */
-void excite_set(uint8_t reg, int16_t v);
+void excite_set(uint8_t reg, int16_t v) MCG_REENTRANT;
 extern uint8_t MCG_XDATA g_exc_kind, g_exc_order, g_exc_steps, g_exc_periods, g_exc_run;
 extern uint16_t MCG_XDATA g_exc_div;
 extern int16_t MCG_XDATA g_exc_amp, g_exc_offset;

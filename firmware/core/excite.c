@@ -37,14 +37,15 @@ static uint16_t MCG_XDATA s_wait;      /* ticks left at the present level */
 static uint16_t MCG_XDATA s_bit;       /* bits (PRBS) or stairs (staircase) left in the period */
 static uint16_t MCG_XDATA s_period;    /* bits or stairs per period */
 static uint8_t MCG_XDATA s_periods;    /* periods left, 0: endless */
-static int16_t MCG_XDATA s_level;      /* the staircase's present level */
+static int16_t MCG_XDATA s_level;      /* the present level (the staircase: its stair) */
+static int32_t MCG_XDATA s_lo, s_hi;   /* the lowest and highest level, checked at the start */
 
 void excite_init(void) {
   g_exc_run = 0;
   s_starting = 0;
 }
 
-void excite_set(uint8_t reg, int16_t v) {
+void excite_set(uint8_t reg, int16_t v) MCG_REENTRANT {
   switch (reg) {
     case MCG_REG_EXC_KIND:
       g_exc_kind = (uint8_t)v;
@@ -70,27 +71,28 @@ void excite_set(uint8_t reg, int16_t v) {
   }
 }
 
-static void apply(int16_t level) {
+/* Sets the target to s_level. */
+static void apply(void) {
   if (s_on_rpm) {
-    g_rpm_cmd = level;
-    control_set_rpm_cmd(level);
+    g_rpm_cmd = s_level;
+    control_set_rpm_cmd(s_level);
   } else {
-    g_duty_set = level;
+    g_duty_set = s_level;
   }
 }
 
-static uint8_t level_ok(int32_t level) {
+static uint8_t levels_ok(void) {
   if (s_on_rpm) {
-    return regs_in_range(MCG_REG_RPM_CMD, level);
+    return s_lo >= regs_min(MCG_REG_RPM_CMD) && s_hi <= regs_max(MCG_REG_RPM_CMD);
   }
-  return level >= g_duty_min && level <= g_duty_max;
+  return s_lo >= g_duty_min && s_hi <= g_duty_max;
 }
 
 uint8_t excite_set_run(uint8_t run) {
-  int32_t lo, hi;
   if (!run) {
     if (g_exc_run) {
-      apply(g_exc_offset);
+      s_level = g_exc_offset;
+      apply();
     }
     g_exc_run = 0;
     s_starting = 0;
@@ -101,16 +103,20 @@ uint8_t excite_set_run(uint8_t run) {
   }
   s_on_rpm = (uint8_t)(g_mode != MCG_MODE_OPEN);
   if (g_exc_kind == MCG_EXC_PRBS) {
-    lo = (int32_t)g_exc_offset - g_exc_amp;
-    hi = (int32_t)g_exc_offset + g_exc_amp;
+    s_lo = (int32_t)g_exc_offset - g_exc_amp;
+    s_hi = (int32_t)g_exc_offset + g_exc_amp;
     s_period = (uint16_t)((1uL << g_exc_order) - 1u);
     s_taps = k_taps[g_exc_order - 2u];
   } else {
-    lo = g_exc_offset;
-    hi = (int32_t)g_exc_offset + (int32_t)g_exc_amp * g_exc_steps;
+    s_lo = g_exc_offset;
+    s_hi = (int32_t)g_exc_offset + (int32_t)g_exc_amp * g_exc_steps;
     s_period = (uint16_t)(g_exc_steps + 1u);
   }
-  if (!level_ok(lo) || !level_ok(hi)) {
+  if (s_lo > s_hi) { /* a staircase that descends */
+    s_hi = s_lo;
+    s_lo = (int32_t)g_exc_offset + (int32_t)g_exc_amp * g_exc_steps;
+  }
+  if (!levels_ok()) {
     return MCG_ST_RANGE;
   }
   s_lfsr = 1;
@@ -149,12 +155,11 @@ void excite_tick(void) {
   if (g_exc_kind == MCG_EXC_PRBS) {
     if (s_lfsr & 1u) {
       s_lfsr = (uint16_t)((s_lfsr >> 1) ^ s_taps);
-      apply((int16_t)(g_exc_offset + g_exc_amp));
+      s_level = (int16_t)(g_exc_offset + g_exc_amp);
     } else {
       s_lfsr >>= 1;
-      apply((int16_t)(g_exc_offset - g_exc_amp));
+      s_level = (int16_t)(g_exc_offset - g_exc_amp);
     }
-  } else {
-    apply(s_level);
   }
+  apply();
 }

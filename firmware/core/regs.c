@@ -209,7 +209,8 @@ uint8_t regs_writable(uint8_t reg) {
 
 static uint8_t in_range(int16_t v, int16_t lo, int16_t hi) { return v >= lo && v <= hi; }
 
-uint8_t regs_in_range(uint8_t reg, int32_t v) { return v >= k_min[reg - 1u] && v <= k_max[reg - 1u]; }
+int16_t regs_min(uint8_t reg) { return k_min[reg - 1u]; }
+int16_t regs_max(uint8_t reg) { return k_max[reg - 1u]; }
 
 uint8_t regs_write(uint8_t reg, int16_t v) {
   if (reg == MCG_REG_COMMIT && v == 1) { /* first: the commit's pass and the next update share a tick */

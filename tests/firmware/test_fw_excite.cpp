@@ -166,3 +166,29 @@ TEST(FwExcite, FirstLevelOpensAStreamSample) {
 }
 
 }  // namespace
+
+namespace {
+
+// The same 10 s of PRBS that bench/bench_excite.c plays in s51 on the 8051 image: the CRC-16 of the
+// duties must be the figure bench-excite.sh reads from s51 (the ctest firmware.excite_s51 passes it).
+TEST(FwExcite, HostPlaysTheSequenceTheEightOFiftyOnePlays) {
+  fwtest::Board b;
+  regs_write(MCG_REG_EXC_RUN, 0);
+  regs_write(MCG_REG_EXC_KIND, MCG_EXC_PRBS);
+  regs_write(MCG_REG_EXC_ORDER, 9);
+  regs_write(MCG_REG_EXC_DIV, 1);
+  regs_write(MCG_REG_EXC_AMP, 200);
+  regs_write(MCG_REG_EXC_OFFSET, 400);
+  regs_write(MCG_REG_EXC_PERIODS, 0);
+  ASSERT_EQ(regs_write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  unsigned crc = MCG_CRC_INIT;
+  for (int i = 0; i < 10000; ++i) {
+    excite_tick();
+    const auto d = static_cast<std::uint16_t>(g_duty_set);
+    crc = mcg_crc16_update(crc, d & 0xFFu);
+    crc = mcg_crc16_update(crc, (d >> 8) & 0xFFu);
+  }
+  EXPECT_EQ(crc, 0xD226u);
+}
+
+}  // namespace
