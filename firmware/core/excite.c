@@ -11,7 +11,9 @@
  * duty_min..duty_max, rpm_cmd within its register range) and is refused with MCG_ST_RANGE
  * otherwise. The first level is applied on the first tick that opens a stream sample (at once if
  * the stream is off), before that tick's control update: the capture's first excited sample is
- * then one whole stream sample, and each level acts for exactly exc_div updates.
+ * then one whole stream sample, and each level acts for exactly exc_div updates. Started with the
+ * stream off, the excitation turns the stream on at that tick: the first streamed sample then
+ * begins with the first excited tick (the capture's t = 0 is the excitation's start).
  * The per-tick cost is a down-counter; the LFSR step and the target write run once per bit.
  * Fixed point only: every level is an int16 computed at the start or by one addition. */
 #include "core.h"
@@ -30,6 +32,7 @@ static MCG_CODE uint16_t k_taps[15] = {0x0003u, 0x0006u, 0x000Cu, 0x0014u, 0x003
                                        0x0240u, 0x0500u, 0x0829u, 0x100Du, 0x2015u, 0x6000u, 0xD008u};
 
 static uint8_t MCG_XDATA s_starting;   /* started, waiting for a tick that opens a stream sample */
+static uint8_t MCG_XDATA s_stream;     /* started with the stream off: turn it on with the first level */
 static uint8_t MCG_XDATA s_on_rpm;     /* target: 1 rpm_cmd (closed loop), 0 duty (open loop) */
 static uint16_t MCG_XDATA s_lfsr;      /* PRBS state */
 static uint16_t MCG_XDATA s_taps;      /* its toggle mask */
@@ -125,6 +128,7 @@ uint8_t excite_set_run(uint8_t run) {
   s_wait = 0;
   s_periods = g_exc_periods;
   s_starting = 1;
+  s_stream = (uint8_t)!g_stream_on;
   g_exc_run = 1;
   return MCG_ST_OK;
 }
@@ -138,6 +142,9 @@ void excite_tick(void) {
       return;
     }
     s_starting = 0;
+    if (s_stream) {
+      g_stream_on = 1;
+    }
   } else if (--s_wait != 0) {
     return;
   } else if (--s_bit == 0) {

@@ -192,3 +192,33 @@ TEST(FwExcite, HostPlaysTheSequenceTheEightOFiftyOnePlays) {
 }
 
 }  // namespace
+
+namespace {
+
+// Started with the stream off, the excitation turns it on: the first streamed sample is the first
+// excited tick (a staircase from 0 whose first stair is 300 shows 300 in sample 0, not a mean with 0).
+TEST(FwExcite, StartTurnsTheStreamOnAtTheFirstLevel) {
+  fwtest::Board b;
+  ASSERT_EQ(b.write(MCG_REG_EXC_KIND, MCG_EXC_STAIRCASE), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_OFFSET, 300), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_AMP, 100), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_DIV, 64), MCG_ST_OK);
+  ASSERT_EQ(b.read(MCG_REG_STREAM), 0);
+  ASSERT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  const auto frames = b.run(200);
+  std::vector<int> duty;
+  for (const auto& f : frames) {
+    if (f.cmd != MCG_MSG_STREAM) continue;
+    for (unsigned k = 0; k < MCG_STREAM_SAMPLES; ++k) {
+      const std::size_t at = MCG_STREAM_HEADER + MCG_STREAM_SAMPLE_BYTES * k;
+      int d = f.payload.at(at) | ((f.payload.at(at + 1) & 0x07) << 8);
+      if (d & 0x400) d -= 0x800;
+      duty.push_back(d);
+    }
+  }
+  ASSERT_GE(duty.size(), 32u);
+  for (std::size_t k = 0; k < 16; ++k) EXPECT_EQ(duty[k], 300) << "sample " << k;  // 64 ticks: stair 0
+  for (std::size_t k = 16; k < 32; ++k) EXPECT_EQ(duty[k], 400) << "sample " << k;
+}
+
+}  // namespace
