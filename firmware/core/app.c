@@ -26,6 +26,7 @@ void core_init(void) {
   control_init();
   logger_init();
   seq_init();
+  excite_init();
   regs_init(); /* last: the register defaults go through regs_write into the modules above */
   menu_init();
   g_stream_seq = 0;
@@ -108,6 +109,7 @@ uint8_t app_stream_sample_opens(void) { return (uint8_t)(!g_stream_on || s_strea
 
 static void tick(uint8_t pulses) {
   stream_tick(pulses);
+  excite_tick();
   control_tick(pulses);
   speed_tick(pulses);
   logger_tick(pulses);

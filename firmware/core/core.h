@@ -51,6 +51,9 @@ uint8_t regs_read_staged(uint8_t reg, int16_t* value);
 /* A write as one atomic change, as the keypad makes it: an MCG_RS register is written into a fresh
  * copy of the active set and committed; any other is written. MCG_ST_OK or the refusal. */
 uint8_t regs_apply(uint8_t reg, int16_t value);
+/* The static range of register reg (which must exist). */
+int16_t regs_min(uint8_t reg);
+int16_t regs_max(uint8_t reg);
 /* 1 if the register exists and is writable. */
 uint8_t regs_writable(uint8_t reg);
 void regs_init(void);
@@ -140,6 +143,19 @@ uint8_t seq_clear(void);
 uint8_t seq_set_state(uint8_t state);
 extern uint8_t MCG_XDATA g_seq_len;
 extern uint8_t MCG_XDATA g_seq_state;
+
+/* excite.c: identification inputs played by the board (PRBS, staircase) ------------------------ */
+void excite_init(void);
+/* Before the control update of every tick: the next level of a running excitation. */
+void excite_tick(void);
+/* 1 starts (MCG_ST_RANGE if no kind is set or a level is out of the target's range), 0 stops and
+ * returns the target to exc_offset. */
+uint8_t excite_set_run(uint8_t run);
+/* Stores one setting (exc_kind .. exc_periods, range-checked by regs_write). */
+void excite_set(uint8_t reg, int16_t v) MCG_REENTRANT;
+extern uint8_t MCG_XDATA g_exc_kind, g_exc_order, g_exc_steps, g_exc_periods, g_exc_run;
+extern uint16_t MCG_XDATA g_exc_div;
+extern int16_t MCG_XDATA g_exc_amp, g_exc_offset;
 
 /* menu.c: keypad and LCD --------------------------------------------------------------------- */
 void menu_init(void);

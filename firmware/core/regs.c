@@ -138,6 +138,30 @@ uint8_t regs_read(uint8_t reg, int16_t* value) MCG_REENTRANT {
     case MCG_REG_COMMIT:
       v = control_pending();
       break;
+    case MCG_REG_EXC_KIND:
+      v = g_exc_kind;
+      break;
+    case MCG_REG_EXC_ORDER:
+      v = g_exc_order;
+      break;
+    case MCG_REG_EXC_STEPS:
+      v = g_exc_steps;
+      break;
+    case MCG_REG_EXC_DIV:
+      v = (int16_t)g_exc_div;
+      break;
+    case MCG_REG_EXC_AMP:
+      v = g_exc_amp;
+      break;
+    case MCG_REG_EXC_OFFSET:
+      v = g_exc_offset;
+      break;
+    case MCG_REG_EXC_PERIODS:
+      v = g_exc_periods;
+      break;
+    case MCG_REG_EXC_RUN:
+      v = g_exc_run;
+      break;
     default:
       return MCG_ST_BAD_REG;
   }
@@ -184,6 +208,9 @@ uint8_t regs_writable(uint8_t reg) {
 }
 
 static uint8_t in_range(int16_t v, int16_t lo, int16_t hi) { return v >= lo && v <= hi; }
+
+int16_t regs_min(uint8_t reg) { return k_min[reg - 1u]; }
+int16_t regs_max(uint8_t reg) { return k_max[reg - 1u]; }
 
 uint8_t regs_write(uint8_t reg, int16_t v) {
   if (reg == MCG_REG_COMMIT && v == 1) { /* first: the commit's pass and the next update share a tick */
@@ -266,8 +293,16 @@ uint8_t regs_write(uint8_t reg, int16_t v) {
     case MCG_REG_TX_DROPS:
       g_tx_drops = 0;
       break;
-    default: /* MCG_REG_COMMIT, the last writable one: 0 discards (1 commits, above) */
+    case MCG_REG_COMMIT: /* 0 discards (1 commits, above) */
       control_discard();
+      break;
+    case MCG_REG_EXC_RUN:
+      return excite_set_run((uint8_t)v);
+    default: /* the excitation's settings: they act at the next start (exc_run 1) */
+      if (g_exc_run) {
+        return MCG_ST_BUSY;
+      }
+      excite_set(reg, v);
       break;
   }
   if (k_access[reg - 1u] == MCG_RS) {

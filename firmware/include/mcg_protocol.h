@@ -120,7 +120,7 @@ typedef struct {
 #define MCG_ST_BAD_REG 7u    /* unknown register */
 #define MCG_ST_READ_ONLY 8u  /* register cannot be written */
 #define MCG_ST_RANGE 9u      /* value outside the register's range; register unchanged */
-#define MCG_ST_BUSY 10u      /* not now: log recording or dumping, or sequence playing */
+#define MCG_ST_BUSY 10u      /* not now: log busy, sequence playing, or an excitation setting while it runs */
 #define MCG_ST_OWNED 11u     /* duty written in a closed-loop mode: the controller owns it */
 #define MCG_ST_NO_GAINS 12u  /* commit of a closed-loop mode whose every gain is zero; nothing changed */
 #define MCG_ST_LIMITS 13u    /* commit of duty_min above duty_max; nothing changed */
@@ -170,7 +170,15 @@ typedef struct {
 #define MCG_REG_TX_DROPS 0x19u
 #define MCG_REG_STREAM_SEQ 0x1Au
 #define MCG_REG_COMMIT 0x1Bu
-#define MCG_REG_COUNT 0x1Cu /* ids 0x01..MCG_REG_COUNT-1 exist, in the order of MCG_REGISTERS */
+#define MCG_REG_EXC_KIND 0x1Cu
+#define MCG_REG_EXC_ORDER 0x1Du
+#define MCG_REG_EXC_STEPS 0x1Eu
+#define MCG_REG_EXC_DIV 0x1Fu
+#define MCG_REG_EXC_AMP 0x20u
+#define MCG_REG_EXC_OFFSET 0x21u
+#define MCG_REG_EXC_PERIODS 0x22u
+#define MCG_REG_EXC_RUN 0x23u
+#define MCG_REG_COUNT 0x24u /* ids 0x01..MCG_REG_COUNT-1 exist, in the order of MCG_REGISTERS */
 
 /* Access column. */
 #define MCG_RO 0u /* read only: a write is refused with MCG_ST_READ_ONLY */
@@ -192,6 +200,8 @@ typedef struct {
 #define MCG_UNIT_SWITCH 8u   /* 0 off, 1 on */
 #define MCG_UNIT_FLAGS 9u    /* MCG_FLAG_* bits */
 #define MCG_UNIT_CLUTCH 10u  /* MCG_CLUTCH_*: the clutch states of mcg-csv(5) the board can take */
+#define MCG_UNIT_EXC 11u     /* MCG_EXC_* */
+#define MCG_UNIT_LEVEL 12u   /* the excitation's target: 1/1000 duty in mode open, rpm in p, pi, pid */
 
 #define MCG_I16_MIN (-32767 - 1)
 #define MCG_I16_MAX 32767
@@ -231,7 +241,17 @@ typedef struct {
   X(TX_DROPS, "tx_drops", MCG_RW, 0, 0, 0, MCG_UNIT_COUNT, "frames the board could not send; write 0 clears") \
   X(STREAM_SEQ, "stream_seq", MCG_RO, 0, 255, 0, MCG_UNIT_COUNT, "sequence number of the next stream block") \
   X(COMMIT, "commit", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, \
-    "write 1: the staged controller set becomes active at the next tick; 0: discards it; read: 1 if one is pending")
+    "write 1: the staged controller set becomes active at the next tick; 0: discards it; read: 1 if one is pending") \
+  X(EXC_KIND, "exc_kind", MCG_RW, MCG_EXC_NONE, MCG_EXC_STAIRCASE, MCG_EXC_NONE, MCG_UNIT_EXC, \
+    "excitation: none, prbs, staircase (a step is a staircase of one stair)") \
+  X(EXC_ORDER, "exc_order", MCG_RW, 2, 16, 9, MCG_UNIT_BITS, "PRBS LFSR order n: 2^n - 1 bits per period") \
+  X(EXC_STEPS, "exc_steps", MCG_RW, 1, 100, 1, MCG_UNIT_COUNT, "staircase stairs above exc_offset") \
+  X(EXC_DIV, "exc_div", MCG_RW, 1, 30000, 1, MCG_UNIT_MS, "ticks per PRBS bit or per stair (clock divider)") \
+  X(EXC_AMP, "exc_amp", MCG_RW, -2000, 2000, 0, MCG_UNIT_LEVEL, "PRBS: offset +- amp; staircase: rise per stair") \
+  X(EXC_OFFSET, "exc_offset", MCG_RW, -1000, 1000, 0, MCG_UNIT_LEVEL, "level the excitation starts from and ends at") \
+  X(EXC_PERIODS, "exc_periods", MCG_RW, 0, 255, 1, MCG_UNIT_COUNT, "periods played, 0: until exc_run 0") \
+  X(EXC_RUN, "exc_run", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, \
+    "write 1: start on the next stream sample (duty in mode open, rpm_cmd otherwise); 0: stop; read: 1 running")
 
 #define MCG_MODE_OPEN 0u /* duty from MCG_REG_DUTY (keypad up/down) */
 #define MCG_MODE_P 1u    /* u = bias + Kp e */
@@ -243,6 +263,11 @@ typedef struct {
  * clutch removed) exists on the bench but not for the board, whose clutch is mounted. */
 #define MCG_CLUTCH_ATTACHED 1u /* attached and disengaged */
 #define MCG_CLUTCH_ENGAGED 2u
+
+/* Excitations (excite.c): the generators the board plays. */
+#define MCG_EXC_NONE 0u
+#define MCG_EXC_PRBS 1u      /* maximal-length LFSR, exc_order bits, exc_div ticks per bit */
+#define MCG_EXC_STAIRCASE 2u /* exc_steps + 1 levels, exc_div ticks each */
 
 #define MCG_SEQ_STOP 0u
 #define MCG_SEQ_PLAY 1u /* play once from entry 0 */

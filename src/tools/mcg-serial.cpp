@@ -73,8 +73,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   stream
       ->add_option("--then", stream_opt.then,
-                   "start the loaded sequence once the stream is on (it starts on a sample)")
-      ->check(CLI::IsMember({"play", "loop"}));
+                   "start the loaded sequence once the stream is on (it starts on a sample), or the "
+                   "excitation the exc_* registers hold (t = 0 at its first tick)")
+      ->check(CLI::IsMember({"play", "loop", "excite"}));
   stream
       ->add_option("--idle-timeout", stream_opt.idle_timeout_s, "no stream data for this long is an error, s")
       ->check(CLI::Range(0.05, 60.0))

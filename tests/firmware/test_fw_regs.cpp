@@ -38,6 +38,10 @@ std::string unit_text(unsigned unit) {
       return "0/1";
     case MCG_UNIT_CLUTCH:
       return "MCG_CLUTCH_*";
+    case MCG_UNIT_EXC:
+      return "MCG_EXC_*";
+    case MCG_UNIT_LEVEL:
+      return "duty 1/1000 or rpm";
     default:
       return "MCG_FLAG_*";
   }

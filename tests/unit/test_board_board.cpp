@@ -107,6 +107,8 @@ TEST(BoardBoard, EveryRegisterAtItsRangeEdges) {
       EXPECT_EQ(refusal(rig.session, r, r.raw_default), "register is read-only") << r.name;
       continue;
     }
+    // exc_run 1 starts an excitation, which needs a kind set (test_fw_excite checks its refusals).
+    if (r.id == MCG_REG_EXC_RUN) continue;
     for (const std::int32_t edge : {r.raw_min, r.raw_max}) {
       // The dynamic parts of the ranges (duty within duty_min..duty_max) opened wide, open loop.
       rig.session.write(reg("mode"), MCG_MODE_OPEN);

@@ -34,6 +34,7 @@ static_assert(ids_in_table_order(), "MCG_REGISTERS: one row per id 0x01..MCG_REG
 
 constexpr const auto& k_modes = boardunits::k_board_modes;
 constexpr std::array<std::string_view, 3> k_seq_states{"stop", "play", "loop"};
+constexpr std::array<std::string_view, 3> k_excitations{"none", "prbs", "staircase"};
 constexpr std::array<std::string_view, 4> k_flags{"saturated", "logging", "log_full", "seq"};
 
 std::string normalise(std::string_view name) {
@@ -130,6 +131,7 @@ double parse_value(const RegisterInfo& reg, std::string_view text, std::string_v
   std::optional<double> value;
   if (reg.unit == Unit::Mode) value = named(k_modes);
   if (reg.unit == Unit::SeqState) value = named(k_seq_states);
+  if (reg.unit == Unit::Excitation) value = named(k_excitations);
   if (reg.unit == Unit::Switch) {
     if (key == "on") value = 1.0;
     if (key == "off") value = 0.0;
@@ -146,6 +148,7 @@ double parse_value(const RegisterInfo& reg, std::string_view text, std::string_v
     std::string hint;
     if (reg.unit == Unit::Mode) hint = " (open, p, pi, pid)";
     if (reg.unit == Unit::SeqState) hint = " (stop, play, loop)";
+    if (reg.unit == Unit::Excitation) hint = " (none, prbs, staircase)";
     if (reg.unit == Unit::Switch) hint = " (0, 1, off, on)";
     if (reg.unit == Unit::Clutch) hint = " (1 or disengaged, 2 or engaged)";
     fail("{}: {}: invalid value {}{}", where, reg.name, quote(text), hint);
@@ -164,6 +167,8 @@ std::string format_value(const RegisterInfo& reg, std::int16_t raw, int frac_bit
       return raw >= 0 && index < k_modes.size() ? std::string(k_modes[index]) : std::to_string(raw);
     case Unit::SeqState:
       return raw >= 0 && index < k_seq_states.size() ? std::string(k_seq_states[index]) : std::to_string(raw);
+    case Unit::Excitation:
+      return raw >= 0 && index < k_excitations.size() ? std::string(k_excitations[index]) : std::to_string(raw);
     case Unit::Flags: {
       std::string out;
       for (std::size_t bit = 0; bit < k_flags.size(); ++bit) {

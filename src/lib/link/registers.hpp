@@ -25,6 +25,8 @@ enum class Unit : std::uint8_t {
   Switch = MCG_UNIT_SWITCH,      ///< 0/1 (also off/on)
   Flags = MCG_UNIT_FLAGS,        ///< MCG_FLAG_* bits, read only
   Clutch = MCG_UNIT_CLUTCH,      ///< mcg-csv clutch state: 1 attached and disengaged, 2 engaged (also names)
+  Excitation = MCG_UNIT_EXC,     ///< MCG_EXC_*: none, prbs, staircase (or 0..2)
+  Level = MCG_UNIT_LEVEL,        ///< the excitation's target, raw = value: 1/1000 duty (open loop) or rpm
 };
 
 struct RegisterInfo {

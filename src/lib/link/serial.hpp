@@ -65,7 +65,7 @@ struct StreamOptions {
   double window_s = 0.016;         ///< rpm estimator window, s (a multiple of the 4 ms sample)
   double idle_timeout_s = 1.0;     ///< no stream block for this long is an error
   RigOptions rig;                  ///< supply and load resistor: v and r_load of the rows
-  std::string then;                ///< "", "play" or "loop": start the loaded sequence once streaming
+  std::string then;                ///< "", "play", "loop" (the loaded sequence) or "excite" (exc_run)
   double reconnect_wait_s = 0.0;   ///< > 0: when the port vanishes or the stream stops, wait this long
                                    ///< for it to come back and go on after a break row (0: an error)
 };

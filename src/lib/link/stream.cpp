@@ -30,6 +30,29 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+/// Starts the excitation the exc_* registers hold, with the stream off so that the board turns it on
+/// with the first level (t = 0 is the excitation's start); returns its description in the column's
+/// units: "prbs column=duty order=9 clock=0.003 amp=0.2 bias=0.4 periods=2" (duty as a fraction, as
+/// mcg-csv's duty column; rpm_cmd in rpm; the clock or the hold in s).
+std::string start_excitation(Connection& c) {
+  const auto raw = [&](std::string_view name) { return c.session->read(require_register(name)); };
+  const std::int16_t kind = raw("exc_kind");
+  if (kind == MCG_EXC_NONE) fail("--then excite: exc_kind is none on the board (set exc_kind first)");
+  if (raw("stream") != 0) fail("--then excite: the stream is already on (another capture?)");
+  const bool rpm = raw("mode") != MCG_MODE_OPEN;
+  const double scale = rpm ? 1.0 : 1e-3;
+  const auto level = [&](std::string_view name) { return config::format_number(raw(name) * scale); };
+  const std::string clock = config::format_number(raw("exc_div") * 1e-3);
+  std::string text = kind == MCG_EXC_PRBS
+                         ? fmt::format("prbs column={} order={} clock={}", rpm ? "rpm_cmd" : "duty",
+                                       raw("exc_order"), clock)
+                         : fmt::format("staircase column={} steps={} hold={}", rpm ? "rpm_cmd" : "duty",
+                                       raw("exc_steps"), clock);
+  text += fmt::format(" amp={} bias={} periods={}", level("exc_amp"), level("exc_offset"), raw("exc_periods"));
+  c.session->write(require_register("exc_run"), 1);
+  return text;
+}
+
 }  // namespace
 
 void write_stream_header(table::Writer& w, const Connection& c, const LinkOptions& link, int window_samples,
@@ -73,7 +96,11 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
   const InterruptGuard guard;
   const std::vector<std::pair<std::string, std::string>> config = board_config(*c);
   const RegisterInfo& stream = require_register("stream");
+  std::string excitation;
   if (options.then.empty()) {
+    c->session->write(stream, 1);
+  } else if (options.then == "excite") {
+    excitation = start_excitation(*c);
     c->session->write(stream, 1);
   } else {
     // A sequence that turns the stream on in its first entry starts the capture on its own first
@@ -85,6 +112,10 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
   }
 
   table::Writer w(out);
+  if (!excitation.empty()) {
+    w.meta("excitation", excitation);
+    w.meta("t0", "the excitation's first tick (the board turned the stream on with its first level)");
+  }
   write_stream_header(w, *c, link, window_samples, rig, config);
 
   StreamAssembler assembler(window_samples);

@@ -1,0 +1,118 @@
+/* bench_excite.c: machine cycles that the excitation generator (excite_tick) adds to the 1 ms tick
+ * on the 8051, measured in s51 as bench_tick.c measures the control update (Timer 1 counts machine
+ * cycles, its reading overhead subtracted). Sets of 256 ticks: 0 idle (no excitation), 1 PRBS on
+ * the duty holding a bit (exc_div 2, the ticks that hold), 2 PRBS on the duty with a new bit every tick
+ * (exc_div 1), 3 PRBS on rpm_cmd in closed loop, a new bit every tick, 4 staircase on the duty, a
+ * new stair every tick. Figures (min, max u16, sum u32) go to BENCH_XADDR, then the CRC-16 of the
+ * duties set 2 played over 10000 ticks; the run ends at bench_done(). */
+#include <8051.h>   /* TMOD, TH1, TL1, TR1 */
+#include <stdint.h> /* uint8_t, uint16_t, uint32_t */
+
+#include "core.h" /* core_init, excite_tick, regs_write */
+
+#define BENCH_XADDR 0x9F00u
+#define BENCH_RUNS 256u
+#define BENCH_SETS 5u
+#define BENCH_PLAY_MS 10000u
+
+typedef struct {
+  uint16_t min, max;
+  uint32_t sum;
+} Figures;
+static Figures MCG_XDATA MCG_AT(BENCH_XADDR) s_fig[BENCH_SETS];
+static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + BENCH_SETS * sizeof(Figures)) s_overhead;
+static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + BENCH_SETS * sizeof(Figures) + 2u) s_crc;
+
+static uint16_t cycles_now(void) {
+  uint8_t hi, lo;
+  do {
+    hi = TH1;
+    lo = TL1;
+  } while (hi != TH1);
+  return (uint16_t)((uint16_t)hi << 8 | lo);
+}
+
+void bench_done(void) {}
+
+static void prbs(uint8_t div, int16_t amp, int16_t offset) {
+  regs_write(MCG_REG_EXC_RUN, 0);
+  regs_write(MCG_REG_EXC_KIND, MCG_EXC_PRBS);
+  regs_write(MCG_REG_EXC_ORDER, 9);
+  regs_write(MCG_REG_EXC_DIV, div);
+  regs_write(MCG_REG_EXC_AMP, amp);
+  regs_write(MCG_REG_EXC_OFFSET, offset);
+  regs_write(MCG_REG_EXC_PERIODS, 0);
+  regs_write(MCG_REG_EXC_RUN, 1);
+}
+
+void main(void) {
+  uint8_t m;
+  uint16_t i;
+  core_init();
+  TMOD = 0x10; /* Timer 1: 16-bit timer (machine cycles) */
+  TH1 = 0;
+  TL1 = 0;
+  TR1 = 1;
+  {
+    uint16_t t0 = cycles_now();
+    uint16_t t1 = cycles_now();
+    s_overhead = (uint16_t)(t1 - t0);
+  }
+  for (m = 0; m < BENCH_SETS; ++m) {
+    if (m == 1) {
+      prbs(2, 200, 400);
+    } else if (m == 2) {
+      prbs(1, 200, 400);
+    } else if (m == 3) {
+      regs_write(MCG_REG_EXC_RUN, 0);
+      regs_write(MCG_REG_B0, 9000);
+      regs_write(MCG_REG_B1, -8800);
+      regs_write(MCG_REG_MODE, MCG_MODE_PI);
+      regs_write(MCG_REG_COMMIT, 1);
+      prbs(1, 100, 420);
+    } else if (m == 4) {
+      regs_write(MCG_REG_EXC_RUN, 0);
+      regs_write(MCG_REG_MODE, MCG_MODE_OPEN);
+      regs_write(MCG_REG_COMMIT, 1);
+      regs_write(MCG_REG_EXC_KIND, MCG_EXC_STAIRCASE);
+      regs_write(MCG_REG_EXC_STEPS, 100);
+      regs_write(MCG_REG_EXC_DIV, 1);
+      regs_write(MCG_REG_EXC_AMP, 5);
+      regs_write(MCG_REG_EXC_OFFSET, 100);
+      regs_write(MCG_REG_EXC_RUN, 1);
+    }
+    excite_tick(); /* the start tick */
+    s_fig[m].min = 0xFFFFu;
+    s_fig[m].max = 0;
+    s_fig[m].sum = 0;
+    for (i = 0; i < BENCH_RUNS; ++i) {
+      uint16_t t0 = cycles_now();
+      uint16_t dt;
+      excite_tick();
+      dt = (uint16_t)(cycles_now() - t0 - s_overhead);
+      if (m == 1u && (i & 1u)) {
+        continue; /* set 1 times the ticks that hold a bit */
+      }
+      if (dt < s_fig[m].min) {
+        s_fig[m].min = dt;
+      }
+      if (dt > s_fig[m].max) {
+        s_fig[m].max = dt;
+      }
+      s_fig[m].sum += dt;
+    }
+  }
+  regs_write(MCG_REG_EXC_RUN, 0);
+  regs_write(MCG_REG_MODE, MCG_MODE_OPEN);
+  regs_write(MCG_REG_COMMIT, 1);
+  prbs(1, 200, 400);
+  s_crc = MCG_CRC_INIT;
+  for (i = 0; i < BENCH_PLAY_MS; ++i) {
+    excite_tick();
+    s_crc = (uint16_t)mcg_crc16_update(s_crc, (unsigned)g_duty_set & 0xFFu);
+    s_crc = (uint16_t)mcg_crc16_update(s_crc, (unsigned)g_duty_set >> 8 & 0xFFu);
+  }
+  bench_done();
+  for (;;) {
+  }
+}

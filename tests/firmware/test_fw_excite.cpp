@@ -1,0 +1,224 @@
+// test_fw_excite.cpp: the excitations the board plays (excite.c), checked against their definitions.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "fw_harness.hpp"
+
+namespace {
+
+using fwtest::Board;
+
+// Duties the PWM ran, one per tick, for ms ticks.
+std::vector<int> duties(Board& b, int ms) {
+  std::vector<int> out;
+  for (int i = 0; i < ms; ++i) {
+    b.run(1);
+    out.push_back(host_board_duty());
+  }
+  return out;
+}
+
+void setup_prbs(Board& b, int order, int div, int amp, int offset, int periods) {
+  ASSERT_EQ(b.write(MCG_REG_EXC_KIND, MCG_EXC_PRBS), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_ORDER, order), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_DIV, div), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_AMP, amp), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_OFFSET, offset), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_PERIODS, periods), MCG_ST_OK);
+}
+
+TEST(FwExcite, PrbsIsMaximalLengthForEveryOrder) {
+  for (int order = 2; order <= 16; ++order) {
+    Board b;
+    setup_prbs(b, order, 1, 100, 300, 2);
+    ASSERT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+    const int period = (1 << order) - 1;
+    const std::vector<int> d = duties(b, 2 * period + 8);
+    auto first = d.begin();
+    while (first != d.end() && *first == 0) ++first;  // ticks before the first level
+    ASSERT_NE(first, d.end()) << "order " << order;
+    const std::vector<int> p1(first, first + period);
+    const std::vector<int> p2(first + period, first + 2 * period);
+    EXPECT_EQ(p1, p2) << "order " << order << ": not periodic with 2^n - 1";
+    int ones = 0;
+    for (int v : p1) {
+      ASSERT_TRUE(v == 400 || v == 200) << "order " << order;
+      ones += v == 400;
+    }
+    EXPECT_EQ(ones, 1 << (order - 1)) << "order " << order << ": an m-sequence holds 2^(n-1) ones";
+    // No shorter period: a maximal-length sequence repeats only after 2^n - 1 bits.
+    for (int q = 1; q < period; ++q) {
+      if (period % q != 0) continue;
+      bool periodic = true;
+      for (int i = 0; i < period; ++i) periodic = periodic && p1[static_cast<std::size_t>(i)] == p1[static_cast<std::size_t>((i + q) % period)];
+      EXPECT_FALSE(periodic) << "order " << order << " repeats after " << q;
+    }
+    // After two periods the duty is back at the offset and the run register reads 0.
+    EXPECT_EQ(*(first + 2 * period), 300) << "order " << order;
+    EXPECT_EQ(b.read(MCG_REG_EXC_RUN), 0);
+  }
+}
+
+TEST(FwExcite, ClockDividerHoldsEachBit) {
+  Board b;
+  setup_prbs(b, 4, 3, 50, 100, 1);
+  ASSERT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  const std::vector<int> d = duties(b, 60);
+  auto first = d.begin();
+  while (*first == 0) ++first;
+  for (int k = 0; k < 15; ++k) {
+    EXPECT_EQ(first[3 * k], first[3 * k + 1]);
+    EXPECT_EQ(first[3 * k], first[3 * k + 2]);
+  }
+  EXPECT_EQ(first[45], 100);
+  // The Galois register seeded with 1, mask 0x000C: the first bits leave as 1, 0, 0, 1, ...
+  EXPECT_EQ(first[0], 150);
+  EXPECT_EQ(first[3], 50);
+}
+
+TEST(FwExcite, StaircaseClimbsAndReturns) {
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_EXC_KIND, MCG_EXC_STAIRCASE), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_STEPS, 3), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_DIV, 5), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_AMP, 100), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_OFFSET, 100), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_PERIODS, 1), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_DUTY, 100), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  std::vector<int> d = duties(b, 30);
+  std::vector<int> want;
+  for (int stair = 0; stair <= 3; ++stair) want.insert(want.end(), 5, 100 + 100 * stair);
+  auto first = d.begin();
+  while (*first == 100 && first[1] == 100 && first[5] != 200) ++first;
+  EXPECT_EQ(std::vector<int>(first, first + 20), want);
+  EXPECT_EQ(first[20], 100);
+}
+
+TEST(FwExcite, ClosedLoopPlaysTheCommand) {
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_B0, 300), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_B1, -290), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_COMMIT, 1), MCG_ST_OK);
+  setup_prbs(b, 3, 10, 50, 400, 1);
+  ASSERT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  std::vector<int> cmds;
+  for (int i = 0; i < 80; ++i) {
+    b.run(1);
+    int16_t v = 0;
+    host_board_reg_read(MCG_REG_RPM_CMD, &v);
+    cmds.push_back(v);
+  }
+  int seen_hi = 0, seen_lo = 0;
+  for (int v : cmds) {
+    ASSERT_TRUE(v == 350 || v == 400 || v == 450) << v;
+    seen_hi += v == 450;
+    seen_lo += v == 350;
+  }
+  EXPECT_EQ(seen_hi, 40);  // 4 ones and 3 zeros in a period of 7 bits, 10 ticks each
+  EXPECT_EQ(seen_lo, 30);
+  EXPECT_EQ(cmds.back(), 400);
+}
+
+TEST(FwExcite, RefusesWhatItCannotPlay) {
+  Board b;
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_RANGE) << "no kind set";
+  setup_prbs(b, 5, 1, 200, 900, 1);
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_RANGE) << "1100 is above duty_max";
+  EXPECT_EQ(b.read(MCG_REG_EXC_RUN), 0);
+  EXPECT_EQ(b.write(MCG_REG_EXC_OFFSET, 500), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_PERIODS, 0), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_AMP, 10), MCG_ST_BUSY) << "settings are fixed while it runs";
+  b.run(5000);
+  EXPECT_EQ(b.read(MCG_REG_EXC_RUN), 1) << "0 periods: until stopped";
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 0), MCG_ST_OK);
+  b.run(2);
+  EXPECT_EQ(host_board_duty(), 500) << "stopping returns the duty to the offset";
+  EXPECT_EQ(b.write(MCG_REG_EXC_ORDER, 17), MCG_ST_RANGE);
+}
+
+TEST(FwExcite, FirstLevelOpensAStreamSample) {
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_STREAM, 1), MCG_ST_OK);
+  b.run(2);  // somewhere inside a sample
+  ASSERT_EQ(b.write(MCG_REG_EXC_KIND, MCG_EXC_STAIRCASE), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_AMP, 200), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_DIV, 8), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  // The step from 0 to 200 must fill whole stream samples: no sample's mean duty lies between.
+  const auto frames = b.run(400);
+  int blocks = 0;
+  for (const auto& f : frames) {
+    if (f.cmd != MCG_MSG_STREAM) continue;
+    ++blocks;
+    for (unsigned k = 0; k < MCG_STREAM_SAMPLES; ++k) {
+      const std::size_t at = MCG_STREAM_HEADER + MCG_STREAM_SAMPLE_BYTES * k;
+      int duty = f.payload.at(at) | ((f.payload.at(at + 1) & 0x07) << 8);
+      if (duty & 0x400) duty -= 0x800;
+      EXPECT_TRUE(duty == 0 || duty == 200) << "a sample straddles a level change: " << duty;
+    }
+  }
+  EXPECT_GT(blocks, 2);
+}
+
+}  // namespace
+
+namespace {
+
+// The same 10 s of PRBS that bench/bench_excite.c plays in s51 on the 8051 image: the CRC-16 of the
+// duties must be the figure bench-excite.sh reads from s51 (the ctest firmware.excite_s51 passes it).
+TEST(FwExcite, HostPlaysTheSequenceTheEightOFiftyOnePlays) {
+  fwtest::Board b;
+  regs_write(MCG_REG_EXC_RUN, 0);
+  regs_write(MCG_REG_EXC_KIND, MCG_EXC_PRBS);
+  regs_write(MCG_REG_EXC_ORDER, 9);
+  regs_write(MCG_REG_EXC_DIV, 1);
+  regs_write(MCG_REG_EXC_AMP, 200);
+  regs_write(MCG_REG_EXC_OFFSET, 400);
+  regs_write(MCG_REG_EXC_PERIODS, 0);
+  ASSERT_EQ(regs_write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  unsigned crc = MCG_CRC_INIT;
+  for (int i = 0; i < 10000; ++i) {
+    excite_tick();
+    const auto d = static_cast<std::uint16_t>(g_duty_set);
+    crc = mcg_crc16_update(crc, d & 0xFFu);
+    crc = mcg_crc16_update(crc, (d >> 8) & 0xFFu);
+  }
+  EXPECT_EQ(crc, 0xD226u);
+}
+
+}  // namespace
+
+namespace {
+
+// Started with the stream off, the excitation turns it on: the first streamed sample is the first
+// excited tick (a staircase from 0 whose first stair is 300 shows 300 in sample 0, not a mean with 0).
+TEST(FwExcite, StartTurnsTheStreamOnAtTheFirstLevel) {
+  fwtest::Board b;
+  ASSERT_EQ(b.write(MCG_REG_EXC_KIND, MCG_EXC_STAIRCASE), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_OFFSET, 300), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_AMP, 100), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_DIV, 64), MCG_ST_OK);
+  ASSERT_EQ(b.read(MCG_REG_STREAM), 0);
+  ASSERT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  const auto frames = b.run(200);
+  std::vector<int> duty;
+  for (const auto& f : frames) {
+    if (f.cmd != MCG_MSG_STREAM) continue;
+    for (unsigned k = 0; k < MCG_STREAM_SAMPLES; ++k) {
+      const std::size_t at = MCG_STREAM_HEADER + MCG_STREAM_SAMPLE_BYTES * k;
+      int d = f.payload.at(at) | ((f.payload.at(at + 1) & 0x07) << 8);
+      if (d & 0x400) d -= 0x800;
+      duty.push_back(d);
+    }
+  }
+  ASSERT_GE(duty.size(), 32u);
+  for (std::size_t k = 0; k < 16; ++k) EXPECT_EQ(duty[k], 300) << "sample " << k;  // 64 ticks: stair 0
+  for (std::size_t k = 16; k < 32; ++k) EXPECT_EQ(duty[k], 400) << "sample " << k;
+}
+
+}  // namespace
