@@ -491,12 +491,12 @@ int main(int argc, char** argv) {
     }
     check(all_bits, "Kp written, committed and read back with the eighth bit of both bytes");
 
-    const auto count = static_cast<std::uint8_t>(MCG_REG_COUNT - 1);
+    const auto count = static_cast<std::uint8_t>(MCG_READ_MANY_MAX);
     const auto many = sim.request(MCG_CMD_READ_MANY, {1, count});
     check(many && many->payload.size() == 3u + 2u * count && many->payload[0] == MCG_ST_OK &&
               fwtest::i16_at(many->payload, 3u + 2u * (MCG_REG_RPM_CMD - 1u)) == 515 &&
               fwtest::i16_at(many->payload, 3u + 2u * (MCG_REG_COEF_FRAC - 1u)) == read_reg(sim, MCG_REG_COEF_FRAC),
-          "every register in one READ_MANY answer (the largest frame the board sends)");
+          "30 registers in one READ_MANY answer (the largest frame the board sends)");
 
     const auto r = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_RPM_CMD, 800));
     check(r && r->payload == Bytes{MCG_ST_RANGE} && read_reg(sim, MCG_REG_RPM_CMD) == 515,

@@ -23,6 +23,13 @@ constexpr std::size_t k_max_unsolicited = 1u << 14;
 
 constexpr double k_write_timeout_s = 2.0;
 
+/// Registers asked for in one MCG_CMD_READ_MANY: a 48-byte answer, which the board's 128-byte
+/// transmit ring takes beside a 56-byte stream block with room to spare (an answer of the
+/// protocol's full MCG_READ_MANY_MAX, 68 bytes, finds no room when the line runs late, and the
+/// board drops it).
+constexpr std::size_t k_read_many_chunk = 20;
+static_assert(k_read_many_chunk <= MCG_READ_MANY_MAX);
+
 }  // namespace
 
 std::string board_name(unsigned board) {
@@ -128,7 +135,7 @@ std::vector<std::int16_t> Session::read_many(std::span<const RegisterInfo* const
   std::size_t at = 0;
   while (at < regs.size()) {
     std::size_t n = 1;
-    while (at + n < regs.size() && n < MCG_READ_MANY_MAX && regs[at + n]->id == regs[at]->id + n) ++n;
+    while (at + n < regs.size() && n < k_read_many_chunk && regs[at + n]->id == regs[at]->id + n) ++n;
     if (n == 1) {
       values.push_back(read(*regs[at]));
       ++at;

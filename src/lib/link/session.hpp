@@ -81,7 +81,7 @@ class Session {
   /// The raw value of a register.
   std::int16_t read(const RegisterInfo& reg);
   /// The raw values of `regs`, in their order: each run of consecutive ids in one
-  /// MCG_CMD_READ_MANY (at most MCG_READ_MANY_MAX registers an answer), a lone id by MCG_CMD_READ.
+  /// MCG_CMD_READ_MANY (at most 20 registers an answer), a lone id by MCG_CMD_READ.
   std::vector<std::int16_t> read_many(std::span<const RegisterInfo* const> regs);
   /// Writes a raw value; returns the value the board holds afterwards (from its answer): for a
   /// staged register, the value in the shadow set.
