@@ -52,7 +52,9 @@ TEST(FwExcite, PrbsIsMaximalLengthForEveryOrder) {
     for (int q = 1; q < period; ++q) {
       if (period % q != 0) continue;
       bool periodic = true;
-      for (int i = 0; i < period; ++i) periodic = periodic && p1[static_cast<std::size_t>(i)] == p1[static_cast<std::size_t>((i + q) % period)];
+      for (int i = 0; i < period; ++i)
+        periodic =
+            periodic && p1[static_cast<std::size_t>(i)] == p1[static_cast<std::size_t>((i + q) % period)];
       EXPECT_FALSE(periodic) << "order " << order << " repeats after " << q;
     }
     // After two periods the duty is back at the offset and the run register reads 0.

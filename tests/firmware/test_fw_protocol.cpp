@@ -59,7 +59,8 @@ TEST(FwProtocol, ReadManyIsReadOfEach) {
   ASSERT_EQ(b.write(MCG_REG_DUTY, 250), MCG_ST_OK);
   std::vector<int> many(MCG_REG_COUNT, 0);
   for (unsigned first = 1; first < MCG_REG_COUNT; first += MCG_READ_MANY_MAX) {
-    const auto count = static_cast<std::uint8_t>(std::min<unsigned>(MCG_READ_MANY_MAX, MCG_REG_COUNT - first));
+    const auto count =
+        static_cast<std::uint8_t>(std::min<unsigned>(MCG_READ_MANY_MAX, MCG_REG_COUNT - first));
     const auto f = b.request(MCG_CMD_READ_MANY, Bytes{static_cast<std::uint8_t>(first), count});
     ASSERT_TRUE(f);
     ASSERT_EQ(f->payload.size(), 3u + 2u * count);

@@ -18,7 +18,8 @@ namespace mcg::board {
 /// What the emulated board is wired to.
 struct BoardOptions {
   model::Model model;               ///< the rig (mcg-sim's --config)
-  double r_load_ohm = boardunits::k_load_resistor_ohm;  ///< resistor the load relay puts across the generator, ohm
+  double r_load_ohm =
+      boardunits::k_load_resistor_ohm;  ///< resistor the load relay puts across the generator, ohm
   std::uint32_t baud = 9600;        ///< serial line rate; 0 = unlimited
   double max_step_s = 1e-3;         ///< the plant's largest integration step (model::SimOptions)
 };

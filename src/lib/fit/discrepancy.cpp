@@ -355,7 +355,8 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
   // be enough (k_discrepancy_min_windows) to tell a term from noise at three standard errors.
   const std::size_t needed = std::max(k_discrepancy_min_windows, library.size() + 1);
   if (y.size() < needed) {
-    out.note = fmt::format("too few windows in which the shaft turns ({} of 20 ms; {} needed)", y.size(), needed);
+    out.note =
+        fmt::format("too few windows in which the shaft turns ({} of 20 ms; {} needed)", y.size(), needed);
     return out;
   }
   const Eigen::Map<const Eigen::VectorXd> Y(y.data(), static_cast<Eigen::Index>(y.size()));

@@ -168,11 +168,13 @@ std::string format_value(const RegisterInfo& reg, std::int16_t raw, int frac_bit
     case Unit::SeqState:
       return raw >= 0 && index < k_seq_states.size() ? std::string(k_seq_states[index]) : std::to_string(raw);
     case Unit::Excitation:
-      return raw >= 0 && index < k_excitations.size() ? std::string(k_excitations[index]) : std::to_string(raw);
+      return raw >= 0 && index < k_excitations.size() ? std::string(k_excitations[index])
+                                                      : std::to_string(raw);
     case Unit::Flags: {
       std::string out;
       for (std::size_t bit = 0; bit < k_flags.size(); ++bit) {
-        if ((static_cast<unsigned>(raw) >> bit) & 1u) out += fmt::format("{}{}", out.empty() ? "" : ",", k_flags[bit]);
+        if ((static_cast<unsigned>(raw) >> bit) & 1u)
+          out += fmt::format("{}{}", out.empty() ? "" : ",", k_flags[bit]);
       }
       return out.empty() ? "none" : out;
     }

@@ -48,7 +48,8 @@ std::string start_excitation(Connection& c) {
                                        raw("exc_order"), clock)
                          : fmt::format("staircase column={} steps={} hold={}", rpm ? "rpm_cmd" : "duty",
                                        raw("exc_steps"), clock);
-  text += fmt::format(" amp={} bias={} periods={}", level("exc_amp"), level("exc_offset"), raw("exc_periods"));
+  text +=
+      fmt::format(" amp={} bias={} periods={}", level("exc_amp"), level("exc_offset"), raw("exc_periods"));
   c.session->write(require_register("exc_run"), 1);
   return text;
 }
