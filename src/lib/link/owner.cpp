@@ -2,7 +2,6 @@
 #include "link/owner.hpp"
 
 #include <fcntl.h>
-#include <fmt/format.h>
 #include <poll.h>
 #include <signal.h>
 #include <sys/socket.h>
@@ -20,12 +19,14 @@
 #include <optional>
 #include <vector>
 
-#include "common/error.hpp"  // mcg::fail
+#include <fmt/format.h>
+
+#include "common/error.hpp"    // mcg::fail
 #include "common/poll_timeout.hpp"
 #include "link/capture_meta.hpp"  // config_register_names
-#include "link/frame.hpp"         // Decoder, encode
-#include "link/registers.hpp"     // require_register
-#include "mcg_protocol.h"         // MCG_CMD_*, MCG_MSG_*
+#include "link/frame.hpp"      // Decoder, encode
+#include "link/registers.hpp"  // require_register
+#include "mcg_protocol.h"      // MCG_CMD_*, MCG_MSG_*
 
 namespace mcg::link {
 
@@ -38,15 +39,11 @@ double now_s() { return std::chrono::duration<double>(Clock::now().time_since_ep
 /// A request goes to the board after the previous one was answered, or after this long.
 constexpr double k_hold_s = 0.1;
 /// While the stream is on it takes 56 of every 61 bytes the line carries at 9600 baud (a
-/// 56-byte block per 64 ms). Answers fill the board's transmit ring beside the blocks; what they
-/// add drains at the line's spare rate, counted here as one register answer per 0.12 s (below
-/// the 85 bytes/s the line leaves, for a board whose line runs late). An answer goes out only
-/// while the ring keeps room for the next block: at most k_answer_room_bytes beyond it (a
-/// 127-byte ring less a 56-byte block), so a burst of reads or one MCG_CMD_READ_MANY goes at
-/// once, and a long run of answers is paced.
+/// 56-byte block per 64 ms): one answer of k_register_answer_bytes (a register) per this long
+/// fits in the rest without making the board drop a block; a longer answer (MCG_CMD_READ_MANY)
+/// holds the next request back in proportion to its length.
+constexpr double k_stream_pace_s = 0.12;
 constexpr std::size_t k_register_answer_bytes = MCG_FRAME_OVERHEAD + 1 + sizeof(McgRegisterAnswer);
-constexpr double k_spare_bytes_per_s = static_cast<double>(k_register_answer_bytes) / 0.12;
-constexpr double k_answer_room_bytes = 127.0 - (MCG_FRAME_OVERHEAD + MCG_STREAM_PAYLOAD);
 
 /// The length on the wire of the answer to `request`.
 std::size_t answer_bytes(const Frame& request) {
@@ -64,7 +61,7 @@ constexpr double k_port_write_timeout_s = 2.0;
 constexpr double k_stream_silent_s = 0.5;
 /// While the stream is on, a read of a configuration register (one only a write changes) is answered
 /// from the value the board gave for it at most this long ago: the line has room for one
-/// answer per 0.12 s, so twelve reads from the board would hold a capture's first
+/// answer per k_stream_pace_s, so twelve reads from the board would hold a capture's first
 /// row back 1.5 s. Any other request (a write, a sequence, a log) forgets every such value.
 constexpr double k_held_s = 5.0;
 /// The owner reads a configuration register again in the line's spare room (no request
@@ -233,15 +230,7 @@ struct PortOwner::Impl {
   std::deque<std::pair<int, Frame>> queue;   ///< requests not sent yet (client -1: the owner's own)
   std::vector<Expect> expected;              ///< sent, not answered
   double last_sent_s = -1e9;
-  double answers_bytes = 0.0;  ///< answer bytes still in the board's ring beside the stream, at last_sent_s
-
-  /// While streaming, how long `f` must wait so its answer leaves the ring room for a block.
-  double pace_wait_s(const Frame& f, double now) const {
-    if (!anyone_streams(-1)) return 0.0;
-    const double left = std::max(0.0, answers_bytes - k_spare_bytes_per_s * (now - last_sent_s));
-    const double over = left + static_cast<double>(answer_bytes(f)) - k_answer_room_bytes;
-    return over > 0.0 ? over / k_spare_bytes_per_s : 0.0;
-  }
+  double pace_s = k_stream_pace_s;  ///< while streaming, the gap the last request's answer needs
   double last_block_s = -1e9;                ///< when the last stream block arrived
   double last_client_s = -1e9;               ///< when a client last asked the board something
   bool waiting = false;                      ///< the last request sent has no answer yet
@@ -439,7 +428,7 @@ struct PortOwner::Impl {
     if (waiting && now - last_sent_s >= k_hold_s) waiting = false;
     refresh_held();
     if (queue.empty() || waiting) return;
-    if (pace_wait_s(queue.front().second, now) > 0.0) return;
+    if (anyone_streams(-1) && now - last_sent_s < pace_s) return;
     auto [id, f] = std::move(queue.front());
     queue.pop_front();
     if (f.cmd != MCG_CMD_READ && f.cmd != MCG_CMD_READ_MANY && f.cmd != MCG_CMD_VERSION) {
@@ -454,9 +443,8 @@ struct PortOwner::Impl {
     e.sent_s = now;
     e.generation = generation;
     expected.push_back(e);
-    answers_bytes = std::max(0.0, answers_bytes - k_spare_bytes_per_s * (now - last_sent_s)) +
-                    static_cast<double>(answer_bytes(f));
     last_sent_s = now;
+    pace_s = k_stream_pace_s * static_cast<double>(answer_bytes(f)) / static_cast<double>(k_register_answer_bytes);
     waiting = true;
   }
 
@@ -540,9 +528,8 @@ struct PortOwner::Impl {
       }
       double timeout_s = 0.05;
       if (!queue.empty()) {
-        const double now = now_s();
-        const double hold_s = waiting ? k_hold_s - (now - last_sent_s) : 0.0;
-        timeout_s = std::clamp(std::max(hold_s, pace_wait_s(queue.front().second, now)), 0.0, timeout_s);
+        const double gap_s = std::max(waiting ? k_hold_s : 0.0, anyone_streams(-1) ? pace_s : 0.0);
+        timeout_s = std::clamp(gap_s - (now_s() - last_sent_s), 0.0, timeout_s);
       }
       if (fds[2].fd < 0) timeout_s = std::min(timeout_s, 0.002);
       const int ready = ::poll(fds.data(), fds.size(), poll_timeout_ms(timeout_s));

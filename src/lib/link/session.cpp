@@ -29,6 +29,10 @@ constexpr double k_write_timeout_s = 2.0;
 /// board drops it).
 constexpr std::size_t k_read_many_chunk = 20;
 static_assert(k_read_many_chunk <= MCG_READ_MANY_MAX);
+/// Added to the reply timeout of MCG_CMD_READ_MANY: a port owner holds a long answer back until
+/// the board's transmit ring has room for it beside the stream (up to about 0.7 s); a resend
+/// meanwhile would only queue another long answer behind it.
+constexpr double k_read_many_pacing_s = 1.0;
 
 }  // namespace
 
@@ -79,7 +83,8 @@ std::vector<std::uint8_t> Session::request(std::uint8_t cmd, std::span<const std
       (cmd == MCG_CMD_READ || cmd == MCG_CMD_WRITE || cmd == MCG_CMD_READ_MANY) && !payload.empty();
   for (int attempt = 0; attempt < m_options.attempts; ++attempt) {
     m_port.write_all(bytes, k_write_timeout_s);
-    const double deadline = now_s() + m_options.reply_timeout_s;
+    const double deadline =
+        now_s() + m_options.reply_timeout_s + (cmd == MCG_CMD_READ_MANY ? k_read_many_pacing_s : 0.0);
     bool resend = false;
     while (!resend) {
       while (!m_frames.empty() && !resend) {
