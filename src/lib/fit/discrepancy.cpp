@@ -316,30 +316,29 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
   for (double order : angle_orders) {
     if (order != 1.0) orders.push_back(order);
   }
-  for (double order : orders) {
-    const std::string per =
-        order == 1.0 ? "once per revolution: an imbalance, a bent shaft or an eccentric load"
-                     : fmt::format("{:g} per revolution: cogging or a load periodic in the angle", order);
+  // A harmonic as its sin and cos pair (the cos is the sin a quarter turn on).
+  const auto add_harmonic = [&](const std::string& prefix, const char* unit, const auto& basis, double order,
+                                const std::string& per) {
     library.push_back(
-        {fmt::format("sin({:g} theta)", order), "N m", b_sin, {order, 0.0, 0.0, 1.0}, order, per});
-    library.push_back({fmt::format("cos({:g} theta)", order),
-                       "N m",
-                       b_sin,
+        {fmt::format("{}sin({:g} theta)", prefix, order), unit, basis, {order, 0.0, 0.0, 1.0}, order, per});
+    library.push_back({fmt::format("{}cos({:g} theta)", prefix, order),
+                       unit,
+                       basis,
                        {order, std::numbers::pi / 2.0, 0.0, 1.0},
                        order,
                        per});
+  };
+  for (double order : orders) {
+    add_harmonic("", "N m", b_sin, order,
+                 order == 1.0
+                     ? "once per revolution: an imbalance, a bent shaft or an eccentric load"
+                     : fmt::format("{:g} per revolution: cogging or a load periodic in the angle", order));
   }
   for (double order : orders) {
-    const std::string per = fmt::format(
-        "scales with the current, {:g} per revolution: torque ripple (Kt varying with the angle)", order);
-    library.push_back(
-        {fmt::format("i sin({:g} theta)", order), "N m/A", b_i_sin, {order, 0.0, 0.0, 1.0}, order, per});
-    library.push_back({fmt::format("i cos({:g} theta)", order),
-                       "N m/A",
-                       b_i_sin,
-                       {order, std::numbers::pi / 2.0, 0.0, 1.0},
-                       order,
-                       per});
+    add_harmonic(
+        "i ", "N m/A", b_i_sin, order,
+        fmt::format("scales with the current, {:g} per revolution: torque ripple (Kt varying with the angle)",
+                    order));
   }
   out.library_size = library.size();
 
