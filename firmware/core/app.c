@@ -226,6 +226,21 @@ void app_dispatch(uint8_t cmd, const uint8_t MCG_XDATA* payload, uint8_t len) {
       }
       frame_reply(cmd, MCG_ST_OK, s_ans, (uint8_t)(sizeof(McgReadManyRequest) + 2u * payload[1]));
       return;
+    case MCG_CMD_READ_LIST:
+      if (len == 0 || len > MCG_READ_MANY_MAX) {
+        break;
+      }
+      s_ans[0] = payload[0];
+      s_ans[1] = len;
+      for (k = 0; k < len; ++k) {
+        if (regs_read(payload[k], &value) != MCG_ST_OK) {
+          frame_reply(cmd, MCG_ST_BAD_REG, s_ans, 0);
+          return;
+        }
+        put16(s_ans + sizeof(McgReadManyRequest) + 2u * k, value);
+      }
+      frame_reply(cmd, MCG_ST_OK, s_ans, (uint8_t)(sizeof(McgReadManyRequest) + 2u * len));
+      return;
     case MCG_CMD_LOG_START:
       if (len != 0) {
         break;

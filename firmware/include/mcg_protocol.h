@@ -19,13 +19,13 @@
 #define MCG_FIRMWARE_INCLUDE_MCG_PROTOCOL_H
 
 /* Protocol revision: bumped on any incompatible change of this header. */
-#define MCG_PROTOCOL_VERSION 4u
+#define MCG_PROTOCOL_VERSION 5u
 
 /* Firmware version reported by MCG_CMD_VERSION. */
 #include <stdint.h> /* uint8_t */
 
 #define MCG_FW_VERSION_MAJOR 0u
-#define MCG_FW_VERSION_MINOR 4u
+#define MCG_FW_VERSION_MINOR 5u
 #define MCG_FW_VERSION_PATCH 0u
 
 /* Board ids reported by MCG_CMD_VERSION. */
@@ -53,6 +53,11 @@
 /* Registers first..first+count-1 in one answer (reads as MCG_CMD_READ), count 1..MCG_READ_MANY_MAX:
  * a full read-back costs one answer of the line's spare room beside the stream, not one per register. */
 #define MCG_CMD_READ_MANY 0x08u /* (first u8, count u8)     -> st, first u8, count u8, count x i16 */
+/* Registers in the order listed, count = LEN 1..MCG_READ_MANY_MAX (reads as MCG_CMD_READ): the
+ * registers the board changes itself are scattered among the configuration ones, and a port owner
+ * that holds the configuration asks for the rest in one answer. The answer's header is
+ * McgReadManyRequest with first = the first id listed. */
+#define MCG_CMD_READ_LIST 0x09u /* (count x reg u8)         -> st, first u8, count u8, count x i16 */
 
 /* ---- Payloads as byte structs ------------------------------------------------------------------
  * Every member is a uint8_t (multi-byte fields as [lo, hi]), so no compiler pads them and sizeof
@@ -101,7 +106,8 @@ typedef struct {
   uint8_t value[2]; /* i16 */
 } McgSeqEntry;
 
-/* Registers in one MCG_CMD_READ_MANY answer: status, header and values fill MCG_MAX_PAYLOAD. */
+/* Registers in one MCG_CMD_READ_MANY or MCG_CMD_READ_LIST answer: status, header and values fill
+ * MCG_MAX_PAYLOAD. */
 #define MCG_READ_MANY_MAX ((MCG_MAX_PAYLOAD - 1u - sizeof(McgReadManyRequest)) / 2u)
 
 /* ---- Frames the board sends on its own -------------------------------------------------------- */

@@ -96,6 +96,44 @@ TEST(FwProtocol, ReadManyRefusesWhatDoesNotExist) {
             MCG_FRAME_OVERHEAD + MCG_MAX_PAYLOAD);
 }
 
+// READ_LIST answers what READ gives for each register listed, in the order listed, repeats too.
+TEST(FwProtocol, ReadListIsReadOfEachListed) {
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_RPM_CMD, 515), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_DUTY, 250), MCG_ST_OK);
+  const Bytes ids{MCG_REG_DUTY, MCG_REG_RPM, MCG_REG_RPM_CMD, MCG_REG_FLAGS, MCG_REG_DUTY, MCG_REG_SEQ_LEN};
+  const auto f = b.request(MCG_CMD_READ_LIST, ids);
+  ASSERT_TRUE(f);
+  ASSERT_EQ(f->payload.size(), 3u + 2u * ids.size());
+  EXPECT_EQ(f->payload[0], MCG_ST_OK);
+  EXPECT_EQ(f->payload[1], MCG_REG_DUTY) << "the header names the first register listed";
+  EXPECT_EQ(f->payload[2], ids.size());
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    EXPECT_EQ(fwtest::i16_at(f->payload, 3u + 2u * k), b.read(ids[k])) << "entry " << k;
+  }
+  EXPECT_EQ(fwtest::i16_at(f->payload, 3u), 250);
+  EXPECT_EQ(fwtest::i16_at(f->payload, 7u), 515);
+
+  Bytes all(MCG_READ_MANY_MAX);
+  for (std::size_t k = 0; k < all.size(); ++k)
+    all[k] = static_cast<std::uint8_t>(1 + k % (MCG_REG_COUNT - 1));
+  const auto longest = b.request(MCG_CMD_READ_LIST, all);
+  ASSERT_TRUE(longest);
+  EXPECT_EQ(longest->payload.size(), 3u + 2u * MCG_READ_MANY_MAX);
+}
+
+TEST(FwProtocol, ReadListRefusesWhatDoesNotExist) {
+  Board b;
+  const auto status = [&](const Bytes& p) {
+    const auto f = b.request(MCG_CMD_READ_LIST, p);
+    return f ? f->payload : Bytes{};
+  };
+  EXPECT_EQ(status({MCG_REG_DUTY, 0}), Bytes{MCG_ST_BAD_REG});
+  EXPECT_EQ(status({MCG_REG_COUNT, MCG_REG_DUTY}), Bytes{MCG_ST_BAD_REG});
+  EXPECT_EQ(status({}), Bytes{MCG_ST_BAD_LENGTH});
+  EXPECT_EQ(status(Bytes(MCG_READ_MANY_MAX + 1, MCG_REG_DUTY)), Bytes{MCG_ST_BAD_LENGTH});
+}
+
 TEST(FwProtocol, DefaultsAfterReset) {
   Board b;
   EXPECT_EQ(b.read(MCG_REG_MODE), static_cast<int>(MCG_MODE_OPEN));

@@ -476,7 +476,7 @@ int main(int argc, char** argv) {
     const auto v = sim.request(MCG_CMD_VERSION);
     check(v && v->payload == Bytes{MCG_ST_OK, MCG_PROTOCOL_VERSION, MCG_FW_VERSION_MAJOR,
                                    MCG_FW_VERSION_MINOR, MCG_FW_VERSION_PATCH, MCG_BOARD_UCSIM},
-          "version: protocol 4, firmware 0.4.0, board ucsim");
+          "version: protocol 5, firmware 0.5.0, board ucsim");
 
     const auto w = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_RPM_CMD, 515));
     check(w && w->payload == Bytes{MCG_ST_OK, MCG_REG_RPM_CMD, 0x03, 0x02}, "write rpm_cmd 515 acknowledged");
@@ -497,6 +497,12 @@ int main(int argc, char** argv) {
               fwtest::i16_at(many->payload, 3u + 2u * (MCG_REG_RPM_CMD - 1u)) == 515 &&
               fwtest::i16_at(many->payload, 3u + 2u * (MCG_REG_COEF_FRAC - 1u)) == read_reg(sim, MCG_REG_COEF_FRAC),
           "30 registers in one READ_MANY answer (the largest frame the board sends)");
+
+    const auto listed = sim.request(MCG_CMD_READ_LIST, {MCG_REG_COEF_FRAC, MCG_REG_RPM_CMD, MCG_REG_RPM});
+    check(listed && listed->payload.size() == 3u + 2u * 3u && listed->payload[0] == MCG_ST_OK &&
+              fwtest::i16_at(listed->payload, 3u) == read_reg(sim, MCG_REG_COEF_FRAC) &&
+              fwtest::i16_at(listed->payload, 5u) == 515,
+          "three registers listed out of order in one READ_LIST answer");
 
     const auto r = sim.request(MCG_CMD_WRITE, write_payload(MCG_REG_RPM_CMD, 800));
     check(r && r->payload == Bytes{MCG_ST_RANGE} && read_reg(sim, MCG_REG_RPM_CMD) == 515,

@@ -37,6 +37,7 @@ check "the board announces its link in one line" eval 'for i in $(seq 50); do [ 
   grep -Eqx "mcg-sim: board at ./ttyH \(/dev/pts/[0-9]+\); Ctrl-C ends" board.err'
 check "mcg-serial list shows the emulated board" eval 'mcg-serial list | grep -Eq "^$work/ttyH	emulated board \(mcg-sim pid [0-9]+, /dev/pts/[0-9]+\)$"'
 
+mcg-serial -p ./ttyH get > get0.ini
 mcg-serial -p ./ttyH stream --seconds 6 > owner.csv 2> owner.err &
 opid=$!
 wait_rows owner.csv 10
@@ -55,6 +56,10 @@ for i in 1 2 3; do mcg-serial -p ./ttyH get > get$i.ini 2> get.err || echo "get 
 check "three full gets back to back while two streams run" eval '[ ! -s get.err ] && [ "$(grep -c " = " get3.ini)" -ge 27 ] &&
   [ "$(grep -c " = " get3.ini)" = "$(grep -c " = " get1.ini)" ]'
 check "and the board dropped no block for them" eval 'grep -q "^tx_drops = 0 " get3.ini'
+# settings: the registers only a write changes, as `get` prints them (stream aside: it is on now).
+settings() { grep -Ev '^(;|\[|stream |duty |seq_state |tx_drops )' "$1"; }
+check "the settings the owner answered from what it holds are the board's" eval 'diff <(settings get0.ini) <(settings get3.ini) &&
+  [ "$(settings get3.ini | wc -l)" -ge 24 ]'
 sleep 2
 check "the owner's own stream ended, it serves its clients still" eval '[ "$(rows owner.csv)" = 1500 ] && kill -0 $opid'
 check "the client stream: 12 s, every sample once, status 0" eval 'wait_bounded $cpid 30 && [ "$status" = 0 ] &&

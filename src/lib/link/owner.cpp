@@ -2,6 +2,7 @@
 #include "link/owner.hpp"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <poll.h>
 #include <signal.h>
 #include <sys/socket.h>
@@ -16,17 +17,17 @@
 #include <cstdlib>
 #include <cstring>
 #include <deque>
+#include <memory>
 #include <optional>
 #include <vector>
 
-#include <fmt/format.h>
-
-#include "common/error.hpp"    // mcg::fail
+#include "common/demand.hpp"  // MCG_DEMAND
+#include "common/error.hpp"   // mcg::fail
 #include "common/poll_timeout.hpp"
 #include "link/capture_meta.hpp"  // config_register_names
-#include "link/frame.hpp"      // Decoder, encode
-#include "link/registers.hpp"  // require_register
-#include "mcg_protocol.h"      // MCG_CMD_*, MCG_MSG_*
+#include "link/frame.hpp"         // Decoder, encode
+#include "link/registers.hpp"     // require_register
+#include "mcg_protocol.h"         // MCG_CMD_*, MCG_MSG_*
 
 namespace mcg::link {
 
@@ -50,8 +51,15 @@ std::size_t answer_bytes(const Frame& request) {
   if (request.cmd == MCG_CMD_READ_MANY && request.payload.size() == sizeof(McgReadManyRequest)) {
     return MCG_FRAME_OVERHEAD + 1 + sizeof(McgReadManyRequest) + 2u * request.payload[1];
   }
+  if (request.cmd == MCG_CMD_READ_LIST) {
+    return MCG_FRAME_OVERHEAD + 1 + sizeof(McgReadManyRequest) + 2u * request.payload.size();
+  }
   return k_register_answer_bytes;
 }
+/// Registers in one MCG_CMD_READ_LIST while the stream is on: a 48-byte answer, which the
+/// board's 128-byte transmit ring takes beside a 56-byte stream block with room to spare.
+constexpr std::size_t k_list_streaming = 20;
+static_assert(k_list_streaming <= MCG_READ_MANY_MAX);
 /// An unanswered request is forgotten (its answer goes nowhere) after this long.
 constexpr double k_forget_s = 10.0;
 /// A client that does not read what it is sent is dropped beyond this backlog.
@@ -67,6 +75,9 @@ constexpr double k_held_s = 5.0;
 /// The owner reads a configuration register again in the line's spare room (no request
 /// queued) once its value is this old, so the values stay within k_held_s.
 constexpr double k_refresh_s = 2.0;
+/// Registers the owner rereads in one MCG_CMD_READ_LIST: a 15-byte answer, which holds the next
+/// request back 0.2 s while the stream runs; the held values take under 2 s to go round.
+constexpr std::size_t k_refresh_list = 4;
 /// ... once no client has asked the board anything for this long (a client reading register
 /// after register has the line to itself).
 constexpr double k_client_quiet_s = 0.3;
@@ -131,6 +142,25 @@ class SocketPort final : public Port {
   int m_fd;
 };
 
+/// A client's MCG_CMD_READ_MANY that the owner answers itself: the configuration registers from
+/// the values it holds, the others from the board in MCG_CMD_READ_LIST parts, then one answer in
+/// READ_MANY's form. While the stream runs the line has room for a few short answers a second,
+/// so a read-back of every register asks the board only for what it changes itself.
+struct Gathered {
+  int client = -1;
+  Frame request;                                    ///< the client's READ_MANY
+  std::vector<std::optional<std::int16_t>> values;  ///< registers first..first + count - 1
+  std::size_t parts_left = 0;
+  bool done = false;  ///< answered or refused
+};
+
+/// A request not sent yet (client -1: the owner's own).
+struct Pending {
+  int client = -1;
+  Frame frame;
+  std::shared_ptr<Gathered> gathered;  ///< the READ_MANY this READ_LIST is a part of
+};
+
 /// The answer a request expects: its command with the reply bit and, for register reads and
 /// writes, the register echoed in the answer.
 struct Expect {
@@ -139,17 +169,28 @@ struct Expect {
   int reg = -1;
   double sent_s = 0.0;
   std::uint64_t generation = 0;  ///< of the held values when it was sent
+  std::vector<std::uint8_t> listed;    ///< the registers of a READ_LIST, in order
+  std::shared_ptr<Gathered> gathered;  ///< see Pending
 };
 
-Expect expectation(int client, const Frame& request) {
+Expect expectation(const Pending& p) {
+  const Frame& request = p.frame;
   Expect e;
-  e.client = client;
+  e.client = p.client;
   e.answer = static_cast<std::uint8_t>(request.cmd | MCG_REPLY_BIT);
-  const bool echoes = request.cmd == MCG_CMD_READ || request.cmd == MCG_CMD_WRITE || request.cmd == MCG_CMD_READ_MANY;
+  const bool echoes = request.cmd == MCG_CMD_READ || request.cmd == MCG_CMD_WRITE ||
+                      request.cmd == MCG_CMD_READ_MANY || request.cmd == MCG_CMD_READ_LIST;
   if (echoes && !request.payload.empty()) {
     e.reg = request.payload[0];
   }
+  if (request.cmd == MCG_CMD_READ_LIST) e.listed = request.payload;
+  e.gathered = p.gathered;
   return e;
+}
+
+bool is_read(std::uint8_t cmd) {
+  return cmd == MCG_CMD_READ || cmd == MCG_CMD_READ_MANY || cmd == MCG_CMD_READ_LIST ||
+         cmd == MCG_CMD_VERSION;
 }
 
 bool answers(const Expect& e, const Frame& f) {
@@ -227,7 +268,7 @@ struct PortOwner::Impl {
   std::vector<Client> clients;
   int next_id = 1;
   Decoder board{0.1};
-  std::deque<std::pair<int, Frame>> queue;   ///< requests not sent yet (client -1: the owner's own)
+  std::deque<Pending> queue;                 ///< requests not sent yet
   std::vector<Expect> expected;              ///< sent, not answered
   double last_sent_s = -1e9;
   double pace_s = k_stream_pace_s;  ///< while streaming, the gap the last request's answer needs
@@ -262,18 +303,99 @@ struct PortOwner::Impl {
     for (auto& h : held) h.raw.reset();
   }
 
+  /// Register `reg` as the owner may answer it: a configuration register while the stream is
+  /// on and no sequence may be writing registers, from the board's answer of less than k_held_s ago.
+  std::optional<std::int16_t> held_value(int reg) {
+    if (!anyone_streams(-1) || sequence_may_play) return {};
+    const Held* h = held_for(reg);
+    if (h == nullptr || !h->raw || now_s() - h->at_s > k_held_s) return {};
+    return h->raw;
+  }
+
   /// The answer to `f` from what the owner holds, if it may give one: the version always, a
-  /// configuration register while the stream is on and no sequence may be writing registers.
+  /// configuration register as held_value() allows.
   std::optional<Frame> answer_here(const Frame& f) {
     if (f.cmd == MCG_CMD_VERSION && f.payload.empty()) return version;
-    if (f.cmd != MCG_CMD_READ || f.payload.size() != 1 || !anyone_streams(-1) || sequence_may_play) return {};
-    const Held* h = held_for(f.payload[0]);
-    if (h == nullptr || !h->raw || now_s() - h->at_s > k_held_s) return {};
+    if (f.cmd != MCG_CMD_READ || f.payload.size() != 1) return {};
+    const auto raw = held_value(f.payload[0]);
+    if (!raw) return {};
     Frame reply;
     reply.cmd = static_cast<std::uint8_t>(MCG_CMD_READ | MCG_REPLY_BIT);
-    reply.payload = {MCG_ST_OK, h->reg};
-    put_i16(reply.payload, *h->raw);
+    reply.payload = {MCG_ST_OK, f.payload[0]};
+    put_i16(reply.payload, *raw);
     return reply;
+  }
+
+  /// Takes client `c`'s MCG_CMD_READ_MANY `f` over as a Gathered (false: `f` is malformed or
+  /// names registers that do not exist, and goes to the board, which refuses it).
+  bool gather(Client& c, const Frame& f) {
+    if (f.payload.size() != sizeof(McgReadManyRequest)) return false;
+    const unsigned first = f.payload[0];
+    const unsigned count = f.payload[1];
+    if (first == 0 || count == 0 || count > MCG_READ_MANY_MAX || first + count > MCG_REG_COUNT) return false;
+    const bool again = std::any_of(queue.begin(), queue.end(), [&](const Pending& p) {
+      return p.gathered && p.gathered->client == c.id && p.gathered->request.payload == f.payload;
+    });
+    if (again) return true;  // a resend while the first still waits for its turn asks once
+    auto g = std::make_shared<Gathered>();
+    g->client = c.id;
+    g->request = f;
+    std::vector<std::uint8_t> needed;
+    for (unsigned k = 0; k < count; ++k) {
+      g->values.push_back(held_value(static_cast<int>(first + k)));
+      if (!g->values.back()) needed.push_back(static_cast<std::uint8_t>(first + k));
+    }
+    if (needed.empty()) {
+      answer_gathered(*g);
+      return true;
+    }
+    last_client_s = now_s();
+    const std::size_t part = anyone_streams(-1) ? k_list_streaming : MCG_READ_MANY_MAX;
+    for (std::size_t at = 0; at < needed.size(); at += part) {
+      Pending p;
+      p.client = c.id;
+      p.frame.cmd = MCG_CMD_READ_LIST;
+      p.frame.payload.assign(
+          needed.begin() + static_cast<std::ptrdiff_t>(at),
+          needed.begin() + static_cast<std::ptrdiff_t>(std::min(needed.size(), at + part)));
+      p.gathered = g;
+      ++g->parts_left;
+      queue.push_back(std::move(p));
+    }
+    return true;
+  }
+
+  /// The board answered part `e` of a Gathered with `f`.
+  void gathered_part(const Expect& e, const Frame& f) {
+    Gathered& g = *e.gathered;
+    if (g.done) return;
+    --g.parts_left;
+    const std::size_t head = 1 + sizeof(McgReadManyRequest);
+    if (f.payload.empty() || f.payload[0] != MCG_ST_OK || f.payload.size() != head + 2 * e.listed.size()) {
+      Frame refusal;
+      refusal.cmd = static_cast<std::uint8_t>(MCG_CMD_READ_MANY | MCG_REPLY_BIT);
+      refusal.payload = {f.payload.empty() || f.payload[0] == MCG_ST_OK ? std::uint8_t{MCG_ST_BAD_LENGTH}
+                                                                        : f.payload[0]};
+      g.done = true;
+      if (Client* c = find(g.client)) send_to(*c, refusal);
+      return;
+    }
+    const unsigned first = g.request.payload[0];
+    for (std::size_t k = 0; k < e.listed.size(); ++k)
+      g.values.at(e.listed[k] - first) = get_i16(f.payload, head + 2 * k);
+    if (g.parts_left == 0) answer_gathered(g);
+  }
+
+  void answer_gathered(Gathered& g) {
+    Frame reply;
+    reply.cmd = static_cast<std::uint8_t>(MCG_CMD_READ_MANY | MCG_REPLY_BIT);
+    reply.payload = {MCG_ST_OK, g.request.payload[0], g.request.payload[1]};
+    for (const auto& v : g.values) {
+      MCG_DEMAND(v.has_value());
+      put_i16(reply.payload, *v);
+    }
+    g.done = true;
+    if (Client* c = find(g.client)) send_to(*c, reply);
   }
 
   /// What an answer from the board tells the owner about the values it holds.
@@ -284,7 +406,7 @@ struct PortOwner::Impl {
       version = f;
       return;
     }
-    if (cmd != MCG_CMD_READ && cmd != MCG_CMD_READ_MANY) {
+    if (!is_read(cmd)) {
       forget_held();  // a write may change other registers (a mode switch, a commit)
       return;
     }
@@ -294,6 +416,11 @@ struct PortOwner::Impl {
       return;
     }
     const std::size_t head = 1 + sizeof(McgReadManyRequest);
+    if (cmd == MCG_CMD_READ_LIST) {
+      if (f.payload.size() != head + 2 * e.listed.size()) return;
+      for (std::size_t k = 0; k < e.listed.size(); ++k) hold(e.listed[k], get_i16(f.payload, head + 2 * k));
+      return;
+    }
     if (f.payload.size() < head || f.payload.size() != head + 2u * f.payload[2]) return;
     for (std::size_t k = 0; k < f.payload[2]; ++k) {
       hold(static_cast<int>(f.payload[1] + k), get_i16(f.payload, head + 2 * k));
@@ -319,12 +446,14 @@ struct PortOwner::Impl {
     if (sequence_may_play) {
       f.payload = {seq_state_reg};
     } else {
-      const auto due = std::find_if(held.begin(), held.end(),
-                                    [&](const Held& h) { return !h.raw || now - h.at_s > k_refresh_s; });
-      if (due == held.end()) return;
-      f.payload = {due->reg};
+      for (const Held& h : held) {
+        if ((!h.raw || now - h.at_s > k_refresh_s) && f.payload.size() < k_refresh_list)
+          f.payload.push_back(h.reg);
+      }
+      if (f.payload.empty()) return;
+      if (f.payload.size() > 1) f.cmd = MCG_CMD_READ_LIST;
     }
-    queue.emplace_back(-1, std::move(f));
+    queue.push_back({-1, std::move(f), nullptr});
   }
 
   Client* find(int id) {
@@ -381,13 +510,14 @@ struct PortOwner::Impl {
       send_to(c, *reply);
       return;
     }
+    if (f.cmd == MCG_CMD_READ_MANY && gather(c, f)) return;
     last_client_s = now_s();
     if (f.cmd == MCG_CMD_LOG_DUMP) log_client = c.id;
     // A client that resends while its request still waits for its turn asks once.
-    const bool again = std::any_of(queue.begin(), queue.end(), [&](const auto& q) {
-      return q.first == c.id && q.second.cmd == f.cmd && q.second.payload == f.payload;
+    const bool again = std::any_of(queue.begin(), queue.end(), [&](const Pending& p) {
+      return p.client == c.id && p.frame.cmd == f.cmd && p.frame.payload == f.payload;
     });
-    if (!again) queue.emplace_back(c.id, std::move(f));
+    if (!again) queue.push_back({c.id, std::move(f), nullptr});
   }
 
   void from_board(const Frame& f) {
@@ -415,11 +545,15 @@ struct PortOwner::Impl {
     }
     const auto it = std::find_if(expected.begin(), expected.end(), [&](const Expect& e) { return answers(e, f); });
     if (it == expected.end()) return;
-    const int id = it->client;
-    learn(*it, f);
+    const Expect e = std::move(*it);
     expected.erase(it);
+    learn(e, f);
     waiting = false;
-    if (Client* c = find(id)) send_to(*c, f);
+    if (e.gathered) {
+      gathered_part(e, f);
+    } else if (Client* c = find(e.client)) {
+      send_to(*c, f);
+    }
   }
 
   void send_next() {
@@ -429,9 +563,10 @@ struct PortOwner::Impl {
     refresh_held();
     if (queue.empty() || waiting) return;
     if (anyone_streams(-1) && now - last_sent_s < pace_s) return;
-    auto [id, f] = std::move(queue.front());
+    Pending p = std::move(queue.front());
     queue.pop_front();
-    if (f.cmd != MCG_CMD_READ && f.cmd != MCG_CMD_READ_MANY && f.cmd != MCG_CMD_VERSION) {
+    const Frame& f = p.frame;
+    if (!is_read(f.cmd)) {
       forget_held();
       if (f.cmd == MCG_CMD_WRITE && f.payload.size() >= 3 && f.payload[0] == seq_state_reg &&
           get_i16(f.payload, 1) != MCG_SEQ_STOP) {
@@ -439,7 +574,7 @@ struct PortOwner::Impl {
       }
     }
     port->write_all(encode(f.cmd, f.payload), k_port_write_timeout_s);
-    Expect e = expectation(id, f);
+    Expect e = expectation(p);
     e.sent_s = now;
     e.generation = generation;
     expected.push_back(e);
@@ -453,7 +588,7 @@ struct PortOwner::Impl {
     for (auto& c : clients) {
       if (!c.closed) continue;
       stopped_streaming = stopped_streaming || c.stream;
-      std::erase_if(queue, [&](const auto& q) { return q.first == c.id; });
+      std::erase_if(queue, [&](const Pending& p) { return p.client == c.id; });
       ::close(c.fd);
       c.fd = -1;
     }
@@ -464,7 +599,7 @@ struct PortOwner::Impl {
       off.cmd = MCG_CMD_WRITE;
       off.payload = {stream_reg};
       put_i16(off.payload, 0);
-      queue.emplace_back(-1, std::move(off));
+      queue.push_back({-1, std::move(off), nullptr});
     }
   }
 

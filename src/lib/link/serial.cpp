@@ -47,6 +47,7 @@ std::unique_ptr<Connection> connect(const LinkOptions& link, Hold hold) {
     SessionOptions so;
     so.reply_timeout_s = link.timeout_s;
     so.attempts = link.attempts;
+    if (through_owner || c->owner) so.read_many_chunk = MCG_READ_MANY_MAX;
     c->session = std::make_unique<Session>(*c->port, so);
     try {
       c->version = c->session->hello();

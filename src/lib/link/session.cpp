@@ -1,13 +1,14 @@
 // Requests, retries and the frames in between.
 #include "link/session.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <chrono>
 
-#include <fmt/format.h>
-
-#include "common/error.hpp"  // mcg::fail
-#include "mcg_protocol.h"    // MCG_CMD_*, MCG_MSG_*
+#include "common/demand.hpp"  // MCG_DEMAND
+#include "common/error.hpp"   // mcg::fail
+#include "mcg_protocol.h"     // MCG_CMD_*, MCG_MSG_*
 
 namespace mcg::link {
 
@@ -23,12 +24,6 @@ constexpr std::size_t k_max_unsolicited = 1u << 14;
 
 constexpr double k_write_timeout_s = 2.0;
 
-/// Registers asked for in one MCG_CMD_READ_MANY: a 48-byte answer, which the board's 128-byte
-/// transmit ring takes beside a 56-byte stream block with room to spare (an answer of the
-/// protocol's full MCG_READ_MANY_MAX, 68 bytes, finds no room when the line runs late, and the
-/// board drops it).
-constexpr std::size_t k_read_many_chunk = 20;
-static_assert(k_read_many_chunk <= MCG_READ_MANY_MAX);
 /// Added to the reply timeout of MCG_CMD_READ_MANY: a port owner holds a long answer back until
 /// the board's transmit ring has room for it beside the stream (up to about 0.7 s); a resend
 /// meanwhile would only queue another long answer behind it.
@@ -50,7 +45,9 @@ std::string board_name(unsigned board) {
 }
 
 Session::Session(Port& port, SessionOptions options)
-    : m_port(port), m_options(options), m_decoder(options.frame_timeout_s) {}
+    : m_port(port), m_options(options), m_decoder(options.frame_timeout_s) {
+  MCG_DEMAND(m_options.read_many_chunk >= 1 && m_options.read_many_chunk <= MCG_READ_MANY_MAX);
+}
 
 void Session::pump(double timeout_s) {
   std::uint8_t buf[512];
@@ -140,7 +137,7 @@ std::vector<std::int16_t> Session::read_many(std::span<const RegisterInfo* const
   std::size_t at = 0;
   while (at < regs.size()) {
     std::size_t n = 1;
-    while (at + n < regs.size() && n < k_read_many_chunk && regs[at + n]->id == regs[at]->id + n) ++n;
+    while (at + n < regs.size() && n < m_options.read_many_chunk && regs[at + n]->id == regs[at]->id + n) ++n;
     if (n == 1) {
       values.push_back(read(*regs[at]));
       ++at;

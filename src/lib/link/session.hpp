@@ -1,6 +1,7 @@
 // A conversation with the board: requests with timeouts and retries, unsolicited frames queued.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <deque>
 #include <optional>
@@ -25,6 +26,12 @@ struct SessionOptions {
   /// Longest silence inside a frame before the host drops it, s. Larger than the board's
   /// MCG_FRAME_TIMEOUT_MS because the host is not real-time.
   double frame_timeout_s = 0.1;
+  /// Registers asked for in one MCG_CMD_READ_MANY. On a line to the board, 20: a 48-byte
+  /// answer, which the board's 128-byte transmit ring takes beside a 56-byte stream block with
+  /// room to spare (an answer of MCG_READ_MANY_MAX, 68 bytes, finds no room when the line runs
+  /// late, and the board drops it). A port owner answers up to MCG_READ_MANY_MAX itself, asking
+  /// the board in parts that fit.
+  std::size_t read_many_chunk = 20;
 };
 
 /// What MCG_CMD_VERSION reports.
@@ -81,7 +88,8 @@ class Session {
   /// The raw value of a register.
   std::int16_t read(const RegisterInfo& reg);
   /// The raw values of `regs`, in their order: each run of consecutive ids in one
-  /// MCG_CMD_READ_MANY (at most 20 registers an answer), a lone id by MCG_CMD_READ.
+  /// MCG_CMD_READ_MANY (at most SessionOptions::read_many_chunk registers an answer), a lone id
+  /// by MCG_CMD_READ.
   std::vector<std::int16_t> read_many(std::span<const RegisterInfo* const> regs);
   /// Writes a raw value; returns the value the board holds afterwards (from its answer): for a
   /// staged register, the value in the shadow set.
