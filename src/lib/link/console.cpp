@@ -453,22 +453,23 @@ class Worker {
     using Kind = ConsoleAction::Kind;
     std::ostringstream out;
     std::ostringstream err;
+    Diagnostics diag(err, m_link.tool);
     try {
       switch (a.kind) {
         case Kind::set:
           if (a.name.empty() || a.value.empty()) return "set: give a register and a value";
-          run_set(m_link, a.name, a.value, err);
+          run_set(m_link, a.name, a.value, diag);
           return fmt::format("{} = {}{}", a.name, get(a.name),
                              err.str().empty() ? "" : "  (" + first_line(err.str()) + ")");
         case Kind::toggle_clutch: {
           const std::string now = get("clutch");
           const std::string next = now == "engaged" || now == "2" ? "disengaged" : "engaged";
-          run_set(m_link, "clutch", next, err);
+          run_set(m_link, "clutch", next, diag);
           return fmt::format("clutch = {}", get("clutch"));
         }
         case Kind::toggle_load: {
           const std::string now = get("load");
-          run_set(m_link, "load", now == "1" || now == "on" ? "0" : "1", err);
+          run_set(m_link, "load", now == "1" || now == "on" ? "0" : "1", diag);
           return fmt::format("load = {}", get("load"));
         }
         case Kind::record_log:
@@ -477,7 +478,7 @@ class Worker {
           DumpOptions d;
           d.record = a.kind == Kind::record_log;
           std::ostringstream csv;
-          run_dump(m_link, d, csv, err);
+          run_dump(m_link, d, csv, diag);
           std::ofstream file(a.value);
           file << csv.str();
           if (!file) return fmt::format("dump: cannot write {}", a.value);
@@ -485,7 +486,7 @@ class Worker {
         }
         case Kind::load_ini:
           if (a.value.empty()) return "load: give an INI file";
-          run_load(m_link, a.value, out, err);
+          run_load(m_link, a.value, out, diag);
           return fmt::format("loaded {}", a.value);
         case Kind::record_csv: {
           auto conn = connect(m_link);
