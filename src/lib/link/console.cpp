@@ -30,6 +30,7 @@
 #include "link/interrupt.hpp"
 #include "link/port.hpp"
 #include "link/stream_block.hpp"
+#include "model/load.hpp"
 #include "model/model.hpp"
 #include "table/table.hpp"
 
@@ -583,7 +584,7 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
   constexpr double k_retry_s = 0.5;
   const Rig rig = load_rig(options.rig);
   model::Model model;
-  if (!options.rig.configs.empty()) model = model::model_from_ini(config::Ini::load_all(options.rig.configs));
+  if (!options.rig.configs.empty()) model = model::load_model(options.rig.configs, {});
   std::ofstream session_log;
   ConsoleState state(options.span_s);
   const auto log = [&](std::string_view text) {
