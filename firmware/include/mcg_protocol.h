@@ -224,7 +224,7 @@ typedef struct {
 /* X(NAME, name, access, min, max, power-on value, unit, capture, keypad, doc), one row per register
  * in id order. min..max is the static range a write must meet (for MCG_RO: the range a read can
  * show); the firmware checks the dynamic parts the doc names (duty within duty_min..duty_max,
- * duty_min <= duty_max). Plain C89 tokens and literals: SDCC expands it into code-memory tables. */
+ * duty_min <= duty_max). Plain C89 tokens: SDCC expands it into code-memory tables. */ /* clang-format off */
 #define MCG_REGISTERS(X) \
   X(MODE, "mode", MCG_RS, 0, MCG_MODE_COUNT - 1, MCG_MODE_OPEN, MCG_UNIT_MODE, \
     MCG_CAP_STATE, MCG_KEY(1, "Mode 0OL 1P 2PI"), "controller: open, p, pi, pid") \
@@ -299,7 +299,7 @@ typedef struct {
     MCG_CAP_NO, MCG_NO_KEY, "periods played, 0: until exc_run 0") \
   X(EXC_RUN, "exc_run", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, \
     MCG_CAP_NO, MCG_NO_KEY, \
-    "write 1: start on the next stream sample (duty in mode open, rpm_cmd otherwise); 0: stop; read: 1 running")
+    "write 1: start on the next stream sample (duty in mode open, rpm_cmd otherwise); 0: stop; read: 1 running") /* clang-format on */
 
 #define MCG_MODE_OPEN 0u /* duty from MCG_REG_DUTY (keypad up/down) */
 #define MCG_MODE_P 1u    /* u = bias + Kp e */

@@ -1,12 +1,5 @@
 // Unit tests of what a capture's board_config says the board ran (captured_board), and of the
 // model running those registers (sim::board_loop_controller on raw values).
-#include "link/capture_meta.hpp"
-#include "link/registers.hpp"
-#include "mcg_protocol.h"
-#include "sim/controller.hpp"
-#include "table/table.hpp"
-#include "test_support_error.hpp"
-
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -15,6 +8,13 @@
 #include <string_view>
 #include <utility>
 #include <vector>
+
+#include "link/capture_meta.hpp"
+#include "link/registers.hpp"
+#include "mcg_protocol.h"
+#include "sim/controller.hpp"
+#include "table/table.hpp"
+#include "test_support_error.hpp"
 
 namespace mcg::link {
 namespace {

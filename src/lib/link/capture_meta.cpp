@@ -4,8 +4,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <vector>
 #include <sstream>
+#include <vector>
 
 #include "common/error.hpp"
 #include "common/quote.hpp"
@@ -13,9 +13,9 @@
 #include "config/ini.hpp"       // Ini, format_number
 #include "link/connection.hpp"  // Connection
 #include "link/registers.hpp"
-#include "mcg_protocol.h"       // MCG_REG_*
-#include "model/load.hpp"       // load_model
-#include "table/table.hpp"      // Writer
+#include "mcg_protocol.h"   // MCG_REG_*
+#include "model/load.hpp"   // load_model
+#include "table/table.hpp"  // Writer
 
 namespace mcg::link {
 
