@@ -58,8 +58,8 @@ TEST(LinkCapturedBoard, ReadsTheRegistersAsTheCoreTakesThem) {
   EXPECT_EQ(board->mode, MCG_MODE_PI);
   EXPECT_EQ(board->mode_name, "pi");
   EXPECT_THAT(board->registers,
-              ElementsAre(Pair(MCG_REG_COEF_FRAC, 12), Pair(MCG_REG_KP, 0), Pair(MCG_REG_B0, 7234),
-                          Pair(MCG_REG_B1, -4341), Pair(MCG_REG_B2, 0), Pair(MCG_REG_DUTY_BIAS, 0),
+              ElementsAre(Pair(MCG_REG_COEF_FRAC, 12), Pair(MCG_REG_DUTY_BIAS, 0), Pair(MCG_REG_KP, 0),
+                          Pair(MCG_REG_B0, 7234), Pair(MCG_REG_B1, -4341), Pair(MCG_REG_B2, 0),
                           Pair(MCG_REG_DUTY_MIN, 0), Pair(MCG_REG_DUTY_MAX, 1000)));
   EXPECT_FALSE(captured_board(table::Metadata{}, "cap.csv").has_value());
 }

@@ -112,9 +112,12 @@ std::optional<CapturedBoard> captured_board(const table::Metadata& meta, std::st
     fail("{}: duty_min {} % is above duty_max {} %", at, format_value(reg, duty_min, 0),
          format_value(reg, duty_max, 0));
   }
+  // The core takes coef_frac before the gains it scales, then the rest in id order.
+  if (values[index_of("coef_frac")])
+    board.registers.emplace_back(MCG_REG_COEF_FRAC, value_of("coef_frac", 0));
   for (std::size_t i = 0; i < names.size(); ++i) {
     const RegisterInfo& reg = require_register(names[i]);
-    if (!values[i] || reg.name == "mode" || reg.carried_by_rows) continue;
+    if (!values[i] || reg.name == "mode" || reg.name == "coef_frac" || reg.carried_by_rows) continue;
     board.registers.emplace_back(reg.id, value_of(reg.name, reg.unit == Unit::Gain ? frac : 0));
   }
   return board;
