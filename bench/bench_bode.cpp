@@ -79,7 +79,8 @@ void BM_BodeTool(benchmark::State& state) {
   for (auto _ : state) {
     std::ostringstream out;
     std::ostringstream warn;
-    mcg::signal::bode(options, out, warn);
+    mcg::Diagnostics diag(warn, "bode");
+    mcg::signal::bode(options, out, diag);
     benchmark::DoNotOptimize(out.str().data());
   }
   std::remove(path.c_str());

@@ -35,44 +35,42 @@ char MCG_XDATA g_lcd[2][17];
 #define ENTRY_MAX 8u
 #define RPM_KEY_STEP 10
 
-typedef struct {
-  uint8_t reg;
-  uint8_t kind;
-  char label[17];
-} MenuItem;
-
-static MCG_CODE MenuItem s_items[] = {
-    {MCG_REG_MODE, KIND_MODE, "Mode 0OL 1P 2PI"},
-    {MCG_REG_RPM_CMD, KIND_INT, "Speed cmd rpm"},
-    {MCG_REG_KP, KIND_COEF, "Kp"},
-    {MCG_REG_B0, KIND_COEF, "PI/PID b0"},
-    {MCG_REG_B1, KIND_COEF, "PI/PID b1"},
-    {MCG_REG_B2, KIND_COEF, "PID b2"},
-    {MCG_REG_COEF_FRAC, KIND_INT, "Gain frac bits"},
-    {MCG_REG_DUTY_BIAS, KIND_INT, "P bias 0.1%"},
-    {MCG_REG_DUTY_MIN, KIND_INT, "Duty min 0.1%"},
-    {MCG_REG_DUTY_MAX, KIND_INT, "Duty max 0.1%"},
-    {MCG_REG_DUTY_STEP, KIND_INT, "Duty step 0.1%"},
-    {MCG_REG_SERVICE_MS, KIND_INT, "Service ms"},
-    {MCG_REG_LOG_INTERVAL, KIND_INT, "Log interval ms"},
-    {MCG_REG_CLUTCH, KIND_INT, "Clutch 1/2 eng"},
-    {MCG_REG_LOAD, KIND_INT, "Load relay 0/1"},
-    {MCG_REG_STREAM, KIND_INT, "Stream 0/1"},
-};
-#define ITEM_COUNT ((uint8_t)(sizeof s_items / sizeof s_items[0]))
+/* The menu from the keypad column of MCG_REGISTERS, indexed by id - 1: each register's position
+ * in the menu (0: not in it), its label, and how its value is shown and typed (from its unit). */
+#define MENU_POS(NAME, name, access, lo, hi, def, unit, capture, keypad, doc) MCG_KEY_POS(keypad),
+#define MENU_LABEL(NAME, name, access, lo, hi, def, unit, capture, keypad, doc) MCG_KEY_LABEL(keypad),
+#define MENU_KIND(NAME, name, access, lo, hi, def, unit, capture, keypad, doc) \
+  (unit) == MCG_UNIT_GAIN ? KIND_COEF : (unit) == MCG_UNIT_MODE ? KIND_MODE : KIND_INT,
+#define MENU_COUNT(NAME, name, access, lo, hi, def, unit, capture, keypad, doc) +(MCG_KEY_POS(keypad) != 0u)
+static MCG_CODE uint8_t k_item_pos[] = {MCG_REGISTERS(MENU_POS)};
+static MCG_CODE char k_item_label[][17] = {MCG_REGISTERS(MENU_LABEL)};
+static MCG_CODE uint8_t k_item_kind[] = {MCG_REGISTERS(MENU_KIND)};
+#define ITEM_COUNT ((uint8_t)(0u MCG_REGISTERS(MENU_COUNT)))
 
 static MCG_CODE char s_mode_names[MCG_MODE_COUNT][4] = {"OL ", "P  ", "PI ", "PID"};
 
 static MCG_XDATA uint8_t s_screen;
-static MCG_XDATA uint8_t s_item;
+static MCG_XDATA uint8_t s_item;     /* position in the menu, from 0 */
+static MCG_XDATA uint8_t s_item_reg; /* the register shown there */
 static MCG_XDATA uint8_t s_last_key;
 static MCG_XDATA uint8_t s_status; /* status of the last store, shown until the next key */
 static char MCG_XDATA s_entry[ENTRY_MAX + 1];
 static MCG_XDATA uint8_t s_entry_len;
 
+/* The register at menu position s_item (the positions are 1..ITEM_COUNT, each once). */
+static void select_item(uint8_t item) {
+  MCG_SLOW uint8_t i;
+  s_item = item;
+  for (i = 0; i < MCG_REG_COUNT - 1u; ++i) {
+    if (k_item_pos[i] == (uint8_t)(item + 1u)) {
+      s_item_reg = (uint8_t)(i + 1u);
+    }
+  }
+}
+
 void menu_init(void) {
   s_screen = SCREEN_MAIN;
-  s_item = 0;
+  select_item(0);
   s_last_key = MCG_KEY_NONE;
   s_status = MCG_ST_OK;
   s_entry_len = 0;
@@ -144,11 +142,11 @@ static int32_t coef_to_milli(int16_t raw) MCG_REENTRANT {
 
 static void show_value(uint8_t row) {
   MCG_SLOW int16_t v = 0;
-  MCG_CODE MenuItem* it = &s_items[s_item];
-  regs_read(it->reg, &v);
-  if (it->kind == KIND_COEF) {
+  MCG_SLOW uint8_t kind = k_item_kind[s_item_reg - 1u];
+  regs_read(s_item_reg, &v);
+  if (kind == KIND_COEF) {
     put_fixed(g_lcd[row], coef_to_milli(v), 3, 12);
-  } else if (it->kind == KIND_MODE) {
+  } else if (kind == KIND_MODE) {
     put_int(g_lcd[row], v, 2);
     put_text(row, 3, s_mode_names[(uint8_t)v]);
   } else {
@@ -175,7 +173,7 @@ void menu_refresh(void) {
     put_fixed(g_lcd[1] + 8, g_duty_out, 1, 6);
     g_lcd[1][14] = '%';
   } else {
-    put_text(0, 0, s_items[s_item].label);
+    put_text(0, 0, k_item_label[s_item_reg - 1u]);
     if (s_screen == SCREEN_EDIT) {
       put_text(1, 0, s_entry);
       g_lcd[1][s_entry_len] = '_';
@@ -238,13 +236,13 @@ static uint8_t parse_entry(uint8_t kind, int16_t* out) MCG_REENTRANT {
 }
 
 static void entry_key(uint8_t key) {
-  MCG_SLOW uint8_t kind = s_items[s_item].kind;
+  MCG_SLOW uint8_t kind = k_item_kind[s_item_reg - 1u];
   MCG_SLOW uint8_t i;
   MCG_SLOW int16_t v;
   if (key == KEY_D) {
     s_status = parse_entry(kind, &v);
     if (s_status == MCG_ST_OK) {
-      s_status = regs_apply(s_items[s_item].reg, v);
+      s_status = regs_apply(s_item_reg, v);
     }
     s_screen = SCREEN_BROWSE;
     return;
@@ -365,9 +363,9 @@ void menu_service(void) {
   } else if (s_screen == SCREEN_BROWSE) {
     s_status = MCG_ST_OK;
     if (key == KEY_A) {
-      s_item = (uint8_t)((s_item + 1u) % ITEM_COUNT);
+      select_item((uint8_t)((s_item + 1u) % ITEM_COUNT));
     } else if (key == KEY_B) {
-      s_item = (uint8_t)((s_item + ITEM_COUNT - 1u) % ITEM_COUNT);
+      select_item((uint8_t)((s_item + ITEM_COUNT - 1u) % ITEM_COUNT));
     } else if (key == KEY_C) {
       s_screen = SCREEN_MAIN;
     } else if (key == KEY_D) {

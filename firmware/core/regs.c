@@ -12,10 +12,10 @@ uint8_t MCG_XDATA g_clutch_on;
 uint8_t MCG_XDATA g_load_on;
 
 /* The columns of MCG_REGISTERS the firmware needs, indexed by id - 1, in code memory. */
-#define REG_ACCESS(NAME, name, access, lo, hi, def, unit, doc) access,
-#define REG_MIN(NAME, name, access, lo, hi, def, unit, doc) lo,
-#define REG_MAX(NAME, name, access, lo, hi, def, unit, doc) hi,
-#define REG_DEFAULT(NAME, name, access, lo, hi, def, unit, doc) def,
+#define REG_ACCESS(NAME, name, access, lo, hi, def, unit, capture, keypad, doc) access,
+#define REG_MIN(NAME, name, access, lo, hi, def, unit, capture, keypad, doc) lo,
+#define REG_MAX(NAME, name, access, lo, hi, def, unit, capture, keypad, doc) hi,
+#define REG_DEFAULT(NAME, name, access, lo, hi, def, unit, capture, keypad, doc) def,
 static MCG_CODE uint8_t k_access[] = {MCG_REGISTERS(REG_ACCESS)};
 static MCG_CODE int16_t k_min[] = {MCG_REGISTERS(REG_MIN)};
 static MCG_CODE int16_t k_max[] = {MCG_REGISTERS(REG_MAX)};

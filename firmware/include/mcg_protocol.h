@@ -212,52 +212,100 @@ typedef struct {
 #define MCG_I16_MIN (-32767 - 1)
 #define MCG_I16_MAX 32767
 
-/* X(NAME, name, access, min, max, power-on value, unit, doc), one row per register in id order.
- * min..max is the static range a write must meet (for MCG_RO: the range a read can show); the
- * firmware checks the dynamic parts the doc names (duty within duty_min..duty_max, duty_min <=
- * duty_max). Plain C89 tokens and literals: SDCC expands it into code-memory tables. */
+/* Capture column: what a capture's board_config metadata states (mcg-csv(5)): the controller's
+ * set and mode, the registers whose value each row also carries, nothing else. */
+#define MCG_CAP_NO 0u    /* not stated */
+#define MCG_CAP_STATE 1u /* stated, and set on the emulated core when a capture is replayed */
+#define MCG_CAP_ROW 2u   /* stated; each row carries its value (rpm_cmd, clutch, r_load columns) */
+
+/* Keypad column: MCG_KEY(position in the keypad's menu, 1.., contiguous; LCD label, 16 characters
+ * at most) or MCG_NO_KEY. MCG_KEY_POS and MCG_KEY_LABEL take the column apart. */
+#define MCG_KEY(pos, label) (pos, label)
+#define MCG_NO_KEY (0u, "")
+#define MCG_KEY_POS_(pos, label) pos
+#define MCG_KEY_LABEL_(pos, label) label
+#define MCG_KEY_POS(keypad) MCG_KEY_POS_ keypad
+#define MCG_KEY_LABEL(keypad) MCG_KEY_LABEL_ keypad
+
+/* X(NAME, name, access, min, max, power-on value, unit, capture, keypad, doc), one row per register
+ * in id order. min..max is the static range a write must meet (for MCG_RO: the range a read can
+ * show); the firmware checks the dynamic parts the doc names (duty within duty_min..duty_max,
+ * duty_min <= duty_max). Plain C89 tokens: SDCC expands it into code-memory tables. */ /* clang-format off */
 #define MCG_REGISTERS(X) \
-  X(MODE, "mode", MCG_RS, 0, MCG_MODE_COUNT - 1, MCG_MODE_OPEN, MCG_UNIT_MODE, "controller: open, p, pi, pid") \
-  X(RPM_CMD, "rpm_cmd", MCG_RW, 120, 720, 420, MCG_UNIT_RPM, "speed command, rpm") \
+  X(MODE, "mode", MCG_RS, 0, MCG_MODE_COUNT - 1, MCG_MODE_OPEN, MCG_UNIT_MODE, \
+    MCG_CAP_STATE, MCG_KEY(1, "Mode 0OL 1P 2PI"), "controller: open, p, pi, pid") \
+  X(RPM_CMD, "rpm_cmd", MCG_RW, 120, 720, 420, MCG_UNIT_RPM, \
+    MCG_CAP_ROW, MCG_KEY(2, "Speed cmd rpm"), "speed command, rpm") \
   X(DUTY, "duty", MCG_RW, -MCG_DUTY_FULL, MCG_DUTY_FULL, 0, MCG_UNIT_PERMILLE, \
+    MCG_CAP_NO, MCG_NO_KEY, \
     "motor duty, % (read: the output; write: open loop only, within duty_min..duty_max)") \
-  X(DUTY_STEP, "duty_step", MCG_RW, 1, MCG_DUTY_FULL, 10, MCG_UNIT_PERMILLE, "keypad up/down duty step, %") \
-  X(DUTY_BIAS, "duty_bias", MCG_RS, -MCG_DUTY_FULL, MCG_DUTY_FULL, 0, MCG_UNIT_PERMILLE, "P mode: u = bias + kp e, %") \
-  X(KP, "kp", MCG_RS, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, "P gain, 1/1000 duty per pulse/ms") \
+  X(DUTY_STEP, "duty_step", MCG_RW, 1, MCG_DUTY_FULL, 10, MCG_UNIT_PERMILLE, \
+    MCG_CAP_NO, MCG_KEY(11, "Duty step 0.1%"), "keypad up/down duty step, %") \
+  X(DUTY_BIAS, "duty_bias", MCG_RS, -MCG_DUTY_FULL, MCG_DUTY_FULL, 0, MCG_UNIT_PERMILLE, \
+    MCG_CAP_STATE, MCG_KEY(8, "P bias 0.1%"), "P mode: u = bias + kp e, %") \
+  X(KP, "kp", MCG_RS, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, \
+    MCG_CAP_STATE, MCG_KEY(3, "Kp"), "P gain, 1/1000 duty per pulse/ms") \
   X(B0, "b0", MCG_RS, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, \
+    MCG_CAP_STATE, MCG_KEY(4, "PI/PID b0"), \
     "PI/PID: u[n] = u[n-1] + b0 e[n] + b1 e[n-1] + b2 e[n-2], 1/1000 duty per pulse/ms") \
-  X(B1, "b1", MCG_RS, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, "PI/PID coefficient of e[n-1]") \
-  X(B2, "b2", MCG_RS, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, "PID coefficient of e[n-2]") \
-  X(COEF_FRAC, "coef_frac", MCG_RS, 0, MCG_COEF_FRAC_BITS_MAX, 8, MCG_UNIT_BITS, "fractional bits F of kp, b0, b1, b2") \
-  X(DUTY_MIN, "duty_min", MCG_RS, -MCG_DUTY_FULL, MCG_DUTY_FULL, 0, MCG_UNIT_PERMILLE, "controller output floor, %") \
-  X(DUTY_MAX, "duty_max", MCG_RS, -MCG_DUTY_FULL, MCG_DUTY_FULL, MCG_DUTY_FULL, MCG_UNIT_PERMILLE, "controller output ceiling, %") \
-  X(SERVICE_MS, "service_ms", MCG_RW, 5, 250, 40, MCG_UNIT_MS, "keypad and duty service period, ms") \
-  X(LOG_INTERVAL, "log_interval", MCG_RW, 1, 255, 4, MCG_UNIT_MS, "RAM log point spacing, ms") \
-  X(LOG_COUNT, "log_count", MCG_RO, 0, MCG_LOG_POINTS, 0, MCG_UNIT_COUNT, "RAM log points recorded") \
-  X(STREAM, "stream", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, "stream blocks on") \
+  X(B1, "b1", MCG_RS, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, \
+    MCG_CAP_STATE, MCG_KEY(5, "PI/PID b1"), "PI/PID coefficient of e[n-1]") \
+  X(B2, "b2", MCG_RS, MCG_I16_MIN, MCG_I16_MAX, 0, MCG_UNIT_GAIN, \
+    MCG_CAP_STATE, MCG_KEY(6, "PID b2"), "PID coefficient of e[n-2]") \
+  X(COEF_FRAC, "coef_frac", MCG_RS, 0, MCG_COEF_FRAC_BITS_MAX, 8, MCG_UNIT_BITS, \
+    MCG_CAP_STATE, MCG_KEY(7, "Gain frac bits"), "fractional bits F of kp, b0, b1, b2") \
+  X(DUTY_MIN, "duty_min", MCG_RS, -MCG_DUTY_FULL, MCG_DUTY_FULL, 0, MCG_UNIT_PERMILLE, \
+    MCG_CAP_STATE, MCG_KEY(9, "Duty min 0.1%"), "controller output floor, %") \
+  X(DUTY_MAX, "duty_max", MCG_RS, -MCG_DUTY_FULL, MCG_DUTY_FULL, MCG_DUTY_FULL, MCG_UNIT_PERMILLE, \
+    MCG_CAP_STATE, MCG_KEY(10, "Duty max 0.1%"), "controller output ceiling, %") \
+  X(SERVICE_MS, "service_ms", MCG_RW, 5, 250, 40, MCG_UNIT_MS, \
+    MCG_CAP_NO, MCG_KEY(12, "Service ms"), "keypad and duty service period, ms") \
+  X(LOG_INTERVAL, "log_interval", MCG_RW, 1, 255, 4, MCG_UNIT_MS, \
+    MCG_CAP_NO, MCG_KEY(13, "Log interval ms"), "RAM log point spacing, ms") \
+  X(LOG_COUNT, "log_count", MCG_RO, 0, MCG_LOG_POINTS, 0, MCG_UNIT_COUNT, \
+    MCG_CAP_NO, MCG_NO_KEY, "RAM log points recorded") \
+  X(STREAM, "stream", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, \
+    MCG_CAP_NO, MCG_KEY(16, "Stream 0/1"), "stream blocks on") \
   X(CLUTCH, "clutch", MCG_RW, MCG_CLUTCH_ATTACHED, MCG_CLUTCH_ENGAGED, MCG_CLUTCH_ATTACHED, MCG_UNIT_CLUTCH, \
+    MCG_CAP_ROW, MCG_KEY(14, "Clutch 1/2 eng"), \
     "clutch: 1 attached and disengaged, 2 engaged (as in mcg-csv(5))") \
-  X(LOAD, "load", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, "generator load relay closed") \
-  X(RPM, "rpm", MCG_RO, 0, 7471, 0, MCG_UNIT_RPM, "measured speed over 16 ms, rpm") \
-  X(COUNTS_16MS, "counts_16ms", MCG_RO, 0, 4080, 0, MCG_UNIT_COUNT, "encoder pulses in the last 16 ms") \
-  X(SEQ_LEN, "seq_len", MCG_RO, 0, MCG_SEQ_MAX, 0, MCG_UNIT_COUNT, "command sequence entries stored") \
-  X(SEQ_STATE, "seq_state", MCG_RW, MCG_SEQ_STOP, MCG_SEQ_LOOP, MCG_SEQ_STOP, MCG_UNIT_SEQ, "sequence playback: stop, play, loop") \
-  X(FLAGS, "flags", MCG_RO, 0, 15, 0, MCG_UNIT_FLAGS, "saturated, logging, log_full, seq") \
-  X(RX_ERRORS, "rx_errors", MCG_RW, 0, 0, 0, MCG_UNIT_COUNT, "frames the board dropped; write 0 clears") \
-  X(TX_DROPS, "tx_drops", MCG_RW, 0, 0, 0, MCG_UNIT_COUNT, "frames the board could not send; write 0 clears") \
-  X(STREAM_SEQ, "stream_seq", MCG_RO, 0, 255, 0, MCG_UNIT_COUNT, "sequence number of the next stream block") \
+  X(LOAD, "load", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, \
+    MCG_CAP_ROW, MCG_KEY(15, "Load relay 0/1"), "generator load relay closed") \
+  X(RPM, "rpm", MCG_RO, 0, 7471, 0, MCG_UNIT_RPM, MCG_CAP_NO, MCG_NO_KEY, "measured speed over 16 ms, rpm") \
+  X(COUNTS_16MS, "counts_16ms", MCG_RO, 0, 4080, 0, MCG_UNIT_COUNT, \
+    MCG_CAP_NO, MCG_NO_KEY, "encoder pulses in the last 16 ms") \
+  X(SEQ_LEN, "seq_len", MCG_RO, 0, MCG_SEQ_MAX, 0, MCG_UNIT_COUNT, \
+    MCG_CAP_NO, MCG_NO_KEY, "command sequence entries stored") \
+  X(SEQ_STATE, "seq_state", MCG_RW, MCG_SEQ_STOP, MCG_SEQ_LOOP, MCG_SEQ_STOP, MCG_UNIT_SEQ, \
+    MCG_CAP_NO, MCG_NO_KEY, "sequence playback: stop, play, loop") \
+  X(FLAGS, "flags", MCG_RO, 0, 15, 0, MCG_UNIT_FLAGS, \
+    MCG_CAP_NO, MCG_NO_KEY, "saturated, logging, log_full, seq") \
+  X(RX_ERRORS, "rx_errors", MCG_RW, 0, 0, 0, MCG_UNIT_COUNT, \
+    MCG_CAP_NO, MCG_NO_KEY, "frames the board dropped; write 0 clears") \
+  X(TX_DROPS, "tx_drops", MCG_RW, 0, 0, 0, MCG_UNIT_COUNT, \
+    MCG_CAP_NO, MCG_NO_KEY, "frames the board could not send; write 0 clears") \
+  X(STREAM_SEQ, "stream_seq", MCG_RO, 0, 255, 0, MCG_UNIT_COUNT, \
+    MCG_CAP_NO, MCG_NO_KEY, "sequence number of the next stream block") \
   X(COMMIT, "commit", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, \
+    MCG_CAP_NO, MCG_NO_KEY, \
     "write 1: the staged controller set becomes active at the next tick; 0: discards it; read: 1 if one is pending") \
   X(EXC_KIND, "exc_kind", MCG_RW, MCG_EXC_NONE, MCG_EXC_STAIRCASE, MCG_EXC_NONE, MCG_UNIT_EXC, \
-    "excitation: none, prbs, staircase (a step is a staircase of one stair)") \
-  X(EXC_ORDER, "exc_order", MCG_RW, 2, 16, 9, MCG_UNIT_BITS, "PRBS LFSR order n: 2^n - 1 bits per period") \
-  X(EXC_STEPS, "exc_steps", MCG_RW, 1, 100, 1, MCG_UNIT_COUNT, "staircase stairs above exc_offset") \
-  X(EXC_DIV, "exc_div", MCG_RW, 1, 30000, 1, MCG_UNIT_MS, "ticks per PRBS bit or per stair (clock divider)") \
-  X(EXC_AMP, "exc_amp", MCG_RW, -2000, 2000, 0, MCG_UNIT_LEVEL, "PRBS: offset +- amp; staircase: rise per stair") \
-  X(EXC_OFFSET, "exc_offset", MCG_RW, -1000, 1000, 0, MCG_UNIT_LEVEL, "level the excitation starts from and ends at") \
-  X(EXC_PERIODS, "exc_periods", MCG_RW, 0, 255, 1, MCG_UNIT_COUNT, "periods played, 0: until exc_run 0") \
+    MCG_CAP_NO, MCG_NO_KEY, "excitation: none, prbs, staircase (a step is a staircase of one stair)") \
+  X(EXC_ORDER, "exc_order", MCG_RW, 2, 16, 9, MCG_UNIT_BITS, \
+    MCG_CAP_NO, MCG_NO_KEY, "PRBS LFSR order n: 2^n - 1 bits per period") \
+  X(EXC_STEPS, "exc_steps", MCG_RW, 1, 100, 1, MCG_UNIT_COUNT, \
+    MCG_CAP_NO, MCG_NO_KEY, "staircase stairs above exc_offset") \
+  X(EXC_DIV, "exc_div", MCG_RW, 1, 30000, 1, MCG_UNIT_MS, \
+    MCG_CAP_NO, MCG_NO_KEY, "ticks per PRBS bit or per stair (clock divider)") \
+  X(EXC_AMP, "exc_amp", MCG_RW, -2000, 2000, 0, MCG_UNIT_LEVEL, \
+    MCG_CAP_NO, MCG_NO_KEY, "PRBS: offset +- amp; staircase: rise per stair") \
+  X(EXC_OFFSET, "exc_offset", MCG_RW, -1000, 1000, 0, MCG_UNIT_LEVEL, \
+    MCG_CAP_NO, MCG_NO_KEY, "level the excitation starts from and ends at") \
+  X(EXC_PERIODS, "exc_periods", MCG_RW, 0, 255, 1, MCG_UNIT_COUNT, \
+    MCG_CAP_NO, MCG_NO_KEY, "periods played, 0: until exc_run 0") \
   X(EXC_RUN, "exc_run", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, \
-    "write 1: start on the next stream sample (duty in mode open, rpm_cmd otherwise); 0: stop; read: 1 running")
+    MCG_CAP_NO, MCG_NO_KEY, \
+    "write 1: start on the next stream sample (duty in mode open, rpm_cmd otherwise); 0: stop; read: 1 running") /* clang-format on */
 
 #define MCG_MODE_OPEN 0u /* duty from MCG_REG_DUTY (keypad up/down) */
 #define MCG_MODE_P 1u    /* u = bias + Kp e */

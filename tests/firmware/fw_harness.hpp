@@ -68,7 +68,7 @@ class Board {
   }
 
   static bool staged(std::uint8_t reg) {
-#define FW_ACCESS(NAME, name, access, lo, hi, def, unit, doc) access,
+#define FW_ACCESS(NAME, name, access, lo, hi, def, unit, capture, keypad, doc) access,
     static const unsigned access[] = {MCG_REGISTERS(FW_ACCESS)};
 #undef FW_ACCESS
     return reg >= MCG_REG_MODE && reg < MCG_REG_COUNT && access[reg - 1u] == MCG_RS;

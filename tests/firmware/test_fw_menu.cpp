@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "fw_harness.hpp"
 
@@ -27,6 +28,44 @@ void edit_kp(Board& b) {
 }
 
 }  // namespace
+
+// The menu is the protocol table's keypad column: positions 1..n, each once, a label of at most 16
+// characters on each, and the items in the order the man page lists them.
+TEST(FwMenu, TheKeypadColumnNumbersTheMenuOnce) {
+  std::vector<std::string> by_position(MCG_REG_COUNT);
+  unsigned count = 0;
+#define KEY_ROW(NAME, name, access, lo, hi, def, unit, capture, keypad, doc) \
+  if (MCG_KEY_POS(keypad) != 0u) {                                           \
+    ++count;                                                                 \
+    ASSERT_LT(MCG_KEY_POS(keypad), MCG_REG_COUNT);                           \
+    EXPECT_EQ(by_position[MCG_KEY_POS(keypad)], "") << name;                 \
+    by_position[MCG_KEY_POS(keypad)] = name;                                 \
+    EXPECT_GT(std::string(MCG_KEY_LABEL(keypad)).size(), 0u) << name;        \
+    EXPECT_LE(std::string(MCG_KEY_LABEL(keypad)).size(), 16u) << name;       \
+  } else {                                                                   \
+    EXPECT_EQ(std::string(MCG_KEY_LABEL(keypad)), "") << name;               \
+  }
+  MCG_REGISTERS(KEY_ROW)
+#undef KEY_ROW
+  const std::vector<std::string> order{
+      "mode",     "rpm_cmd",  "kp",        "b0",         "b1",           "b2",     "coef_frac", "duty_bias",
+      "duty_min", "duty_max", "duty_step", "service_ms", "log_interval", "clutch", "load",      "stream"};
+  ASSERT_EQ(count, order.size());
+  for (unsigned k = 0; k < count; ++k) EXPECT_EQ(by_position[k + 1], order[k]) << k + 1;
+}
+
+// Stepping through the menu shows each item's label, and wraps at both ends.
+TEST(FwMenu, AAndBStepThroughTheItemsAndWrap) {
+  Board b;
+  keys(b, {k_c});
+  EXPECT_EQ(lcd(0), "Mode 0OL 1P 2PI ");
+  keys(b, {k_b});
+  EXPECT_EQ(lcd(0), "Stream 0/1      ");
+  keys(b, {k_a, k_a, k_a, k_a});
+  EXPECT_EQ(lcd(0), "PI/PID b0       ");
+  keys(b, {k_a, k_a, k_a, k_a, k_a, k_a, k_a, k_a, k_a, k_a, k_a, k_a, k_a});
+  EXPECT_EQ(lcd(0), "Mode 0OL 1P 2PI ");
+}
 
 // Report bug: "The interface on the EMAC will not receive any Kp input value from the keypad."
 TEST(FwMenu, RegressionKpEnteredOnTheKeypad) {

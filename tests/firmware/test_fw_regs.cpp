@@ -56,7 +56,7 @@ std::string hex_id(unsigned id) {
 
 std::vector<std::string> expected_rows() {
   std::vector<std::string> rows;
-#define MAN_ROW(NAME, name, access, lo, hi, def, unit, doc)                                              \
+#define MAN_ROW(NAME, name, access, lo, hi, def, unit, capture, keypad, doc)                             \
   rows.push_back(hex_id(MCG_REG_##NAME) + "\t" + name + "\t" + access_text(access) + "\t" + number(lo) + \
                  ".." + number(hi) + "\t" + ((access) != MCG_RO ? number(def) : "") + "\t" +             \
                  unit_text(unit) + "\t" + doc);

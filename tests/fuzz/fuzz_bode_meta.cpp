@@ -31,7 +31,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     o.method = lines ? mcg::signal::BodeMethod::automatic : mcg::signal::BodeMethod::welch;
     std::ostringstream out;
     std::ostringstream warn;
-    mcg::signal::bode(tbl, o, out, warn);
+    mcg::Diagnostics diag(warn, "bode");
+    mcg::signal::bode(tbl, o, out, diag);
     for (const char c : warn.str()) {
       if (static_cast<unsigned char>(c) < 0x20 && c != '\n')
         mcg::fuzz::finding("a warning carries a control byte");

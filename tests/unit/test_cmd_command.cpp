@@ -2,6 +2,7 @@
 // that take the tool's name from their Io instead of naming one.
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -9,6 +10,9 @@
 #include "cmd/command.hpp"
 #include "cmd/design/analysis.hpp"
 #include "cmd/fit/model.hpp"
+#include "cmd/serial/registers.hpp"
+#include "cmd/sweep/bode.hpp"
+#include "cmd/sweep/generate.hpp"
 #include "common/error.hpp"
 
 namespace mcg::cmd {
@@ -80,6 +84,49 @@ TEST(CmdCommand, AParameterNameTheModelLacksPointsToTheToolsList) {
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()), "unknown parameter 'motor.bogus' (see some-tool model --list)");
   }
+}
+
+TEST(CmdCommand, SweepTablesAndResponsesNameTheToolOfTheirIo) {
+  std::istringstream in;
+  std::ostringstream table;
+  std::ostringstream err;
+  Diagnostics diag(err, "prefix");
+  Io io{in, table, diag, "some-tool"};
+  SweepGenerate step(signal::Generator::step);
+  step.options.dt_s = 0.001;
+  step.options.duration_s = 0.004;
+  EXPECT_EQ(step.run(io), 0);
+  EXPECT_NE(table.str().find("# source: some-tool "), std::string::npos) << table.str();
+  EXPECT_EQ(table.str().find("mcg-"), std::string::npos) << table.str();
+
+  // Uneven sampling: the response is written and the warning goes to the tool's diagnostics.
+  const std::string path = ::testing::TempDir() + "cmd_uneven.csv";
+  {
+    std::ofstream file(path);
+    file << "t,v,omega\n";
+    for (int k = 0; k < 400; ++k)
+      file << 0.001 * k + (k % 2 == 1 ? 0.0004 : 0.0) << "," << k % 3 << "," << k % 5 << "\n";
+  }
+  std::ostringstream response;
+  Io bode_io{in, response, diag, "some-tool"};
+  SweepBode bode;
+  bode.options.input = path;
+  EXPECT_EQ(bode.run(bode_io), 0);
+  EXPECT_EQ(err.str().rfind("prefix: warning: " + path + ": uneven sampling", 0), 0u) << err.str();
+  EXPECT_NE(response.str().find("# source: some-tool "), std::string::npos) << response.str();
+  EXPECT_EQ(response.str().find("mcg-"), std::string::npos) << response.str();
+}
+
+TEST(CmdCommand, ASerialCommandWithoutAPortIsAUsageError) {
+  std::istringstream in;
+  std::ostringstream out;
+  std::ostringstream err;
+  Diagnostics diag(err, "prefix");
+  Io io{in, out, diag, "some-tool"};
+  link::LinkOptions line;
+  SerialGet get(line);
+  EXPECT_THROW(get.run(io), CLI::RequiredError);
+  EXPECT_EQ(line.tool, "");
 }
 
 }  // namespace

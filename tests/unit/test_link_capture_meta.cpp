@@ -1,18 +1,20 @@
 // Unit tests of what a capture's board_config says the board ran (captured_board), and of the
 // model running those registers (sim::board_loop_controller on raw values).
-#include "link/capture_meta.hpp"
-#include "mcg_protocol.h"
-#include "sim/controller.hpp"
-#include "table/table.hpp"
-#include "test_support_error.hpp"
-
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cstdint>
 #include <numbers>
+#include <string_view>
 #include <utility>
 #include <vector>
+
+#include "link/capture_meta.hpp"
+#include "link/registers.hpp"
+#include "mcg_protocol.h"
+#include "sim/controller.hpp"
+#include "table/table.hpp"
+#include "test_support_error.hpp"
 
 namespace mcg::link {
 namespace {
@@ -30,6 +32,22 @@ std::string error_of(const std::string& text) {
   return test::error_of([&] { captured_board(with_config(text), "cap.csv"); });
 }
 
+// The list is the protocol table's capture column: the controller's set (mode among it) and the
+// registers a capture's rows carry, in id order.
+TEST(LinkCapturedBoard, TheStatedRegistersAreTheProtocolTablesCaptureColumn) {
+  std::vector<std::string_view> expected;
+  for (const RegisterInfo& reg : registers()) {
+    if (reg.staged || reg.name == "rpm_cmd" || reg.name == "clutch" || reg.name == "load") {
+      expected.push_back(reg.name);
+    }
+    EXPECT_EQ(reg.carried_by_rows, reg.name == "rpm_cmd" || reg.name == "clutch" || reg.name == "load")
+        << reg.name;
+  }
+  const auto names = config_register_names();
+  EXPECT_EQ(std::vector<std::string_view>(names.begin(), names.end()), expected);
+  EXPECT_EQ(names.size(), 12u);
+}
+
 TEST(LinkCapturedBoard, ReadsTheRegistersAsTheCoreTakesThem) {
   // What mcg-serial stream writes for a board with a designed PI loaded (gains in 2^-12).
   const auto board = captured_board(
@@ -40,8 +58,8 @@ TEST(LinkCapturedBoard, ReadsTheRegistersAsTheCoreTakesThem) {
   EXPECT_EQ(board->mode, MCG_MODE_PI);
   EXPECT_EQ(board->mode_name, "pi");
   EXPECT_THAT(board->registers,
-              ElementsAre(Pair(MCG_REG_COEF_FRAC, 12), Pair(MCG_REG_KP, 0), Pair(MCG_REG_B0, 7234),
-                          Pair(MCG_REG_B1, -4341), Pair(MCG_REG_B2, 0), Pair(MCG_REG_DUTY_BIAS, 0),
+              ElementsAre(Pair(MCG_REG_COEF_FRAC, 12), Pair(MCG_REG_DUTY_BIAS, 0), Pair(MCG_REG_KP, 0),
+                          Pair(MCG_REG_B0, 7234), Pair(MCG_REG_B1, -4341), Pair(MCG_REG_B2, 0),
                           Pair(MCG_REG_DUTY_MIN, 0), Pair(MCG_REG_DUTY_MAX, 1000)));
   EXPECT_FALSE(captured_board(table::Metadata{}, "cap.csv").has_value());
 }
@@ -60,10 +78,10 @@ TEST(LinkCapturedBoard, EveryBoardItReturnsTheCoreTakes) {
   EXPECT_EQ(
       error_of("mode=pi stream_seq=2"),
       "cap.csv: board_config: 'stream_seq' is not one of the registers a capture states (mode, rpm_cmd, "
-      "clutch, load, coef_frac, kp, b0, b1, b2, duty_bias, duty_min, duty_max)");
+      "duty_bias, kp, b0, b1, b2, coef_frac, duty_min, duty_max, clutch, load)");
   EXPECT_EQ(error_of("mode=pi duty=5"),
             "cap.csv: board_config: 'duty' is not one of the registers a capture states (mode, rpm_cmd, "
-            "clutch, load, coef_frac, kp, b0, b1, b2, duty_bias, duty_min, duty_max)");
+            "duty_bias, kp, b0, b1, b2, coef_frac, duty_min, duty_max, clutch, load)");
   EXPECT_EQ(error_of("mode=pi duty_min=50 duty_max=10"),
             "cap.csv: board_config: duty_min 50 % is above duty_max 10 %");
   EXPECT_EQ(error_of("mode=pi duty_max=90 duty_min=95"),
@@ -76,7 +94,7 @@ TEST(LinkCapturedBoard, EveryBoardItReturnsTheCoreTakes) {
   EXPECT_EQ(
       test::error_of([&] { captured_board(meta, "cap.csv"); }),
       "cap.csv:7: board_config: 'stream_seq' is not one of the registers a capture states (mode, rpm_cmd, "
-      "clutch, load, coef_frac, kp, b0, b1, b2, duty_bias, duty_min, duty_max)");
+      "duty_bias, kp, b0, b1, b2, coef_frac, duty_min, duty_max, clutch, load)");
   // Limits below the power-on floor, in either order: the core takes the floor first.
   const auto board = captured_board(with_config("mode=p duty_max=-10 kp=1 duty_min=-50"), "cap.csv");
   ASSERT_TRUE(board.has_value());

@@ -4,8 +4,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <array>
 #include <sstream>
+#include <vector>
 
 #include "common/error.hpp"
 #include "common/quote.hpp"
@@ -13,15 +13,15 @@
 #include "config/ini.hpp"       // Ini, format_number
 #include "link/connection.hpp"  // Connection
 #include "link/registers.hpp"
-#include "mcg_protocol.h"       // MCG_REG_*
-#include "model/model.hpp"      // model_from_ini
-#include "table/table.hpp"      // Writer
+#include "mcg_protocol.h"   // MCG_REG_*
+#include "model/load.hpp"   // load_model
+#include "table/table.hpp"  // Writer
 
 namespace mcg::link {
 
 Rig load_rig(const RigOptions& options) {
   Rig rig;
-  rig.supply_V = model::model_from_ini(config::Ini::load_all(options.configs)).params.supply_V;
+  rig.supply_V = model::load_model(options.configs, {}).params.supply_V;
   rig.r_load_ohm = options.r_load_ohm;
   rig.supply_source = "model default";
   std::vector<std::string> names;
@@ -32,22 +32,26 @@ Rig load_rig(const RigOptions& options) {
 
 namespace {
 
-/// The registers a capture's board_config states: the mode, those a capture's rows also carry,
-/// and those that shape the controller's output.
-constexpr std::array<std::string_view, 12> k_config_registers{"mode",      "rpm_cmd",   "clutch",   "load",
-                                                         "coef_frac", "kp",        "b0",       "b1",
-                                                         "b2",        "duty_bias", "duty_min", "duty_max"};
-
-/// The registers whose value each row of a capture carries (its rpm_cmd, clutch, r_load).
-bool carried_by_rows(std::string_view name) { return name == "rpm_cmd" || name == "clutch" || name == "load"; }
+/// The registers a capture's board_config states, in id order: the protocol table's capture
+/// column (the controller's set and mode, and those a capture's rows also carry).
+const std::vector<std::string_view>& config_registers() {
+  static const std::vector<std::string_view> names = [] {
+    std::vector<std::string_view> out;
+    for (const RegisterInfo& reg : registers()) {
+      if (reg.captured) out.push_back(reg.name);
+    }
+    return out;
+  }();
+  return names;
+}
 
 }  // namespace
 
-std::span<const std::string_view> config_register_names() { return k_config_registers; }
+std::span<const std::string_view> config_register_names() { return config_registers(); }
 
 std::vector<std::pair<std::string, std::string>> board_config(Connection& c) {
   std::vector<std::pair<std::string, std::string>> out;
-  for (const std::string_view name : k_config_registers) {
+  for (const std::string_view name : config_registers()) {
     const RegisterInfo& reg = require_register(name);
     const int frac = reg.unit == Unit::Gain ? c.frac_bits() : 0;
     out.emplace_back(name, format_value(reg, c.session->read(reg), frac));
@@ -63,24 +67,24 @@ std::optional<CapturedBoard> captured_board(const table::Metadata& meta, std::st
   board.text = *text;
   // The registers board_config writes and nothing else: another one (stream_seq, a read-only
   // counter; duty, busy outside mode open) is nothing the firmware core could be set to.
-  std::array<std::optional<std::string>, k_config_registers.size()> values;
+  const std::vector<std::string_view>& names = config_registers();
+  std::vector<std::optional<std::string>> values(names.size());
   std::istringstream words(*text);
   for (std::string word; words >> word;) {
     const auto eq = word.find('=');
     const RegisterInfo* reg = eq == std::string::npos ? nullptr : find_register(std::string_view(word).substr(0, eq));
     if (reg == nullptr) fail("{}: {} is not NAME=value of a register", at, quote(word));
-    const auto it = std::find(k_config_registers.begin(), k_config_registers.end(), reg->name);
-    if (it == k_config_registers.end()) {
+    const auto it = std::find(names.begin(), names.end(), reg->name);
+    if (it == names.end()) {
       fail("{}: {} is not one of the registers a capture states ({})", at, quote(reg->name),
-           fmt::join(k_config_registers, ", "));
+           fmt::join(names, ", "));
     }
-    auto& slot = values[static_cast<std::size_t>(it - k_config_registers.begin())];
+    auto& slot = values[static_cast<std::size_t>(it - names.begin())];
     if (slot) fail("{}: {} is given twice", at, quote(reg->name));
     slot = word.substr(eq + 1);
   }
-  const auto index_of = [](std::string_view name) {
-    return static_cast<std::size_t>(std::find(k_config_registers.begin(), k_config_registers.end(), name) -
-                                    k_config_registers.begin());
+  const auto index_of = [&](std::string_view name) {
+    return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
   };
   const auto value_of = [&](std::string_view name, int frac) -> std::int16_t {
     const RegisterInfo& reg = require_register(name);
@@ -99,7 +103,7 @@ std::optional<CapturedBoard> captured_board(const table::Metadata& meta, std::st
   board.mode = value_of("mode", 0);
   board.mode_name = format_value(require_register("mode"), board.mode, 0);
   // The firmware checks duty_min <= duty_max at each write: a pair it would refuse is refused
-  // here, and the core takes them in k_config_registers' order (the floor first), which from
+  // here, and the core takes them in id order (the floor first), which from
   // the power-on limits every ordered pair passes.
   const std::int16_t duty_min = value_of("duty_min", 0);
   const std::int16_t duty_max = value_of("duty_max", 0);
@@ -108,11 +112,13 @@ std::optional<CapturedBoard> captured_board(const table::Metadata& meta, std::st
     fail("{}: duty_min {} % is above duty_max {} %", at, format_value(reg, duty_min, 0),
          format_value(reg, duty_max, 0));
   }
-  for (std::size_t i = 0; i < k_config_registers.size(); ++i) {
-    const std::string_view name = k_config_registers[i];
-    if (!values[i] || name == "mode" || carried_by_rows(name)) continue;
-    const RegisterInfo& reg = require_register(name);
-    board.registers.emplace_back(reg.id, value_of(name, reg.unit == Unit::Gain ? frac : 0));
+  // The core takes coef_frac before the gains it scales, then the rest in id order.
+  if (values[index_of("coef_frac")])
+    board.registers.emplace_back(MCG_REG_COEF_FRAC, value_of("coef_frac", 0));
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const RegisterInfo& reg = require_register(names[i]);
+    if (!values[i] || reg.name == "mode" || reg.name == "coef_frac" || reg.carried_by_rows) continue;
+    board.registers.emplace_back(reg.id, value_of(reg.name, reg.unit == Unit::Gain ? frac : 0));
   }
   return board;
 }

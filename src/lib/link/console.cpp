@@ -30,6 +30,7 @@
 #include "link/interrupt.hpp"
 #include "link/port.hpp"
 #include "link/stream_block.hpp"
+#include "model/load.hpp"
 #include "model/model.hpp"
 #include "table/table.hpp"
 
@@ -453,22 +454,23 @@ class Worker {
     using Kind = ConsoleAction::Kind;
     std::ostringstream out;
     std::ostringstream err;
+    Diagnostics diag(err, m_link.tool);
     try {
       switch (a.kind) {
         case Kind::set:
           if (a.name.empty() || a.value.empty()) return "set: give a register and a value";
-          run_set(m_link, a.name, a.value, err);
+          run_set(m_link, a.name, a.value, diag);
           return fmt::format("{} = {}{}", a.name, get(a.name),
                              err.str().empty() ? "" : "  (" + first_line(err.str()) + ")");
         case Kind::toggle_clutch: {
           const std::string now = get("clutch");
           const std::string next = now == "engaged" || now == "2" ? "disengaged" : "engaged";
-          run_set(m_link, "clutch", next, err);
+          run_set(m_link, "clutch", next, diag);
           return fmt::format("clutch = {}", get("clutch"));
         }
         case Kind::toggle_load: {
           const std::string now = get("load");
-          run_set(m_link, "load", now == "1" || now == "on" ? "0" : "1", err);
+          run_set(m_link, "load", now == "1" || now == "on" ? "0" : "1", diag);
           return fmt::format("load = {}", get("load"));
         }
         case Kind::record_log:
@@ -477,7 +479,7 @@ class Worker {
           DumpOptions d;
           d.record = a.kind == Kind::record_log;
           std::ostringstream csv;
-          run_dump(m_link, d, csv, err);
+          run_dump(m_link, d, csv, diag);
           std::ofstream file(a.value);
           file << csv.str();
           if (!file) return fmt::format("dump: cannot write {}", a.value);
@@ -485,7 +487,7 @@ class Worker {
         }
         case Kind::load_ini:
           if (a.value.empty()) return "load: give an INI file";
-          run_load(m_link, a.value, out, err);
+          run_load(m_link, a.value, out, diag);
           return fmt::format("loaded {}", a.value);
         case Kind::record_csv: {
           auto conn = connect(m_link);
@@ -582,7 +584,7 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
   constexpr double k_retry_s = 0.5;
   const Rig rig = load_rig(options.rig);
   model::Model model;
-  if (!options.rig.configs.empty()) model = model::model_from_ini(config::Ini::load_all(options.rig.configs));
+  if (!options.rig.configs.empty()) model = model::load_model(options.rig.configs, {});
   std::ofstream session_log;
   ConsoleState state(options.span_s);
   const auto log = [&](std::string_view text) {

@@ -18,9 +18,9 @@ namespace mcg::link {
 
 namespace {
 
-#define MCG_HOST_REGISTER(NAME, name, access, lo, hi, def, unit, doc)                                    \
-  RegisterInfo{name, MCG_REG_##NAME, static_cast<Unit>(unit), (access) != MCG_RO, lo, hi, def, doc, \
-               (access) == MCG_RS},
+#define MCG_HOST_REGISTER(NAME, name, access, lo, hi, def, unit, capture, keypad, doc)                  \
+  RegisterInfo{name, MCG_REG_##NAME,     static_cast<Unit>(unit), (access) != MCG_RO,      lo, hi, def, \
+               doc,  (access) == MCG_RS, (capture) != MCG_CAP_NO, (capture) == MCG_CAP_ROW},
 constexpr std::array<RegisterInfo, MCG_REG_COUNT - 1> k_registers{{MCG_REGISTERS(MCG_HOST_REGISTER)}};
 #undef MCG_HOST_REGISTER
 

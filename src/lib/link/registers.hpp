@@ -41,6 +41,10 @@ struct RegisterInfo {
   /// One of the controller's set (MCG_RS): a write goes to the board's shadow set and acts only
   /// when the commit register is written; a read shows the active set.
   bool staged = false;
+  /// Stated in a capture's board_config metadata (MCG_CAP_STATE or MCG_CAP_ROW).
+  bool captured = false;
+  /// Each row of a capture carries its value too (MCG_CAP_ROW: rpm_cmd, clutch, load).
+  bool carried_by_rows = false;
 };
 
 /// Every register of the protocol, in id order (MCG_REGISTERS expanded).

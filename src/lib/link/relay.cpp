@@ -75,7 +75,7 @@ class Direction {
 
 }  // namespace
 
-void run_relay(const RelayOptions& options, std::ostream& err) {
+void run_relay(const RelayOptions& options, Diagnostics& diag) {
   auto board = open_port(options.port, options.baud);
   PtyLink link(options.link_path);
   const InterruptGuard guard;
@@ -120,11 +120,12 @@ void run_relay(const RelayOptions& options, std::ostream& err) {
     }
   }
   link.close();
-  err << fmt::format(
-      "mcg-serial relay: {}; to the tool {} bytes ({} corrupted, {} dropped, {} paused), to the board {} bytes "
-      "({} corrupted, {} dropped, {} paused)\n",
-      ended, to_tool_counts.forwarded, to_tool_counts.corrupted, to_tool_counts.dropped, to_tool_counts.paused,
-      to_board_counts.forwarded, to_board_counts.corrupted, to_board_counts.dropped, to_board_counts.paused);
+  diag.report(
+      fmt::format("{}; to the tool {} bytes ({} corrupted, {} dropped, {} paused), to the board {} bytes "
+                  "({} corrupted, {} dropped, {} paused)",
+                  ended, to_tool_counts.forwarded, to_tool_counts.corrupted, to_tool_counts.dropped,
+                  to_tool_counts.paused, to_board_counts.forwarded, to_board_counts.corrupted,
+                  to_board_counts.dropped, to_board_counts.paused));
 }
 
 }  // namespace mcg::link

@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <string>
 
+#include "common/diagnostics.hpp"
+
 namespace mcg::link {
 
 struct RelayOptions {
@@ -23,8 +25,8 @@ struct RelayOptions {
 };
 
 /// Runs the relay until a signal, `seconds`, the cut, or the board side vanishing. Each
-/// direction keeps its byte order: a pause holds back the bytes behind it. Prints one
-/// summary line on `err` at the end (bytes forwarded, corrupted, dropped, paused).
-void run_relay(const RelayOptions& options, std::ostream& err);
+/// direction keeps its byte order: a pause holds back the bytes behind it. Reports one
+/// summary line on `diag` at the end (bytes forwarded, corrupted, dropped, paused).
+void run_relay(const RelayOptions& options, Diagnostics& diag);
 
 }  // namespace mcg::link

@@ -76,10 +76,10 @@ constexpr double k_pulses_to_rev = 1.0 / MCG_COUNTS_PER_REV;
 
 /// Writes `value` (engineering units) into `reg` and checks what the board holds: for a staged
 /// register the shadow value its answer reports, else the register read back. Returns the raw value
-/// held. Notes a rounded value on `err`; throws when the board holds something else, and names the
+/// held. Notes a rounded value on `diag`; throws when the board holds something else, and names the
 /// mode when the board refuses a duty its controller owns.
 std::int16_t write_verified(Connection& c, const RegisterInfo& reg, double value, std::string_view where,
-                            std::ostream& err) {
+                            Diagnostics& diag) {
   if (!reg.writable) fail("{}: {} is read-only", where, reg.name);
   const int frac = reg.unit == Unit::Gain ? c.frac_bits() : 0;
   const std::int16_t raw = to_raw(reg, value, frac);
@@ -100,8 +100,8 @@ std::int16_t write_verified(Connection& c, const RegisterInfo& reg, double value
   if (reg.name == "coef_frac") c.set_frac_bits(held);  // the staged gains that follow are in this format
   const double held_value = to_engineering(reg, held, frac);
   if (held_value != value && reg.unit != Unit::Mode && reg.unit != Unit::SeqState) {
-    err << fmt::format("mcg-serial: note: {}: {} is held as {} (the register's resolution)\n", reg.name,
-                       config::format_number(value), format_value(reg, held, frac));
+    diag.note(fmt::format("{}: {} is held as {} (the register's resolution)", reg.name,
+                          config::format_number(value), format_value(reg, held, frac)));
   }
   return held;
 }
@@ -174,7 +174,7 @@ void run_get(const LinkOptions& link, const std::vector<std::string>& names, std
   auto c = connect(link);
   if (names.empty()) {
     for (const auto& reg : registers()) regs.push_back(&reg);
-    out << fmt::format("; mcg-serial get: {} on {}\n", c->board_text(), printable_name(link.port));
+    out << fmt::format("; {} get: {} on {}\n", link.tool, c->board_text(), printable_name(link.port));
     print_board_section(*c, regs, out);
     return;
   }
@@ -184,7 +184,7 @@ void run_get(const LinkOptions& link, const std::vector<std::string>& names, std
   }
 }
 
-void run_set(const LinkOptions& link, const std::string& name, const std::string& value, std::ostream& err) {
+void run_set(const LinkOptions& link, const std::string& name, const std::string& value, Diagnostics& diag) {
   const RegisterInfo& reg = require_register(name);
   if (!reg.writable) fail("set: {} is read-only", reg.name);
   const double v = parse_value(reg, value, "set");
@@ -199,13 +199,13 @@ void run_set(const LinkOptions& link, const std::string& name, const std::string
     return;
   }
   if (!reg.staged) {
-    write_verified(*c, reg, v, "set", err);
+    write_verified(*c, reg, v, "set", diag);
     return;
   }
   // One register of the controller's set: staged onto the running set and committed, so the loop
   // changes at one tick and a set the board refuses changes nothing.
   discard_staged(*c);
-  const std::int16_t raw = write_verified(*c, reg, v, "set", err);
+  const std::int16_t raw = write_verified(*c, reg, v, "set", diag);
   const std::pair<const RegisterInfo*, std::int16_t> staged[] = {{&reg, raw}};
   commit_staged(*c, staged, fmt::format("committing {} {}", reg.name, value));
 }
@@ -254,7 +254,7 @@ LoadPlan load_plan(const config::Ini& ini, const std::string& path) {
   return plan;
 }
 
-void run_load(const LinkOptions& link, const std::string& path, std::ostream& out, std::ostream& err) {
+void run_load(const LinkOptions& link, const std::string& path, std::ostream& out, Diagnostics& diag) {
   const LoadPlan plan = load_plan(config::Ini::load(path), input_name(path));
   auto c = connect(link);
   // The controller's set is staged whole and committed once: the loop runs the old controller up
@@ -264,26 +264,26 @@ void run_load(const LinkOptions& link, const std::string& path, std::ostream& ou
   discard_staged(*c);
   std::vector<std::pair<const RegisterInfo*, std::int16_t>> staged;
   for (const LoadWrite& w : plan) {
-    if (w.reg->staged) staged.emplace_back(w.reg, write_verified(*c, *w.reg, w.value, w.origin, err));
+    if (w.reg->staged) staged.emplace_back(w.reg, write_verified(*c, *w.reg, w.value, w.origin, diag));
   }
   if (!staged.empty()) commit_staged(*c, staged, fmt::format("committing the controller of {}", path));
   for (const LoadWrite& w : plan) {
-    if (!w.reg->staged) write_verified(*c, *w.reg, w.value, w.origin, err);
+    if (!w.reg->staged) write_verified(*c, *w.reg, w.value, w.origin, diag);
   }
 
   std::vector<const RegisterInfo*> regs;
   for (const LoadWrite& w : plan) regs.push_back(w.reg);
-  out << fmt::format("; mcg-serial load {}: {} on {}, every register read back\n", input_name(path),
+  out << fmt::format("; {} load {}: {} on {}, every register read back\n", link.tool, input_name(path),
                      c->board_text(), printable_name(link.port));
   print_board_section(*c, regs, out);
 }
 
-void run_dump(const LinkOptions& link, const DumpOptions& options, std::ostream& out, std::ostream& err) {
+void run_dump(const LinkOptions& link, const DumpOptions& options, std::ostream& out, Diagnostics& diag) {
   auto c = connect(link);
   Session& s = *c->session;
   if (options.record) {
     if (options.interval_ms != 0) {
-      write_verified(*c, require_register("log_interval"), options.interval_ms, "--interval", err);
+      write_verified(*c, require_register("log_interval"), options.interval_ms, "--interval", diag);
     }
     const int interval_ms = s.read(require_register("log_interval"));
     s.request(MCG_CMD_LOG_START, {}, "starting the log");
@@ -307,7 +307,7 @@ void run_dump(const LinkOptions& link, const DumpOptions& options, std::ostream&
   }
   const double interval_s = dump.interval_ms * 1e-3;
   table::Writer w(out);
-  w.meta("source", fmt::format("mcg-serial {} dump", k_version));
+  w.meta("source", fmt::format("{} {} dump", link.tool, k_version));
   w.meta("board", c->board_text());
   w.meta("port", printable_name(link.port));
   w.meta("sample_period", config::format_number(interval_s));

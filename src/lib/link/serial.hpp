@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "common/diagnostics.hpp"
 #include "config/ini.hpp"
 #include "link/capture_meta.hpp"  // RigOptions
 #include "link/registers.hpp"
@@ -20,6 +21,7 @@ struct LinkOptions {
   int baud = 9600;               ///< --baud
   double timeout_s = 0.3;        ///< --timeout: wait for each answer
   int attempts = 3;              ///< --tries: attempts per request
+  std::string tool;              ///< the tool's name, for the provenance its outputs record
 };
 
 /// Exit status of a capture that lost samples (without --allow-loss).
@@ -34,18 +36,18 @@ void run_list(std::ostream& out);
 void run_get(const LinkOptions& link, const std::vector<std::string>& names, std::ostream& out);
 
 /// set NAME VALUE: writes one register in engineering units and reads it back. A value the
-/// register cannot hold exactly is rounded to its resolution (a note on stderr says so); a
+/// register cannot hold exactly is rounded to its resolution (a note on `diag` says so); a
 /// board that holds something else after the write is an error. A register of the controller's
 /// set (RegisterInfo::staged) is staged onto the running set and committed at once: the loop
 /// changes at one tick, and a set the board refuses (a closed-loop mode with every gain zero)
 /// changes nothing and fails with the board's reason.
-void run_set(const LinkOptions& link, const std::string& name, const std::string& value, std::ostream& err);
+void run_set(const LinkOptions& link, const std::string& name, const std::string& value, Diagnostics& diag);
 
 /// load FILE.ini: writes the [board] section (register = value, as get prints it) or the
 /// [controller] fixed-point section of mcg-design (docs/formats.md), verifies each register
 /// and prints what the board holds as a [board] section. The controller's registers are staged
 /// and committed once, so the loop swaps controllers at one tick, bumpless; then the rest.
-void run_load(const LinkOptions& link, const std::string& path, std::ostream& out, std::ostream& err);
+void run_load(const LinkOptions& link, const std::string& path, std::ostream& out, Diagnostics& diag);
 
 /// One register write of load FILE.ini and the file:line it came from.
 struct LoadWrite {
@@ -70,10 +72,11 @@ struct StreamOptions {
                                    ///< for it to come back and go on after a break row (0: an error)
 };
 /// stream: turns the board's stream on, writes CSV rows (t, rpm, counts, duty, v, rpm_cmd,
-/// clutch, r_load; mcg-csv(5)) as the blocks arrive (flushed per block), turns it off at the end. Sequence gaps count as
-/// lost samples: reported on stderr, exit status k_exit_lost_samples unless allow_loss.
+/// clutch, r_load; mcg-csv(5)) as the blocks arrive (flushed per block), turns it off at the end.
+/// Sequence gaps count as lost samples: reported on `diag`, exit status k_exit_lost_samples unless
+/// allow_loss.
 /// SIGINT ends the capture cleanly. Returns the exit status.
-int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostream& out, std::ostream& err);
+int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostream& out, Diagnostics& diag);
 
 struct DumpOptions {
   bool record = false;       ///< start a recording first and wait until the log is full
@@ -81,7 +84,7 @@ struct DumpOptions {
 };
 /// dump: the RAM log as CSV (t, rpm, counts), t = (i + 1) interval: point i holds the pulses
 /// counted over (t - interval, t] after the recording started.
-void run_dump(const LinkOptions& link, const DumpOptions& options, std::ostream& out, std::ostream& err);
+void run_dump(const LinkOptions& link, const DumpOptions& options, std::ostream& out, Diagnostics& diag);
 
 struct SendOptions {
   std::string path;         ///< CSV: t and one column per register to change

@@ -59,7 +59,7 @@ std::string start_excitation(Connection& c) {
 void write_stream_header(table::Writer& w, const Connection& c, const LinkOptions& link, int window_samples,
                          const Rig& rig, const std::vector<std::pair<std::string, std::string>>& config) {
   constexpr double k_sample_s = MCG_STREAM_PERIOD_MS * 1e-3;
-  w.meta("source", fmt::format("mcg-serial {} stream", k_version));
+  w.meta("source", fmt::format("{} {} stream", link.tool, k_version));
   w.meta("board", c.board_text());
   w.meta("port", printable_name(link.port));
   w.meta("sample_period", config::format_number(k_sample_s));
@@ -83,7 +83,7 @@ void write_stream_row(table::Writer& w, const StreamRow& r, const Rig& rig) {
   w.row({r.t_s, r.rpm, r.counts, r.duty, r.duty * rig.supply_V, r.rpm_cmd, r.clutch, r_load});
 }
 
-int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostream& out, std::ostream& err) {
+int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostream& out, Diagnostics& diag) {
   constexpr double k_sample_s = MCG_STREAM_PERIOD_MS * 1e-3;
   const auto window_samples = static_cast<int>(std::llround(options.window_s / k_sample_s));
   if (window_samples < 1 || std::abs(window_samples * k_sample_s - options.window_s) > 1e-9) {
@@ -156,8 +156,8 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
     if (!back) return false;
     const double silence_s = seconds_since(last_block);
     assembler.restart();
-    err << fmt::format("mcg-serial: note: {}: {}; back after {} s, the gap is a row of nan in the capture\n",
-                       link.port, why, config::format_number(std::round(silence_s * 10.0) / 10.0));
+    diag.note(fmt::format("{}: {}; back after {} s, the gap is a row of nan in the capture", link.port, why,
+                          config::format_number(std::round(silence_s * 10.0) / 10.0)));
     idle_from = Clock::now();
     return true;
   };
@@ -214,8 +214,8 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
   }
   if (!ended_by.empty()) fail("{} ({} samples captured are on stdout)", ended_by, written);
   if (assembler.breaks() > 0) {
-    err << fmt::format("mcg-serial: note: {} break{} in the stream (a row of nan each)\n", assembler.breaks(),
-                       assembler.breaks() == 1 ? "" : "s");
+    diag.note(fmt::format("{} break{} in the stream (a row of nan each)", assembler.breaks(),
+                          assembler.breaks() == 1 ? "" : "s"));
   }
   DecoderStats st = before_reconnect;
   if (c) {
@@ -226,10 +226,9 @@ int run_stream(const LinkOptions& link, const StreamOptions& options, std::ostre
   }
   const std::uint64_t lost = assembler.lost_samples();
   if (lost > 0) {
-    err << fmt::format(
-        "mcg-serial: lost {} of {} samples ({} stream blocks; {} damaged frames, {} bytes of noise)\n", lost,
-        static_cast<std::uint64_t>(written), lost / MCG_STREAM_SAMPLES,
-        st.bad_crc + st.too_long + st.timeouts, st.skipped_bytes);
+    diag.report(fmt::format("lost {} of {} samples ({} stream blocks; {} damaged frames, {} bytes of noise)",
+                            lost, static_cast<std::uint64_t>(written), lost / MCG_STREAM_SAMPLES,
+                            st.bad_crc + st.too_long + st.timeouts, st.skipped_bytes));
     if (!options.allow_loss) return k_exit_lost_samples;
   }
   return 0;

@@ -1,15 +1,6 @@
 // mcg-sweep's two halves: excitation tables out, frequency responses of measured tables.
 #include "signal/sweep.hpp"
 
-#include "common/checked.hpp"
-#include "common/error.hpp"
-#include "common/quote.hpp"
-#include "config/ini.hpp"
-#include "mcg/version.hpp"
-#include "signal/excitation.hpp"
-#include "signal/spectrum.hpp"
-#include "table/table.hpp"
-
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -17,6 +8,16 @@
 #include <ostream>
 #include <random>
 #include <sstream>
+
+#include "common/checked.hpp"
+#include "common/diagnostics.hpp"
+#include "common/error.hpp"
+#include "common/quote.hpp"
+#include "config/ini.hpp"
+#include "mcg/version.hpp"
+#include "signal/excitation.hpp"
+#include "signal/spectrum.hpp"
+#include "table/table.hpp"
 
 namespace mcg::signal {
 
@@ -279,7 +280,7 @@ void generate(Generator generator, const GeneratorOptions& o, std::ostream& out)
   // The table's size is checked before anything is allocated: its rows, and a chirp's frame.
   const std::optional<std::size_t> samples = grid_samples(o.dt_s, duration);
   if (!samples) {
-    fail("{} at --dt {} s is {} rows, more than the {} mcg-sweep writes",
+    fail("{} at --dt {} s is {} rows, more than the {} written at most",
          duration_text(generator, o, duration), format_number(o.dt_s),
          format_number(std::floor(duration / o.dt_s)), k_max_rows);
   }
@@ -292,7 +293,7 @@ void generate(Generator generator, const GeneratorOptions& o, std::ostream& out)
   const std::size_t lead =
       generator == Generator::chirp && o.settle_s > 0 ? whole_samples(o.settle_s, o.dt_s, "--settle") : 0;
   if (2 * lead + *samples > k_max_rows) {
-    fail("--settle {} s twice and {} at --dt {} s is {} rows, more than the {} mcg-sweep writes",
+    fail("--settle {} s twice and {} at --dt {} s is {} rows, more than the {} written at most",
          format_number(o.settle_s), duration_text(generator, o, duration), format_number(o.dt_s),
          2 * lead + *samples, k_max_rows);
   }
@@ -309,7 +310,7 @@ void generate(Generator generator, const GeneratorOptions& o, std::ostream& out)
   }
 
   table::Writer w(out);
-  w.meta("source", fmt::format("mcg-sweep {}", k_version));
+  w.meta("source", fmt::format("{} {}", o.tool, k_version));
   w.meta("sample_period", format_number(o.dt_s));
   for (const auto& [key, value] : e.meta.entries()) w.meta(key, value);
   w.header({"t", o.column, "clutch", "r_load"});
@@ -323,15 +324,15 @@ void generate(Generator generator, const GeneratorOptions& o, std::ostream& out)
   w.finish();
 }
 
-void bode(const BodeOptions& o, std::ostream& out, std::ostream& warn) {
-  bode(table::read_path(o.input), o, out, warn);
+void bode(const BodeOptions& o, std::ostream& out, Diagnostics& diag) {
+  bode(table::read_path(o.input), o, out, diag);
 }
 
-void bode(const table::Table& input, const BodeOptions& o, std::ostream& out, std::ostream& warn) {
+void bode(const table::Table& input, const BodeOptions& o, std::ostream& out, Diagnostics& diag) {
   table::Table tbl = input;
   // A capture starts with rows the speed estimator has not filled yet: skipped, and said so.
   if (const auto skipped = table::leading_unmeasured(tbl, {o.in_column, o.out_column}); skipped.rows > 0) {
-    warn << "mcg-sweep: note: " << table::skipped_note(tbl, skipped) << '\n';
+    diag.note(table::skipped_note(tbl, skipped));
     tbl = table::drop_leading(tbl, skipped.rows);
   }
   const std::vector<double>& t_in = tbl.col("t");
@@ -366,7 +367,7 @@ void bode(const table::Table& input, const BodeOptions& o, std::ostream& out, st
     const std::optional<std::size_t> samples =
         to_integer(std::floor(span_s / nominal + 1e-9) + 1.0, std::size_t{0}, k_max_rows);
     if (!samples) {
-      fail("{} resamples the {} s of uneven rows to {} samples, more than the {} mcg-sweep resamples to",
+      fail("{} resamples the {} s of uneven rows to {} samples, more than the {} resampled to at most",
            nominal_from, format_number(span_s), format_number(std::floor(span_s / nominal) + 1.0),
            k_max_rows);
     }
@@ -380,9 +381,10 @@ void bode(const table::Table& input, const BodeOptions& o, std::ostream& out, st
     y_even = resample_linear(t_in, y_in, dt);
     x = x_even;
     y = y_even;
-    warn << fmt::format("mcg-sweep: warning: {}: uneven sampling (steps {:.4g} to {:.4g} s); resampled to {:.6g} s "
-                        "by linear interpolation\n",
-                        tbl.source, spacing.min_dt_s, spacing.max_dt_s, dt);
+    diag.warning(
+        fmt::format("{}: uneven sampling (steps {:.4g} to {:.4g} s); resampled to {:.6g} s by linear "
+                    "interpolation",
+                    tbl.source, spacing.min_dt_s, spacing.max_dt_s, dt));
   }
 
   // Lines come from --lines/--period, else from the multisine generator's metadata.
@@ -415,7 +417,7 @@ void bode(const table::Table& input, const BodeOptions& o, std::ostream& out, st
   table::Metadata meta = tbl.meta;
   meta.erase("sample_period");
   meta.erase("timing");
-  meta.set("source", fmt::format("mcg-sweep {} bode", k_version));
+  meta.set("source", fmt::format("{} {} bode", o.tool, k_version));
   meta.set("response", fmt::format("{} -> {}", o.in_column, o.out_column));
   if (use_lines) {
     // One period at least must fit the record (line_response says so for a shorter one).

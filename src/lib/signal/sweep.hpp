@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "common/diagnostics.hpp"
+
 namespace mcg::table {
 struct Table;
 }
@@ -46,6 +48,7 @@ struct GeneratorOptions {
   std::string phases = "schroeder";  ///< multisine: schroeder, random (--seed), zero
   int order = 10;             ///< prbs/aprbs register length
   std::optional<double> clock_s;  ///< prbs/aprbs bit time; default dt
+  std::string tool;               ///< the tool's name, for the table's source metadata
 };
 
 /// Writes the excitation table. Throws mcg::Error for inconsistent options (a band above
@@ -66,13 +69,14 @@ struct BodeOptions {
   std::optional<double> period_s;
   std::optional<double> f_min_hz;
   std::optional<double> f_max_hz;
+  std::string tool;  ///< the tool's name, for the response's source metadata
 };
 
 /// Reads the table, estimates the response from in_column to out_column and writes
 /// f_hz, mag_db, phase_deg, coherence. Uneven sampling is resampled by linear interpolation
-/// with one warning line on `warn` ("mcg-sweep: warning: ...").
-void bode(const BodeOptions& options, std::ostream& out, std::ostream& warn);
+/// with one warning on `diag`; leading rows not measured yet are skipped with a note.
+void bode(const BodeOptions& options, std::ostream& out, Diagnostics& diag);
 /// bode() of a table already read (options.input unused).
-void bode(const table::Table& table, const BodeOptions& options, std::ostream& out, std::ostream& warn);
+void bode(const table::Table& table, const BodeOptions& options, std::ostream& out, Diagnostics& diag);
 
 }  // namespace mcg::signal
