@@ -178,7 +178,10 @@ typedef struct {
 #define MCG_REG_EXC_OFFSET 0x21u
 #define MCG_REG_EXC_PERIODS 0x22u
 #define MCG_REG_EXC_RUN 0x23u
-#define MCG_REG_COUNT 0x24u /* ids 0x01..MCG_REG_COUNT-1 exist, in the order of MCG_REGISTERS */
+#define MCG_REG_EXC_F0 0x24u
+#define MCG_REG_EXC_F1 0x25u
+#define MCG_REG_EXC_SWEEP 0x26u
+#define MCG_REG_COUNT 0x27u /* ids 0x01..MCG_REG_COUNT-1 exist, in the order of MCG_REGISTERS */
 
 /* Access column. */
 #define MCG_RO 0u /* read only: a write is refused with MCG_ST_READ_ONLY */
@@ -202,6 +205,8 @@ typedef struct {
 #define MCG_UNIT_CLUTCH 10u  /* MCG_CLUTCH_*: the clutch states of mcg-csv(5) the board can take */
 #define MCG_UNIT_EXC 11u     /* MCG_EXC_* */
 #define MCG_UNIT_LEVEL 12u   /* the excitation's target: 1/1000 duty in mode open, rpm in p, pi, pid */
+#define MCG_UNIT_CHZ 13u     /* 1/100 Hz */
+#define MCG_UNIT_S 14u       /* seconds */
 
 #define MCG_I16_MIN (-32767 - 1)
 #define MCG_I16_MAX 32767
@@ -209,7 +214,9 @@ typedef struct {
 /* X(NAME, name, access, min, max, power-on value, unit, doc), one row per register in id order.
  * min..max is the static range a write must meet (for MCG_RO: the range a read can show); the
  * firmware checks the dynamic parts the doc names (duty within duty_min..duty_max, duty_min <=
- * duty_max). Plain C89 tokens and literals: SDCC expands it into code-memory tables. */
+ * duty_max). Plain C89 tokens and literals: SDCC expands it into code-memory tables. One row a line,
+ * as written (not reflowed), so that a new row is a one-line change. */
+/* clang-format off */
 #define MCG_REGISTERS(X) \
   X(MODE, "mode", MCG_RS, 0, MCG_MODE_COUNT - 1, MCG_MODE_OPEN, MCG_UNIT_MODE, "controller: open, p, pi, pid") \
   X(RPM_CMD, "rpm_cmd", MCG_RW, 120, 720, 420, MCG_UNIT_RPM, "speed command, rpm") \
@@ -242,16 +249,20 @@ typedef struct {
   X(STREAM_SEQ, "stream_seq", MCG_RO, 0, 255, 0, MCG_UNIT_COUNT, "sequence number of the next stream block") \
   X(COMMIT, "commit", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, \
     "write 1: the staged controller set becomes active at the next tick; 0: discards it; read: 1 if one is pending") \
-  X(EXC_KIND, "exc_kind", MCG_RW, MCG_EXC_NONE, MCG_EXC_STAIRCASE, MCG_EXC_NONE, MCG_UNIT_EXC, \
-    "excitation: none, prbs, staircase (a step is a staircase of one stair)") \
+  X(EXC_KIND, "exc_kind", MCG_RW, MCG_EXC_NONE, MCG_EXC_CHIRP, MCG_EXC_NONE, MCG_UNIT_EXC, \
+    "excitation: none, prbs, staircase (a step is a staircase of one stair), chirp") \
   X(EXC_ORDER, "exc_order", MCG_RW, 2, 16, 9, MCG_UNIT_BITS, "PRBS LFSR order n: 2^n - 1 bits per period") \
   X(EXC_STEPS, "exc_steps", MCG_RW, 1, 100, 1, MCG_UNIT_COUNT, "staircase stairs above exc_offset") \
-  X(EXC_DIV, "exc_div", MCG_RW, 1, 30000, 1, MCG_UNIT_MS, "ticks per PRBS bit or per stair (clock divider)") \
-  X(EXC_AMP, "exc_amp", MCG_RW, -2000, 2000, 0, MCG_UNIT_LEVEL, "PRBS: offset +- amp; staircase: rise per stair") \
+  X(EXC_DIV, "exc_div", MCG_RW, 1, 30000, 1, MCG_UNIT_MS, "ticks per PRBS bit, stair or chirp level") \
+  X(EXC_AMP, "exc_amp", MCG_RW, -2000, 2000, 0, MCG_UNIT_LEVEL, "PRBS: offset +- amp; staircase: rise per stair; chirp: amplitude") \
   X(EXC_OFFSET, "exc_offset", MCG_RW, -1000, 1000, 0, MCG_UNIT_LEVEL, "level the excitation starts from and ends at") \
   X(EXC_PERIODS, "exc_periods", MCG_RW, 0, 255, 1, MCG_UNIT_COUNT, "periods played, 0: until exc_run 0") \
   X(EXC_RUN, "exc_run", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, \
-    "write 1: start on the next stream sample (duty in mode open, rpm_cmd otherwise); 0: stop; read: 1 running")
+    "write 1: start on the next stream sample (duty in mode open, rpm_cmd otherwise); 0: stop; read: 1 running") \
+  X(EXC_F0, "exc_f0", MCG_RW, 1, 30000, 10, MCG_UNIT_CHZ, "chirp: start frequency, Hz") \
+  X(EXC_F1, "exc_f1", MCG_RW, 1, 30000, 1000, MCG_UNIT_CHZ, "chirp: end frequency, Hz") \
+  X(EXC_SWEEP, "exc_sweep", MCG_RW, 1, 600, 10, MCG_UNIT_S, "chirp: seconds per sweep (one period)")
+/* clang-format on */
 
 #define MCG_MODE_OPEN 0u /* duty from MCG_REG_DUTY (keypad up/down) */
 #define MCG_MODE_P 1u    /* u = bias + Kp e */
@@ -268,6 +279,7 @@ typedef struct {
 #define MCG_EXC_NONE 0u
 #define MCG_EXC_PRBS 1u      /* maximal-length LFSR, exc_order bits, exc_div ticks per bit */
 #define MCG_EXC_STAIRCASE 2u /* exc_steps + 1 levels, exc_div ticks each */
+#define MCG_EXC_CHIRP 3u     /* linear sweep exc_f0 -> exc_f1 over exc_sweep s, a level every exc_div ticks */
 
 #define MCG_SEQ_STOP 0u
 #define MCG_SEQ_PLAY 1u /* play once from entry 0 */

@@ -33,7 +33,8 @@ double seconds_since(Clock::time_point t0) {
 /// Starts the excitation the exc_* registers hold, with the stream off so that the board turns it on
 /// with the first level (t = 0 is the excitation's start); returns its description in the column's
 /// units: "prbs column=duty order=9 clock=0.003 amp=0.2 bias=0.4 periods=2" (duty as a fraction, as
-/// mcg-csv's duty column; rpm_cmd in rpm; the clock or the hold in s).
+/// mcg-csv's duty column; rpm_cmd in rpm; the clock, the hold or a chirp's update in s, its
+/// frequencies in Hz and its sweep in s: "chirp column=duty f0=0.1 f1=10 sweep=10 update=0.001 ...").
 std::string start_excitation(Connection& c) {
   const auto raw = [&](std::string_view name) { return c.session->read(require_register(name)); };
   const std::int16_t kind = raw("exc_kind");
@@ -43,11 +44,17 @@ std::string start_excitation(Connection& c) {
   const double scale = rpm ? 1.0 : 1e-3;
   const auto level = [&](std::string_view name) { return config::format_number(raw(name) * scale); };
   const std::string clock = config::format_number(raw("exc_div") * 1e-3);
-  std::string text = kind == MCG_EXC_PRBS
-                         ? fmt::format("prbs column={} order={} clock={}", rpm ? "rpm_cmd" : "duty",
-                                       raw("exc_order"), clock)
-                         : fmt::format("staircase column={} steps={} hold={}", rpm ? "rpm_cmd" : "duty",
-                                       raw("exc_steps"), clock);
+  const std::string column = rpm ? "rpm_cmd" : "duty";
+  std::string text;
+  if (kind == MCG_EXC_PRBS) {
+    text = fmt::format("prbs column={} order={} clock={}", column, raw("exc_order"), clock);
+  } else if (kind == MCG_EXC_CHIRP) {
+    const auto hz = [&](std::string_view name) { return config::format_number(raw(name) / 100.0); };
+    text = fmt::format("chirp column={} f0={} f1={} sweep={} update={}", column, hz("exc_f0"), hz("exc_f1"),
+                       raw("exc_sweep"), clock);
+  } else {
+    text = fmt::format("staircase column={} steps={} hold={}", column, raw("exc_steps"), clock);
+  }
   text +=
       fmt::format(" amp={} bias={} periods={}", level("exc_amp"), level("exc_offset"), raw("exc_periods"));
   c.session->write(require_register("exc_run"), 1);
