@@ -123,8 +123,9 @@ int main(int argc, char** argv) {
   mcg::signal::BodeOptions bode;
   CLI::App* bode_cmd = app.add_subcommand("bode", "frequency response f_hz,mag_db,phase_deg,coherence");
   bode_cmd->add_option("file", bode.input, "input table (- = stdin)")->capture_default_str();
-  bode_cmd->add_option("--in", bode.in_column, "input column")->capture_default_str();
-  bode_cmd->add_option("--out", bode.out_column, "output column")->capture_default_str();
+  bode_cmd->add_option("--in", bode.in_column,
+                       "input column (default: the excitation line's column, else v)");
+  bode_cmd->add_option("--out", bode.out_column, "output column (default: omega, else rpm)");
   bode_cmd->add_option("--method", bode.method, "auto (lines when the table is a multisine), welch or lines")
       ->transform(CLI::CheckedTransformer(std::map<std::string, mcg::signal::BodeMethod>{
           {"auto", mcg::signal::BodeMethod::automatic},

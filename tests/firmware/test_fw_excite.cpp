@@ -334,3 +334,16 @@ TEST(FwExcite, HostPlaysTheChirpTheEightOFiftyOnePlays) {
 }
 
 }  // namespace
+
+namespace {
+
+// A PRBS with a negative amplitude plays offset -+ amp: its range check takes those two levels, not
+// the staircase's top stair (500 - 3 x 200 would be below duty_min and refused).
+TEST(FwExcite, NegativePrbsAmplitudeIsCheckedOnItsOwnLevels) {
+  fwtest::Board b;
+  setup_prbs(b, 4, 1, -200, 500, 1);
+  ASSERT_EQ(b.write(MCG_REG_EXC_STEPS, 3), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+}
+
+}  // namespace

@@ -1,24 +1,24 @@
 // mcg-serial stream: live stream blocks to CSV, with loss accounting.
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
 #include <ostream>
 
-#include <unistd.h>
-
-#include "common/error.hpp"       // mcg::fail
+#include "common/error.hpp"  // mcg::fail
 #include "common/quote.hpp"
 #include "config/ini.hpp"         // format_number
 #include "link/capture_meta.hpp"  // load_rig, board_config
 #include "link/connection.hpp"    // connect
 #include "link/interrupt.hpp"     // InterruptGuard
 #include "link/serial.hpp"
-#include "link/stream_block.hpp"        // StreamAssembler
-#include "mcg/version.hpp"              // k_version
-#include "measurement/measurement.hpp"  // CountEstimator, format_rpm_estimator
-#include "model/model.hpp"              // model_from_ini, k_open_circuit
-#include "table/table.hpp"              // Writer
+#include "link/stream_block.hpp"             // StreamAssembler
+#include "mcg/version.hpp"                   // k_version
+#include "measurement/board_excitation.hpp"  // format_board_excitation
+#include "measurement/measurement.hpp"       // CountEstimator, format_rpm_estimator
+#include "model/model.hpp"                   // model_from_ini, k_open_circuit
+#include "table/table.hpp"                   // Writer
 
 namespace mcg::link {
 
@@ -42,21 +42,26 @@ std::string start_excitation(Connection& c) {
   if (raw("stream") != 0) fail("--then excite: the stream is already on (another capture?)");
   const bool rpm = raw("mode") != MCG_MODE_OPEN;
   const double scale = rpm ? 1.0 : 1e-3;
-  const auto level = [&](std::string_view name) { return config::format_number(raw(name) * scale); };
-  const std::string clock = config::format_number(raw("exc_div") * 1e-3);
-  const std::string column = rpm ? "rpm_cmd" : "duty";
-  std::string text;
+  const double clock_s = raw("exc_div") * 1e-3;
+  measurement::BoardExcitation e;
+  e.column = rpm ? "rpm_cmd" : "duty";
   if (kind == MCG_EXC_PRBS) {
-    text = fmt::format("prbs column={} order={} clock={}", column, raw("exc_order"), clock);
+    e.kind = "prbs";
+    e.values = {{"order", raw("exc_order")}, {"clock", clock_s}};
   } else if (kind == MCG_EXC_CHIRP) {
-    const auto hz = [&](std::string_view name) { return config::format_number(raw(name) / 100.0); };
-    text = fmt::format("chirp column={} f0={} f1={} sweep={} update={}", column, hz("exc_f0"), hz("exc_f1"),
-                       raw("exc_sweep"), clock);
+    e.kind = "chirp";
+    e.values = {{"f0", raw("exc_f0") / 100.0},
+                {"f1", raw("exc_f1") / 100.0},
+                {"sweep", raw("exc_sweep")},
+                {"update", clock_s}};
   } else {
-    text = fmt::format("staircase column={} steps={} hold={}", column, raw("exc_steps"), clock);
+    e.kind = "staircase";
+    e.values = {{"steps", raw("exc_steps")}, {"hold", clock_s}};
   }
-  text +=
-      fmt::format(" amp={} bias={} periods={}", level("exc_amp"), level("exc_offset"), raw("exc_periods"));
+  e.values.emplace_back("amp", raw("exc_amp") * scale);
+  e.values.emplace_back("bias", raw("exc_offset") * scale);
+  e.values.emplace_back("periods", raw("exc_periods"));
+  const std::string text = measurement::format_board_excitation(e);
   c.session->write(require_register("exc_run"), 1);
   return text;
 }
