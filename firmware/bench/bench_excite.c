@@ -5,8 +5,8 @@
  * (exc_div 1), 3 PRBS on rpm_cmd in closed loop, a new bit every tick, 4 staircase on the duty, a
  * new stair every tick, 5 chirp on the duty, a new level every tick. Figures (min, max u16, sum u32)
  * go to BENCH_XADDR, then the timer overhead and the CRC-16 of the duties a PRBS (as set 2) and a
- * chirp (0.1 -> 50 Hz over 3 s, 400 +- 300, a level every tick) play over 10000 ticks each; the run
- * ends at bench_done(). */
+ * chirp (0.1 -> 50 Hz over 3 s, 400 +- 300, a level every tick) play over 10000 ticks each, and the
+ * cycles of the chirp's start (the write of exc_run 1); the run ends at bench_done(). */
 #include <8051.h>   /* TMOD, TH1, TL1, TR1 */
 #include <stdint.h> /* uint8_t, uint16_t, uint32_t */
 
@@ -25,6 +25,7 @@ static Figures MCG_XDATA MCG_AT(BENCH_XADDR) s_fig[BENCH_SETS];
 static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + BENCH_SETS * sizeof(Figures)) s_overhead;
 static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + BENCH_SETS * sizeof(Figures) + 2u) s_crc;
 static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + BENCH_SETS * sizeof(Figures) + 4u) s_crc_chirp;
+static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + BENCH_SETS * sizeof(Figures) + 6u) s_chirp_start;
 
 static uint16_t cycles_now(void) {
   uint8_t hi, lo;
@@ -59,7 +60,11 @@ static void chirp(void) {
   regs_write(MCG_REG_EXC_AMP, 300);
   regs_write(MCG_REG_EXC_OFFSET, 400);
   regs_write(MCG_REG_EXC_PERIODS, 0);
-  regs_write(MCG_REG_EXC_RUN, 1);
+  {
+    uint16_t MCG_XDATA t0 = cycles_now();
+    regs_write(MCG_REG_EXC_RUN, 1); /* the start scales the sine table */
+    s_chirp_start = (uint16_t)(cycles_now() - t0 - s_overhead);
+  }
 }
 
 /* The CRC-16 of the duties the running excitation plays over BENCH_PLAY_MS ticks (its locals in

@@ -8,8 +8,8 @@
  * Chirp: a linear sweep from exc_f0 to exc_f1 over exc_sweep s, one level every exc_div ticks (an
  * update), N = exc_sweep 1000 / exc_div updates a period. A phase accumulator in 1/2^32 turns: the
  * level of update k is exc_offset + round(exc_amp sin(2 pi phase_k)), phase_0 = 0, phase_k+1 =
- * phase_k + w_k, w_k = w(f0) + floor(k (w(f1) - w(f0)) / N) with w(f) = f exc_div 2^32 / 1000 Hz
- * (the fraction carried exactly, so w_N = w(f1)). The sine is a quarter-wave table of 65 points
+ * phase_k + w_k, w_k = w(f0) + k (w(f1) - w(f0)) / N rounded toward w(f0), w(f) = f exc_div 2^32 /
+ * 1000 Hz (the fraction carried exactly, so w_N = w(f1)). The sine is a quarter-wave table of 65 points
  * (256 a turn, the phase truncated to 8 bits): a level is off the exact sine by at most
  * 2 pi / 256 of exc_amp, and the board plays, streams and regenerates on the host the same levels.
  * After exc_periods periods (0: until exc_run is written 0) the target returns to exc_offset.
@@ -137,7 +137,6 @@ static uint8_t levels_ok(void) {
 /* Sets up a chirp's sweep; 0 if it cannot be played (a frequency too high, no whole update).
  * Reentrant: its temporaries go on the stack, as the 8051's internal RAM has no room for them. */
 static uint8_t chirp_setup(void) MCG_REENTRANT {
-  uint8_t j;
   uint32_t x0 = (uint32_t)g_exc_f0 * g_exc_div;
   uint32_t x1 = (uint32_t)g_exc_f1 * g_exc_div;
   s_n = (uint32_t)g_exc_sweep * (uint32_t)1000u / g_exc_div;
@@ -158,12 +157,17 @@ static uint8_t chirp_setup(void) MCG_REENTRANT {
   if (s_dunit != 1u) {
     s_dq = (uint32_t)0u - s_dq;
   }
-  /* 2 amp k_sine[j] in Q15 is amp sin in Q16: a level is the product's high word, rounded half up. */
-  for (j = 0; j < 65u; ++j) {
-    s_wave[j] =
-        (int16_t)((arith_mul16((int16_t)(2 * g_exc_amp), (int16_t)k_sine[j]) + (int32_t)0x8000) >> 16);
-  }
   return 1;
+}
+
+/* s_wave: 2 amp k_sine[j] in Q15 is amp sin in Q16, so a level is the product's high word, rounded
+ * half up. Not reentrant, its locals in external RAM (see chirp_next). */
+static void chirp_scale(void) {
+  uint8_t MCG_XDATA j;
+  int16_t MCG_XDATA amp2 = (int16_t)(2 * g_exc_amp);
+  for (j = 0; j < 65u; ++j) {
+    s_wave[j] = (int16_t)((arith_mul16(amp2, (int16_t)k_sine[j]) + (int32_t)0x8000) >> 16);
+  }
 }
 
 static void chirp_restart(void) {
@@ -228,6 +232,7 @@ uint8_t excite_set_run(uint8_t run) {
     if (!chirp_setup()) {
       return MCG_ST_RANGE;
     }
+    chirp_scale();
     s_lo = (int32_t)g_exc_offset - g_exc_amp;
     s_hi = (int32_t)g_exc_offset + g_exc_amp;
     chirp_restart();
