@@ -3,8 +3,10 @@
  * cycles, its reading overhead subtracted). Sets of 256 ticks: 0 idle (no excitation), 1 PRBS on
  * the duty holding a bit (exc_div 2, the ticks that hold), 2 PRBS on the duty with a new bit every tick
  * (exc_div 1), 3 PRBS on rpm_cmd in closed loop, a new bit every tick, 4 staircase on the duty, a
- * new stair every tick. Figures (min, max u16, sum u32) go to BENCH_XADDR, then the CRC-16 of the
- * duties set 2 played over 10000 ticks; the run ends at bench_done(). */
+ * new stair every tick, 5 chirp on the duty, a new level every tick. Figures (min, max u16, sum u32)
+ * go to BENCH_XADDR, then the timer overhead and the CRC-16 of the duties a PRBS (as set 2) and a
+ * chirp (0.1 -> 50 Hz over 3 s, 400 +- 300, a level every tick) play over 10000 ticks each, and the
+ * cycles of the chirp's start (the write of exc_run 1); the run ends at bench_done(). */
 #include <8051.h>   /* TMOD, TH1, TL1, TR1 */
 #include <stdint.h> /* uint8_t, uint16_t, uint32_t */
 
@@ -12,7 +14,7 @@
 
 #define BENCH_XADDR 0x9F00u
 #define BENCH_RUNS 256u
-#define BENCH_SETS 5u
+#define BENCH_SETS 6u
 #define BENCH_PLAY_MS 10000u
 
 typedef struct {
@@ -22,6 +24,8 @@ typedef struct {
 static Figures MCG_XDATA MCG_AT(BENCH_XADDR) s_fig[BENCH_SETS];
 static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + BENCH_SETS * sizeof(Figures)) s_overhead;
 static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + BENCH_SETS * sizeof(Figures) + 2u) s_crc;
+static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + BENCH_SETS * sizeof(Figures) + 4u) s_crc_chirp;
+static uint16_t MCG_XDATA MCG_AT(BENCH_XADDR + BENCH_SETS * sizeof(Figures) + 6u) s_chirp_start;
 
 static uint16_t cycles_now(void) {
   uint8_t hi, lo;
@@ -43,6 +47,37 @@ static void prbs(uint8_t div, int16_t amp, int16_t offset) {
   regs_write(MCG_REG_EXC_OFFSET, offset);
   regs_write(MCG_REG_EXC_PERIODS, 0);
   regs_write(MCG_REG_EXC_RUN, 1);
+}
+
+/* 0.1 -> 50 Hz over 3 s on the duty, 400 +- 300, a level every tick, endless. */
+static void chirp(void) {
+  regs_write(MCG_REG_EXC_RUN, 0);
+  regs_write(MCG_REG_EXC_KIND, MCG_EXC_CHIRP);
+  regs_write(MCG_REG_EXC_F0, 10);
+  regs_write(MCG_REG_EXC_F1, 5000);
+  regs_write(MCG_REG_EXC_SWEEP, 3);
+  regs_write(MCG_REG_EXC_DIV, 1);
+  regs_write(MCG_REG_EXC_AMP, 300);
+  regs_write(MCG_REG_EXC_OFFSET, 400);
+  regs_write(MCG_REG_EXC_PERIODS, 0);
+  {
+    uint16_t MCG_XDATA t0 = cycles_now();
+    regs_write(MCG_REG_EXC_RUN, 1); /* the start scales the sine table */
+    s_chirp_start = (uint16_t)(cycles_now() - t0 - s_overhead);
+  }
+}
+
+/* The CRC-16 of the duties the running excitation plays over BENCH_PLAY_MS ticks (its locals in
+ * external RAM: the internal RAM is spent). */
+static uint16_t play_crc(void) {
+  uint16_t MCG_XDATA i;
+  uint16_t MCG_XDATA crc = MCG_CRC_INIT;
+  for (i = 0; i < BENCH_PLAY_MS; ++i) {
+    excite_tick();
+    crc = (uint16_t)mcg_crc16_update(crc, (unsigned)g_duty_set & 0xFFu);
+    crc = (uint16_t)mcg_crc16_update(crc, (unsigned)g_duty_set >> 8 & 0xFFu);
+  }
+  return crc;
 }
 
 void main(void) {
@@ -80,6 +115,8 @@ void main(void) {
       regs_write(MCG_REG_EXC_AMP, 5);
       regs_write(MCG_REG_EXC_OFFSET, 100);
       regs_write(MCG_REG_EXC_RUN, 1);
+    } else if (m == 5) {
+      chirp();
     }
     excite_tick(); /* the start tick */
     s_fig[m].min = 0xFFFFu;
@@ -106,12 +143,9 @@ void main(void) {
   regs_write(MCG_REG_MODE, MCG_MODE_OPEN);
   regs_write(MCG_REG_COMMIT, 1);
   prbs(1, 200, 400);
-  s_crc = MCG_CRC_INIT;
-  for (i = 0; i < BENCH_PLAY_MS; ++i) {
-    excite_tick();
-    s_crc = (uint16_t)mcg_crc16_update(s_crc, (unsigned)g_duty_set & 0xFFu);
-    s_crc = (uint16_t)mcg_crc16_update(s_crc, (unsigned)g_duty_set >> 8 & 0xFFu);
-  }
+  s_crc = play_crc();
+  chirp();
+  s_crc_chirp = play_crc();
   bench_done();
   for (;;) {
   }

@@ -144,18 +144,19 @@ uint8_t seq_set_state(uint8_t state);
 extern uint8_t MCG_XDATA g_seq_len;
 extern uint8_t MCG_XDATA g_seq_state;
 
-/* excite.c: identification inputs played by the board (PRBS, staircase) ------------------------ */
+/* excite.c: identification inputs played by the board (PRBS, staircase, chirp) ----------------- */
 void excite_init(void);
 /* Before the control update of every tick: the next level of a running excitation. */
 void excite_tick(void);
 /* 1 starts (MCG_ST_RANGE if no kind is set or a level is out of the target's range), 0 stops and
  * returns the target to exc_offset. */
 uint8_t excite_set_run(uint8_t run);
-/* Stores one setting (exc_kind .. exc_periods, range-checked by regs_write). */
+/* Stores one setting (exc_kind .. exc_periods, exc_f0 .. exc_sweep, range-checked by regs_write). */
 void excite_set(uint8_t reg, int16_t v) MCG_REENTRANT;
 extern uint8_t MCG_XDATA g_exc_kind, g_exc_order, g_exc_steps, g_exc_periods, g_exc_run;
 extern uint16_t MCG_XDATA g_exc_div;
 extern int16_t MCG_XDATA g_exc_amp, g_exc_offset;
+extern uint16_t MCG_XDATA g_exc_f0, g_exc_f1, g_exc_sweep;
 
 /* menu.c: keypad and LCD --------------------------------------------------------------------- */
 void menu_init(void);

@@ -162,6 +162,15 @@ uint8_t regs_read(uint8_t reg, int16_t* value) MCG_REENTRANT {
     case MCG_REG_EXC_RUN:
       v = g_exc_run;
       break;
+    case MCG_REG_EXC_F0:
+      v = (int16_t)g_exc_f0;
+      break;
+    case MCG_REG_EXC_F1:
+      v = (int16_t)g_exc_f1;
+      break;
+    case MCG_REG_EXC_SWEEP:
+      v = (int16_t)g_exc_sweep;
+      break;
     default:
       return MCG_ST_BAD_REG;
   }

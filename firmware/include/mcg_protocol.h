@@ -184,7 +184,10 @@ typedef struct {
 #define MCG_REG_EXC_OFFSET 0x21u
 #define MCG_REG_EXC_PERIODS 0x22u
 #define MCG_REG_EXC_RUN 0x23u
-#define MCG_REG_COUNT 0x24u /* ids 0x01..MCG_REG_COUNT-1 exist, in the order of MCG_REGISTERS */
+#define MCG_REG_EXC_F0 0x24u
+#define MCG_REG_EXC_F1 0x25u
+#define MCG_REG_EXC_SWEEP 0x26u
+#define MCG_REG_COUNT 0x27u /* ids 0x01..MCG_REG_COUNT-1 exist, in the order of MCG_REGISTERS */
 
 /* Access column. */
 #define MCG_RO 0u /* read only: a write is refused with MCG_ST_READ_ONLY */
@@ -208,6 +211,8 @@ typedef struct {
 #define MCG_UNIT_CLUTCH 10u  /* MCG_CLUTCH_*: the clutch states of mcg-csv(5) the board can take */
 #define MCG_UNIT_EXC 11u     /* MCG_EXC_* */
 #define MCG_UNIT_LEVEL 12u   /* the excitation's target: 1/1000 duty in mode open, rpm in p, pi, pid */
+#define MCG_UNIT_CHZ 13u     /* 1/100 Hz */
+#define MCG_UNIT_S 14u       /* seconds */
 
 #define MCG_I16_MIN (-32767 - 1)
 #define MCG_I16_MAX 32767
@@ -289,23 +294,29 @@ typedef struct {
   X(COMMIT, "commit", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, \
     MCG_CAP_NO, MCG_NO_KEY, \
     "write 1: the staged controller set becomes active at the next tick; 0: discards it; read: 1 if one is pending") \
-  X(EXC_KIND, "exc_kind", MCG_RW, MCG_EXC_NONE, MCG_EXC_STAIRCASE, MCG_EXC_NONE, MCG_UNIT_EXC, \
-    MCG_CAP_NO, MCG_NO_KEY, "excitation: none, prbs, staircase (a step is a staircase of one stair)") \
+  X(EXC_KIND, "exc_kind", MCG_RW, MCG_EXC_NONE, MCG_EXC_CHIRP, MCG_EXC_NONE, MCG_UNIT_EXC, \
+    MCG_CAP_NO, MCG_NO_KEY, "excitation: none, prbs, staircase (a step is a staircase of one stair), chirp") \
   X(EXC_ORDER, "exc_order", MCG_RW, 2, 16, 9, MCG_UNIT_BITS, \
     MCG_CAP_NO, MCG_NO_KEY, "PRBS LFSR order n: 2^n - 1 bits per period") \
   X(EXC_STEPS, "exc_steps", MCG_RW, 1, 100, 1, MCG_UNIT_COUNT, \
     MCG_CAP_NO, MCG_NO_KEY, "staircase stairs above exc_offset") \
   X(EXC_DIV, "exc_div", MCG_RW, 1, 30000, 1, MCG_UNIT_MS, \
-    MCG_CAP_NO, MCG_NO_KEY, "ticks per PRBS bit or per stair (clock divider)") \
+    MCG_CAP_NO, MCG_NO_KEY, "ticks per PRBS bit, stair or chirp level") \
   X(EXC_AMP, "exc_amp", MCG_RW, -2000, 2000, 0, MCG_UNIT_LEVEL, \
-    MCG_CAP_NO, MCG_NO_KEY, "PRBS: offset +- amp; staircase: rise per stair") \
+    MCG_CAP_NO, MCG_NO_KEY, "PRBS: offset +- amp; staircase: rise per stair; chirp: amplitude") \
   X(EXC_OFFSET, "exc_offset", MCG_RW, -1000, 1000, 0, MCG_UNIT_LEVEL, \
     MCG_CAP_NO, MCG_NO_KEY, "level the excitation starts from and ends at") \
   X(EXC_PERIODS, "exc_periods", MCG_RW, 0, 255, 1, MCG_UNIT_COUNT, \
     MCG_CAP_NO, MCG_NO_KEY, "periods played, 0: until exc_run 0") \
   X(EXC_RUN, "exc_run", MCG_RW, 0, 1, 0, MCG_UNIT_SWITCH, \
     MCG_CAP_NO, MCG_NO_KEY, \
-    "write 1: start on the next stream sample (duty in mode open, rpm_cmd otherwise); 0: stop; read: 1 running") /* clang-format on */
+    "write 1: start on the next stream sample (duty in mode open, rpm_cmd otherwise); 0: stop; read: 1 running") \
+  X(EXC_F0, "exc_f0", MCG_RW, 1, 30000, 10, MCG_UNIT_CHZ, \
+    MCG_CAP_NO, MCG_NO_KEY, "chirp: start frequency, Hz") \
+  X(EXC_F1, "exc_f1", MCG_RW, 1, 30000, 1000, MCG_UNIT_CHZ, \
+    MCG_CAP_NO, MCG_NO_KEY, "chirp: end frequency, Hz") \
+  X(EXC_SWEEP, "exc_sweep", MCG_RW, 1, 600, 10, MCG_UNIT_S, \
+    MCG_CAP_NO, MCG_NO_KEY, "chirp: seconds per sweep (one period)") /* clang-format on */
 
 #define MCG_MODE_OPEN 0u /* duty from MCG_REG_DUTY (keypad up/down) */
 #define MCG_MODE_P 1u    /* u = bias + Kp e */
@@ -322,6 +333,7 @@ typedef struct {
 #define MCG_EXC_NONE 0u
 #define MCG_EXC_PRBS 1u      /* maximal-length LFSR, exc_order bits, exc_div ticks per bit */
 #define MCG_EXC_STAIRCASE 2u /* exc_steps + 1 levels, exc_div ticks each */
+#define MCG_EXC_CHIRP 3u     /* linear sweep exc_f0 -> exc_f1 over exc_sweep s, a level every exc_div ticks */
 
 #define MCG_SEQ_STOP 0u
 #define MCG_SEQ_PLAY 1u /* play once from entry 0 */

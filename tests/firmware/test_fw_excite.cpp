@@ -1,6 +1,8 @@
 // test_fw_excite.cpp: the excitations the board plays (excite.c), checked against their definitions.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -221,6 +223,127 @@ TEST(FwExcite, StartTurnsTheStreamOnAtTheFirstLevel) {
   ASSERT_GE(duty.size(), 32u);
   for (std::size_t k = 0; k < 16; ++k) EXPECT_EQ(duty[k], 300) << "sample " << k;  // 64 ticks: stair 0
   for (std::size_t k = 16; k < 32; ++k) EXPECT_EQ(duty[k], 400) << "sample " << k;
+}
+
+}  // namespace
+
+namespace {
+
+void setup_chirp(fwtest::Board& b, int f0_chz, int f1_chz, int sweep_s, int div, int amp, int offset,
+                 int periods) {
+  ASSERT_EQ(b.write(MCG_REG_EXC_KIND, MCG_EXC_CHIRP), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_F0, f0_chz), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_F1, f1_chz), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_SWEEP, sweep_s), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_DIV, div), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_AMP, amp), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_OFFSET, offset), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_EXC_PERIODS, periods), MCG_ST_OK);
+}
+
+// The level of update k against the sweep's definition in double precision: phase_k (turns) =
+// k w0 + (w1 - w0) k (k - 1) / (2 N), w = f exc_div / 1000 Hz. The table's 256 points a turn put a
+// level within 2 pi / 256 of the amplitude, and the rounding within half a count, of the sine.
+void expect_chirp(const std::vector<int>& level, double f0_hz, double f1_hz, double sweep_s, int div, int amp,
+                  int offset) {
+  const double n = std::floor(sweep_s * 1000.0 / div);
+  const double w0 = f0_hz * div / 1000.0;
+  const double w1 = f1_hz * div / 1000.0;
+  const double bound = 2.0 * M_PI / 256.0 * std::abs(amp) + 0.5 + 1e-9;
+  double worst = 0.0;
+  for (std::size_t k = 0; k < level.size(); ++k) {
+    const double kk = std::fmod(static_cast<double>(k), n);  // a period restarts at phase 0
+    const double phase = kk * w0 + (w1 - w0) * kk * (kk - 1.0) / (2.0 * n);
+    const double want = offset + amp * std::sin(2.0 * M_PI * phase);
+    worst = std::max(worst, std::abs(level[k] - want));
+    ASSERT_LE(std::abs(level[k] - want), bound) << "update " << k << ": " << level[k] << " for " << want;
+  }
+  EXPECT_GT(worst, 0.5) << "the table's error shows (a test that cannot fail would not)";
+}
+
+TEST(FwExcite, ChirpSweepsAsDefined) {
+  fwtest::Board b;
+  setup_chirp(b, 50, 2000, 2, 1, 300, 400, 1);  // 0.5 -> 20 Hz over 2 s, a level every tick
+  ASSERT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  const std::vector<int> d = duties(b, 2000);
+  expect_chirp(d, 0.5, 20.0, 2.0, 1, 300, 400);
+  b.run(1);
+  EXPECT_EQ(host_board_duty(), 400) << "after its one period the duty is back at the offset";
+  EXPECT_EQ(b.read(MCG_REG_EXC_RUN), 0);
+}
+
+TEST(FwExcite, ChirpFallsHoldsAndRepeats) {
+  fwtest::Board b;
+  setup_chirp(b, 2500, 100, 1, 4, -150, 500, 2);  // 25 -> 1 Hz over 1 s, a level per 4 ticks, twice
+  ASSERT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  const std::vector<int> d = duties(b, 2000);
+  std::vector<int> level;
+  for (std::size_t k = 0; k < d.size(); k += 4) {
+    for (std::size_t i = 1; i < 4; ++i) ASSERT_EQ(d[k + i], d[k]) << "tick " << k + i << " holds its level";
+    level.push_back(d[k]);
+  }
+  expect_chirp(level, 25.0, 1.0, 1.0, 4, -150, 500);
+  EXPECT_EQ(std::vector<int>(d.begin(), d.begin() + 1000), std::vector<int>(d.begin() + 1000, d.end()));
+  b.run(1);
+  EXPECT_EQ(host_board_duty(), 500);
+}
+
+TEST(FwExcite, ChirpRefusesFrequenciesAtHalfTheUpdateRate) {
+  fwtest::Board b;
+  setup_chirp(b, 100, 25000, 10, 2, 100, 400, 1);  // 250 Hz with a level every 2 ms: the Nyquist rate
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_RANGE);
+  EXPECT_EQ(b.write(MCG_REG_EXC_F1, 24999), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 0), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_F0, 25000), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_RANGE) << "a falling sweep from there too";
+  EXPECT_EQ(b.write(MCG_REG_EXC_F0, 100), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_AMP, 700), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_RANGE) << "400 - 700 is below duty_min";
+  EXPECT_EQ(b.write(MCG_REG_EXC_AMP, -400), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK) << "0..800 with the amplitude's sign turned";
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 0), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_DIV, 20000), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_F1, 1), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_F0, 1), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_SWEEP, 10), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_RANGE) << "a sweep shorter than one update";
+}
+
+// The same 10 s of chirp that bench/bench_excite.c plays in s51 (see the PRBS's twin above).
+TEST(FwExcite, HostPlaysTheChirpTheEightOFiftyOnePlays) {
+  fwtest::Board b;
+  regs_write(MCG_REG_EXC_RUN, 0);
+  regs_write(MCG_REG_EXC_KIND, MCG_EXC_CHIRP);
+  regs_write(MCG_REG_EXC_F0, 10);
+  regs_write(MCG_REG_EXC_F1, 5000);
+  regs_write(MCG_REG_EXC_SWEEP, 3);
+  regs_write(MCG_REG_EXC_DIV, 1);
+  regs_write(MCG_REG_EXC_AMP, 300);
+  regs_write(MCG_REG_EXC_OFFSET, 400);
+  regs_write(MCG_REG_EXC_PERIODS, 0);
+  ASSERT_EQ(regs_write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  unsigned crc = MCG_CRC_INIT;
+  for (int i = 0; i < 10000; ++i) {
+    excite_tick();
+    const auto d = static_cast<std::uint16_t>(g_duty_set);
+    crc = mcg_crc16_update(crc, d & 0xFFu);
+    crc = mcg_crc16_update(crc, (d >> 8) & 0xFFu);
+  }
+  EXPECT_EQ(crc, 0x548Fu);
+}
+
+}  // namespace
+
+namespace {
+
+// A PRBS with a negative amplitude plays offset -+ amp: its range check takes those two levels, not
+// the staircase's top stair (500 - 3 x 200 would be below duty_min and refused).
+TEST(FwExcite, NegativePrbsAmplitudeIsCheckedOnItsOwnLevels) {
+  fwtest::Board b;
+  setup_prbs(b, 4, 1, -200, 500, 1);
+  ASSERT_EQ(b.write(MCG_REG_EXC_STEPS, 3), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
 }
 
 }  // namespace

@@ -42,6 +42,10 @@ std::string unit_text(unsigned unit) {
       return "MCG_EXC_*";
     case MCG_UNIT_LEVEL:
       return "duty 1/1000 or rpm";
+    case MCG_UNIT_CHZ:
+      return "1/100 Hz (host: Hz)";
+    case MCG_UNIT_S:
+      return "s";
     default:
       return "MCG_FLAG_*";
   }

@@ -43,6 +43,9 @@ sleep 1.5
 tmux -L "$session" send-keys -t "$session" w
 check "w again stops it" shows "recorded "
 check "the recording is a capture of more than 200 rows" test "$(rows rec.csv)" -gt 200
+check "the recording starts at t = 0" eval '[ "$(grep -v "^#" rec.csv | awk -F, "NR == 2 { print \$1 }")" = 0 ]'
+check "its metadata states the wall clock of its start" grep -Eq \
+  '^# t0: the first row streamed after the recording began at [0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9:.]{12}Z' rec.csv
 check "mcg-sim reads the recording unedited" eval 'mcg-sim --compare < rec.csv > compare.csv 2> compare.err'
 check "with the speed measured beside the model's" eval 'grep -v "^#" compare.csv | head -1 | grep -q rpm_measured'
 

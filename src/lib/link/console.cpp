@@ -528,12 +528,15 @@ class Worker {
 };
 
 /// The stream recording to a CSV file, in mcg-serial stream's format. Its header waits for
-/// the board's configuration (read by the worker); the rows in between wait in `pending`.
+/// the board's configuration (read by the worker); the rows in between wait in `pending`. Its t
+/// starts at 0 with its first row, as a capture's does; the header states the wall clock.
 struct Recording {
   std::ofstream file;
   std::optional<table::Writer> writer;
   bool header_written = false;
   std::vector<StreamRow> pending;
+  double started_unix_s = 0.0;  ///< the wall clock when the recording began
+  std::optional<double> t0_s;   ///< the console's t of its first row: the file's t = 0
 };
 
 /// What an action asks, for the session log: "set rpm_cmd 450", "load pi.ini", ...
@@ -561,15 +564,20 @@ double unix_now_s() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
-}  // namespace
-
-std::string session_log_line(double unix_s, std::string_view text) {
+/// "2026-11-26T23:15:02.123Z": the wall clock `unix_s`, UTC, to the millisecond.
+std::string utc_text(double unix_s) {
   const auto whole = static_cast<std::time_t>(std::floor(unix_s));
   const auto ms = std::clamp(static_cast<int>(std::floor((unix_s - std::floor(unix_s)) * 1e3)), 0, 999);
   std::tm utc{};
   gmtime_r(&whole, &utc);
-  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{:03}Z {}", utc.tm_year + 1900, utc.tm_mon + 1,
-                     utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, ms, text);
+  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{:03}Z", utc.tm_year + 1900, utc.tm_mon + 1,
+                     utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, ms);
+}
+
+}  // namespace
+
+std::string session_log_line(double unix_s, std::string_view text) {
+  return fmt::format("{} {}", utc_text(unix_s), text);
 }
 
 int run_console(const LinkOptions& link, const ConsoleOptions& options) {
@@ -612,11 +620,14 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
   std::size_t recorded = 0;
   const auto write_row = [&](const StreamRow& r) {
     if (!rec.writer) return;
+    if (!rec.t0_s) rec.t0_s = r.t_s;
     if (!rec.header_written) {
       rec.pending.push_back(r);
       return;
     }
-    write_stream_row(*rec.writer, r, rig);
+    StreamRow from_start = r;
+    from_start.t_s -= *rec.t0_s;
+    write_stream_row(*rec.writer, from_start, rig);
     ++recorded;
   };
   auto stop_recording = [&] {
@@ -724,6 +735,9 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
       if (rec.writer && !rec.header_written && c) {
         bool failed = false;
         if (auto config = worker.take_config(failed)) {
+          rec.writer->meta("t0", fmt::format("the first row streamed after the recording began at {} (wall "
+                                             "clock, UTC)",
+                                             utc_text(rec.started_unix_s)));
           write_stream_header(*rec.writer, *c, link, k_window_samples, rig, *config);
           rec.header_written = true;
           for (const StreamRow& r : rec.pending) write_row(r);
@@ -774,6 +788,8 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
               rec.writer.emplace(rec.file);
               rec.header_written = false;
               rec.pending.clear();
+              rec.started_unix_s = unix_now_s();
+              rec.t0_s.reset();
               recorded = 0;
               state.recording = true;
               state.recording_path = a.value;

@@ -34,7 +34,7 @@ static_assert(ids_in_table_order(), "MCG_REGISTERS: one row per id 0x01..MCG_REG
 
 constexpr const auto& k_modes = boardunits::k_board_modes;
 constexpr std::array<std::string_view, 3> k_seq_states{"stop", "play", "loop"};
-constexpr std::array<std::string_view, 3> k_excitations{"none", "prbs", "staircase"};
+constexpr std::array<std::string_view, 4> k_excitations{"none", "prbs", "staircase", "chirp"};
 constexpr std::array<std::string_view, 4> k_flags{"saturated", "logging", "log_full", "seq"};
 
 std::string normalise(std::string_view name) {
@@ -52,6 +52,8 @@ double steps_per_unit(const RegisterInfo& reg, int frac_bits) {
   switch (reg.unit) {
     case Unit::Percent:
       return 10.0;
+    case Unit::Hz:
+      return 100.0;
     case Unit::Gain:
       return std::ldexp(1.0, frac_bits);
     default:
@@ -97,6 +99,10 @@ std::string_view unit_suffix(Unit unit) {
       return "bits";
     case Unit::Ms:
       return "ms";
+    case Unit::Hz:
+      return "Hz";
+    case Unit::Seconds:
+      return "s";
     default:
       return "";
   }
@@ -148,7 +154,7 @@ double parse_value(const RegisterInfo& reg, std::string_view text, std::string_v
     std::string hint;
     if (reg.unit == Unit::Mode) hint = " (open, p, pi, pid)";
     if (reg.unit == Unit::SeqState) hint = " (stop, play, loop)";
-    if (reg.unit == Unit::Excitation) hint = " (none, prbs, staircase)";
+    if (reg.unit == Unit::Excitation) hint = " (none, prbs, staircase, chirp)";
     if (reg.unit == Unit::Switch) hint = " (0, 1, off, on)";
     if (reg.unit == Unit::Clutch) hint = " (1 or disengaged, 2 or engaged)";
     fail("{}: {}: invalid value {}{}", where, reg.name, quote(text), hint);

@@ -14,19 +14,22 @@ namespace mcg::link {
 /// How a register's raw i16 maps to the value a user types and reads (the unit column of
 /// MCG_REGISTERS in mcg_protocol.h).
 enum class Unit : std::uint8_t {
-  Mode = MCG_UNIT_MODE,          ///< MCG_MODE_*: open, p, pi, pid (or 0..3)
-  SeqState = MCG_UNIT_SEQ,       ///< MCG_SEQ_*: stop, play, loop (or 0..2)
-  Rpm = MCG_UNIT_RPM,            ///< rev/min, raw = value
-  Percent = MCG_UNIT_PERMILLE,   ///< duty in %, raw = 10 x value (the board counts 1/1000 of full scale)
-  Gain = MCG_UNIT_GAIN,          ///< coefficient, raw = value x 2^F (F = coef_frac): 1/1000 duty per (pulse/ms)
-  Bits = MCG_UNIT_BITS,          ///< fractional bits, raw = value
-  Ms = MCG_UNIT_MS,              ///< milliseconds, raw = value
-  Count = MCG_UNIT_COUNT,        ///< a count, raw = value (counters read as unsigned 16 bit)
-  Switch = MCG_UNIT_SWITCH,      ///< 0/1 (also off/on)
-  Flags = MCG_UNIT_FLAGS,        ///< MCG_FLAG_* bits, read only
-  Clutch = MCG_UNIT_CLUTCH,      ///< mcg-csv clutch state: 1 attached and disengaged, 2 engaged (also names)
-  Excitation = MCG_UNIT_EXC,     ///< MCG_EXC_*: none, prbs, staircase (or 0..2)
-  Level = MCG_UNIT_LEVEL,        ///< the excitation's target, raw = value: 1/1000 duty (open loop) or rpm
+  Mode = MCG_UNIT_MODE,         ///< MCG_MODE_*: open, p, pi, pid (or 0..3)
+  SeqState = MCG_UNIT_SEQ,      ///< MCG_SEQ_*: stop, play, loop (or 0..2)
+  Rpm = MCG_UNIT_RPM,           ///< rev/min, raw = value
+  Percent = MCG_UNIT_PERMILLE,  ///< duty in %, raw = 10 x value (the board counts 1/1000 of full scale)
+  Gain = MCG_UNIT_GAIN,       ///< coefficient, raw = value x 2^F (F = coef_frac): 1/1000 duty per (pulse/ms)
+  Bits = MCG_UNIT_BITS,       ///< fractional bits, raw = value
+  Ms = MCG_UNIT_MS,           ///< milliseconds, raw = value
+  Count = MCG_UNIT_COUNT,     ///< a count, raw = value (counters read as unsigned 16 bit)
+  Switch = MCG_UNIT_SWITCH,   ///< 0/1 (also off/on)
+  Flags = MCG_UNIT_FLAGS,     ///< MCG_FLAG_* bits, read only
+  Clutch = MCG_UNIT_CLUTCH,   ///< mcg-csv clutch state: 1 attached and disengaged, 2 engaged (also names)
+  Excitation = MCG_UNIT_EXC,  ///< MCG_EXC_*: none, prbs, staircase, chirp (or 0..3)
+  Level = MCG_UNIT_LEVEL,     ///< the excitation's target, raw = value: 1/1000 duty (open loop) or rpm
+
+  Hz = MCG_UNIT_CHZ,     ///< frequency in Hz, raw = 100 x value
+  Seconds = MCG_UNIT_S,  ///< seconds, raw = value
 };
 
 struct RegisterInfo {

@@ -1,24 +1,24 @@
 // mcg-serial stream: live stream blocks to CSV, with loss accounting.
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
 #include <ostream>
 
-#include <unistd.h>
-
-#include "common/error.hpp"       // mcg::fail
+#include "common/error.hpp"  // mcg::fail
 #include "common/quote.hpp"
 #include "config/ini.hpp"         // format_number
 #include "link/capture_meta.hpp"  // load_rig, board_config
 #include "link/connection.hpp"    // connect
 #include "link/interrupt.hpp"     // InterruptGuard
 #include "link/serial.hpp"
-#include "link/stream_block.hpp"        // StreamAssembler
-#include "mcg/version.hpp"              // k_version
-#include "measurement/measurement.hpp"  // CountEstimator, format_rpm_estimator
-#include "model/model.hpp"              // model_from_ini, k_open_circuit
-#include "table/table.hpp"              // Writer
+#include "link/stream_block.hpp"             // StreamAssembler
+#include "mcg/version.hpp"                   // k_version
+#include "measurement/board_excitation.hpp"  // format_board_excitation
+#include "measurement/measurement.hpp"       // CountEstimator, format_rpm_estimator
+#include "model/model.hpp"                   // model_from_ini, k_open_circuit
+#include "table/table.hpp"                   // Writer
 
 namespace mcg::link {
 
@@ -33,7 +33,8 @@ double seconds_since(Clock::time_point t0) {
 /// Starts the excitation the exc_* registers hold, with the stream off so that the board turns it on
 /// with the first level (t = 0 is the excitation's start); returns its description in the column's
 /// units: "prbs column=duty order=9 clock=0.003 amp=0.2 bias=0.4 periods=2" (duty as a fraction, as
-/// mcg-csv's duty column; rpm_cmd in rpm; the clock or the hold in s).
+/// mcg-csv's duty column; rpm_cmd in rpm; the clock, the hold or a chirp's update in s, its
+/// frequencies in Hz and its sweep in s: "chirp column=duty f0=0.1 f1=10 sweep=10 update=0.001 ...").
 std::string start_excitation(Connection& c) {
   const auto raw = [&](std::string_view name) { return c.session->read(require_register(name)); };
   const std::int16_t kind = raw("exc_kind");
@@ -41,15 +42,26 @@ std::string start_excitation(Connection& c) {
   if (raw("stream") != 0) fail("--then excite: the stream is already on (another capture?)");
   const bool rpm = raw("mode") != MCG_MODE_OPEN;
   const double scale = rpm ? 1.0 : 1e-3;
-  const auto level = [&](std::string_view name) { return config::format_number(raw(name) * scale); };
-  const std::string clock = config::format_number(raw("exc_div") * 1e-3);
-  std::string text = kind == MCG_EXC_PRBS
-                         ? fmt::format("prbs column={} order={} clock={}", rpm ? "rpm_cmd" : "duty",
-                                       raw("exc_order"), clock)
-                         : fmt::format("staircase column={} steps={} hold={}", rpm ? "rpm_cmd" : "duty",
-                                       raw("exc_steps"), clock);
-  text +=
-      fmt::format(" amp={} bias={} periods={}", level("exc_amp"), level("exc_offset"), raw("exc_periods"));
+  const double clock_s = raw("exc_div") * 1e-3;
+  measurement::BoardExcitation e;
+  e.column = rpm ? "rpm_cmd" : "duty";
+  if (kind == MCG_EXC_PRBS) {
+    e.kind = "prbs";
+    e.values = {{"order", raw("exc_order")}, {"clock", clock_s}};
+  } else if (kind == MCG_EXC_CHIRP) {
+    e.kind = "chirp";
+    e.values = {{"f0", raw("exc_f0") / 100.0},
+                {"f1", raw("exc_f1") / 100.0},
+                {"sweep", raw("exc_sweep")},
+                {"update", clock_s}};
+  } else {
+    e.kind = "staircase";
+    e.values = {{"steps", raw("exc_steps")}, {"hold", clock_s}};
+  }
+  e.values.emplace_back("amp", raw("exc_amp") * scale);
+  e.values.emplace_back("bias", raw("exc_offset") * scale);
+  e.values.emplace_back("periods", raw("exc_periods"));
+  const std::string text = measurement::format_board_excitation(e);
   c.session->write(require_register("exc_run"), 1);
   return text;
 }

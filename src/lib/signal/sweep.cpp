@@ -15,6 +15,7 @@
 #include "common/quote.hpp"
 #include "config/ini.hpp"
 #include "mcg/version.hpp"
+#include "measurement/board_excitation.hpp"  // parse_board_excitation
 #include "signal/excitation.hpp"
 #include "signal/spectrum.hpp"
 #include "table/table.hpp"
@@ -328,8 +329,24 @@ void bode(const BodeOptions& o, std::ostream& out, Diagnostics& diag) {
   bode(table::read_path(o.input), o, out, diag);
 }
 
-void bode(const table::Table& input, const BodeOptions& o, std::ostream& out, Diagnostics& diag) {
+void bode(const table::Table& input, const BodeOptions& options, std::ostream& out, Diagnostics& diag) {
   table::Table tbl = input;
+  BodeOptions o = options;
+  // A board capture says what the board played: its column is the input, a chirp's sweep the band.
+  std::optional<measurement::BoardExcitation> played;
+  if (const auto text = tbl.meta.get("excitation")) {
+    played = measurement::parse_board_excitation(*text, tbl.meta.where(tbl.source, "excitation"));
+  }
+  if (o.in_column.empty()) o.in_column = played ? played->column : "v";
+  if (o.out_column.empty()) o.out_column = !tbl.has("omega") && tbl.has("rpm") ? "rpm" : "omega";
+  if (played && played->kind == "chirp" && !o.f_min_hz && !o.f_max_hz) {
+    const auto f0 = played->value("f0");
+    const auto f1 = played->value("f1");
+    if (f0 && f1 && *f0 != *f1) {
+      o.f_min_hz = std::min(*f0, *f1);
+      o.f_max_hz = std::max(*f0, *f1);
+    }
+  }
   // A capture starts with rows the speed estimator has not filled yet: skipped, and said so.
   if (const auto skipped = table::leading_unmeasured(tbl, {o.in_column, o.out_column}); skipped.rows > 0) {
     diag.note(table::skipped_note(tbl, skipped));

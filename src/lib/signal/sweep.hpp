@@ -60,8 +60,8 @@ enum class BodeMethod { automatic, welch, lines };
 /// Options of `mcg-sweep bode`.
 struct BodeOptions {
   std::string input = "-";
-  std::string in_column = "v";
-  std::string out_column = "omega";
+  std::string in_column;   ///< empty: the board's `# excitation:` line's column, else v
+  std::string out_column;  ///< empty: omega, else rpm when the table has rpm and no omega
   BodeMethod method = BodeMethod::automatic;
   std::size_t segment = 0;  ///< Welch segment in samples; 0 = default_segment()
   double overlap = 0.5;

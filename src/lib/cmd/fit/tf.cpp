@@ -12,6 +12,7 @@
 #include "common/range.hpp"
 #include "config/ini.hpp"
 #include "mcg/version.hpp"
+#include "measurement/board_excitation.hpp"  // parse_board_excitation
 #include "table/table.hpp"
 
 namespace mcg::cmd {
@@ -139,7 +140,15 @@ void run_tf_time(const table::Table& table, const FitTfOptions& options, Io& io)
     fail("{}: --f-min, --f-max and --no-coherence apply to a frequency response; this is a time-domain run",
          table.source);
   }
-  const std::string in = options.in_column.empty() ? "v" : options.in_column;
+  // A board capture says which column the board drove (its `# excitation:` line).
+  std::string in = options.in_column;
+  if (in.empty()) {
+    const auto text = table.meta.get("excitation");
+    const auto played =
+        text ? measurement::parse_board_excitation(*text, table.meta.where(table.source, "excitation"))
+             : std::nullopt;
+    in = played ? played->column : "v";
+  }
   const std::string out_col = options.out_column.empty()
                                   ? (table.has("rpm") || !table.has("omega") ? "rpm" : "omega")
                                   : options.out_column;
@@ -200,7 +209,8 @@ void FitTf::define(CLI::App& app) {
   tfc->add_option(
       "--units", tf.units,
       "what the response maps when its metadata does not say: 'v -> rpm', 'duty -> rpm', 'v -> omega'");
-  tfc->add_option("--in", tf.in_column, "time-domain run: the input column (v)");
+  tfc->add_option("--in", tf.in_column,
+                  "time-domain run: the input column (default: the excitation line's column, else v)");
   tfc->add_option("--out", tf.out_column, "time-domain run: the output column (rpm, else omega)");
   tfc->add_option("--validate", tf.validate, "time-domain run: a held-out run the fit is scored on");
   tfc->add_option(

@@ -8,8 +8,8 @@ namespace mcg::cmd {
 void SweepBode::define(CLI::App& app) {
   signal::BodeOptions& bode = options;
   app.add_option("file", bode.input, "input table (- = stdin)")->capture_default_str();
-  app.add_option("--in", bode.in_column, "input column")->capture_default_str();
-  app.add_option("--out", bode.out_column, "output column")->capture_default_str();
+  app.add_option("--in", bode.in_column, "input column (default: the excitation line's column, else v)");
+  app.add_option("--out", bode.out_column, "output column (default: omega, else rpm)");
   app.add_option("--method", bode.method, "auto (lines when the table is a multisine), welch or lines")
       ->transform(CLI::CheckedTransformer(
           std::map<std::string, signal::BodeMethod>{{"auto", signal::BodeMethod::automatic},
