@@ -11,10 +11,8 @@
 
 #include "common/checked.hpp"
 #include "common/error.hpp"
-#include "common/units.hpp"
 #include "fit/discrepancy_parts.hpp"
 #include "fit/gap_parts.hpp"
-#include "fit/nls.hpp"  // covariance_statistics
 #include "model/effects/compiled.hpp"
 
 namespace mcg::fit {
@@ -143,7 +141,7 @@ void windows(const model::Compiled& c, const Run& run, std::size_t first,
       for (std::size_t k = 0; k < library.size(); ++k) {
         const Candidate& cand = library[k];
         row[k] += h * (cand.dead_band
-                           ? dead_band_torque(cand.k, in.v_V[n]) + dead_band_torque(cand.k, in.v_V[n + 1])
+                           ? 2.0 * dead_band_torque(cand.k, in.v_V[n])  // held over the sample
                            : cand.basis(cand.k, m.theta[n], m.w[n], i[n], in.t_s[n]) +
                                  cand.basis(cand.k, m.theta[n + 1], m.w[n + 1], i[n + 1], in.t_s[n + 1]));
       }

@@ -3,9 +3,9 @@
 //
 // The circuit. With the measured speed w and current i, over 20 ms windows [a, b],
 //   L (i(b) - i(a)) - int_a^b (v_b - R i - Ke w - V_b tanh(i / 0.01 A)) dt = int_a^b e dt,
-// e the voltage the model's circuit lacks (v_b: the bridge's output per the model). Its
-// library: a constant voltage c (the column -R (b - a): coefficient -c/R), a resistance error
-// dR (the column -(L di + R int i): coefficient dR/R), a brush drop -V_b tanh(i / 0.01 A), a
+// e the voltage the model's circuit lacks (v_b: the bridge's output per the model, held over
+// each sample). Its library: a constant voltage c (the column -R (b - a): coefficient -c/R), a
+// resistance error dR (the column -(L di + R int i): coefficient dR/R), a brush drop -V_b tanh(i / 0.01 A), a
 // dead band of the drive -V_d tanh(v / (0.01 supply)) and a back-emf error -dKe w.
 // A reading of the current i_m with gain g and offset o (i = a i_m + b, a = 1/g, b = -o/g)
 // shows in the circuit as exactly that constant and that resistance error; it differs from
@@ -45,32 +45,42 @@ void circuit_windows(const model::Compiled& c, const Run& run, std::size_t first
                                       std::numeric_limits<std::size_t>::max());
   const model::Machine& mm = c.p.motor;
   const double supply = c.p.supply_V;
-  // The model's circuit at row n: v_b - R i - Ke w - V_b tanh(i / 0.01 A), and the R it uses.
-  auto drive = [&](std::size_t n, double& R) {
+  // The model's circuit at row n: the bridge's output v_b (held over the sample, as the plant
+  // applies it) and the R it uses.
+  auto bridge = [&](std::size_t n, double& R) {
     double d = std::clamp(in.v_V[n], -supply, supply) / supply;
     if (c.deadband > 0.0) d = std::copysign(std::max(0.0, std::abs(d) - c.deadband), d);
     R = mm.R_ohm + c.R_on2 + std::abs(d) * c.R_s;
-    return d * supply - R * m.i[n] - mm.Ke_V_s_rad * m.w[n] - c.V_b * std::tanh(m.i[n] / 0.01);
+    return d * supply;
   };
   for (std::size_t a = first; a + width < rows; a += width) {
     const std::size_t b = a + width;
     bool ok = true;
     for (std::size_t n = a; n <= b && ok; ++n) ok = std::isfinite(m.w[n]) && std::isfinite(m.i[n]);
     if (!ok) continue;
-    double lacking = mm.L_H * (m.i[b] - m.i[a]);
+    double lacking = 0.0;
     std::vector<double> row(c_count, 0.0);
-    row[c_gain] = -mm.L_H * (m.i[b] - m.i[a]);
     for (std::size_t n = a; n < b; ++n) {
-      const double h = 0.5 * (in.t_s[n + 1] - in.t_s[n]);
-      double R0 = 0.0;
-      double R1 = 0.0;
-      lacking -= h * (drive(n, R0) + drive(n + 1, R1));
-      row[c_offset] -= h * (R0 + R1);
-      row[c_gain] -= h * (R0 * m.i[n] + R1 * m.i[n + 1]);
+      const double dt = in.t_s[n + 1] - in.t_s[n];
+      const double h = 0.5 * dt;
+      double R = 0.0;
+      const double v_b = bridge(n, R);
+      // The current is sampled about as fast as it settles (L/R near a sample), so the circuit
+      // is taken over each sample as the model makes it: i relaxes from i(n) towards the level
+      // i_ss it reaches i(n+1) on, and the back-emf it relaxes against is the speed weighted as
+      // the exponential weighs it, at the fraction f = 1/(1 - decay) - L/(R dt) of the sample
+      // (the speed moves linearly across it); then L di + R int i dt = R i_ss dt exactly.
+      const double decay = std::exp(-R * dt / mm.L_H);
+      const double i_ss = (m.i[n + 1] - decay * m.i[n]) / (1.0 - decay);
+      const double f = 1.0 / (1.0 - decay) - mm.L_H / (R * dt);
+      const double w_eff = m.w[n] + f * (m.w[n + 1] - m.w[n]);
+      lacking += dt * (R * i_ss + mm.Ke_V_s_rad * w_eff - v_b) +
+                 h * c.V_b * (std::tanh(m.i[n] / 0.01) + std::tanh(m.i[n + 1] / 0.01));
+      row[c_offset] -= dt * R;
+      row[c_gain] -= dt * R * i_ss;
       row[c_brush] -= h * (std::tanh(m.i[n] / 0.01) + std::tanh(m.i[n + 1] / 0.01));
-      row[c_dead] -=
-          h * (std::tanh(in.v_V[n] / (0.01 * supply)) + std::tanh(in.v_V[n + 1] / (0.01 * supply)));
-      row[c_emf] -= h * (m.w[n] + m.w[n + 1]);
+      row[c_dead] -= dt * std::tanh(in.v_V[n] / (0.01 * supply));
+      row[c_emf] -= dt * w_eff;
     }
     out.y.push_back(lacking);
     out.phi.push_back(std::move(row));
