@@ -119,7 +119,7 @@ run_case outside_cogging unexplained "cogging:T_c_Nm=0.0019,N_per_rev=11,phase_r
 prbs_reversing() { mcg-sweep prbs --bias 0 --amp 6 --clock 0.02 --duration 3 --clutch 2 --seed "$1"; }
 chirp_reversing() { mcg-sweep chirp --bias 0 --amp 7 --f0 0.5 --f1 20 --duration 3 --clutch 2; }
 run_case outside_asymmetry unexplained "friction_asymmetry:dT_Nm=0.0011" "prbs_reversing 1" "chirp_reversing" \
-  "  - 0.001" --exclude friction_asymmetry
+  "shaft: - 0.001" --exclude friction_asymmetry
 
 # A time budget too short for the search: the ranking so far, marked partial, exit status 4.
 status=0

@@ -10,12 +10,14 @@
 #include <numbers>
 
 #include "common/checked.hpp"
-#include "common/units.hpp"
+#include "common/error.hpp"
+#include "fit/discrepancy_parts.hpp"
 #include "fit/gap_parts.hpp"
-#include "fit/nls.hpp"  // covariance_statistics
 #include "model/effects/compiled.hpp"
 
 namespace mcg::fit {
+
+using namespace discrepancy_detail;
 
 namespace {
 
@@ -58,63 +60,28 @@ double b_drop(const std::array<double, 4>& k, double, double, double i, double) 
   return -k[0] * k[3] * std::tanh(i / 0.01);
 }
 
-/// One library column: a basis with its numbers (k[3] = 1 to evaluate).
+/// A term of the torque library: its column and its basis with the basis' numbers (k[3] = 1).
 struct Candidate {
-  std::string text;
-  std::string unit;
+  Column col;
   Basis basis = nullptr;
   std::array<double, 4> k{0.0, 0.0, 0.0, 1.0};
-  double order = 0.0;  ///< harmonic order for sin/cos columns (paired), else 0
-  std::string reading;  ///< what it is physically
+  /// A voltage V_d lost from the drive's output in its direction, as the torque it costs:
+  /// -(Kt/R) V_d tanh(v / (0.01 supply)), k[0] = Kt/R, k[1] = 0.01 supply (no basis: the
+  /// plant's bridge deadband is its simulation).
+  bool dead_band = false;
 };
 
-/// A run's measured motor speed (rad/s) and angle (rad), or empty when speed is not measured.
-struct Measured {
-  std::vector<double> w;
-  std::vector<double> theta;
-  std::vector<double> i;  ///< measured current, NaN where not measured
-};
-
-Measured measured_of(const Run& run) {
-  Measured m;
-  const std::size_t rows = run.inputs.t_s.size();
-  for (std::size_t o = 0; o < run.outputs.size(); ++o) {
-    const double per = run.outputs[o] == "rpm" ? k_rad_s_per_rpm : run.outputs[o] == "omega" ? 1.0 : 0.0;
-    if (per > 0.0) {
-      m.w.resize(rows);
-      for (std::size_t n = 0; n < rows; ++n) m.w[n] = run.measured[o][n] * per * run.gear_ratio;
-    }
-    if (run.outputs[o] == "i") m.i = run.measured[o];
-  }
-  if (m.w.empty()) return m;
-  // A counting estimator reports the mean speed over its window, half a window late: the
-  // speed at t is read at t + W/2 (the angle's harmonics are phase-sensitive to it).
-  if (run.rpm_estimator && rows > 1) {
-    const double dt = (run.inputs.t_s.back() - run.inputs.t_s.front()) / static_cast<double>(rows - 1);
-    const double shift = 0.5 * run.rpm_estimator->window_s / dt;
-    const auto whole = static_cast<std::size_t>(shift);
-    const double frac = shift - static_cast<double>(whole);
-    std::vector<double> w(rows, std::numeric_limits<double>::quiet_NaN());
-    for (std::size_t n = 0; n + whole + 1 < rows; ++n)
-      w[n] = (1.0 - frac) * m.w[n + whole] + frac * m.w[n + whole + 1];
-    m.w = std::move(w);
-  }
-  if (m.i.empty()) m.i.assign(rows, std::numeric_limits<double>::quiet_NaN());
-  m.theta.assign(rows, 0.0);
-  for (std::size_t n = 1; n < rows; ++n) {
-    const double dt = run.inputs.t_s[n] - run.inputs.t_s[n - 1];
-    const double step = 0.5 * (m.w[n] + m.w[n - 1]) * dt;
-    m.theta[n] = m.theta[n - 1] + (std::isfinite(step) ? step : 0.0);
-  }
-  return m;
+double dead_band_torque(const std::array<double, 4>& k, double v) {
+  return -k[0] * k[3] * std::tanh(v / k[1]);
 }
 
 /// Weak-form rows of one run from row `first` on: y (the torque integral the model lacks) and
-/// the library's integrals, one row per window in which the shaft moves throughout.
+/// the library's integrals, one row per window in which the shaft moves throughout. The
+/// measured current is read through `i_map` (a reading's gain and offset taken out).
 void windows(const model::Compiled& c, const Run& run, std::size_t first,
-             const std::vector<Candidate>& library, double w_max, std::vector<double>& y,
-             std::vector<std::vector<double>>& phi) {
-  const Measured m = measured_of(run);
+             const std::vector<Candidate>& library, double w_max, std::array<double, 2> i_map,
+             Rows& rows_out) {
+  const Measured m = measured_of(run, i_map);
   if (m.w.empty()) return;
   const model::Inputs& in = run.inputs;
   const std::size_t rows = in.t_s.size();
@@ -173,52 +140,326 @@ void windows(const model::Compiled& c, const Run& run, std::size_t first,
       integral += h * (torque(n) + torque(n + 1));
       for (std::size_t k = 0; k < library.size(); ++k) {
         const Candidate& cand = library[k];
-        row[k] += h * (cand.basis(cand.k, m.theta[n], m.w[n], i[n], in.t_s[n]) +
-                       cand.basis(cand.k, m.theta[n + 1], m.w[n + 1], i[n + 1], in.t_s[n + 1]));
+        row[k] += h * (cand.dead_band
+                           ? 2.0 * dead_band_torque(cand.k, in.v_V[n])  // held over the sample
+                           : cand.basis(cand.k, m.theta[n], m.w[n], i[n], in.t_s[n]) +
+                                 cand.basis(cand.k, m.theta[n + 1], m.w[n + 1], i[n + 1], in.t_s[n + 1]));
       }
     }
-    y.push_back(J * (m.w[b] - m.w[a]) - integral);
-    phi.push_back(std::move(row));
+    rows_out.y.push_back(J * (m.w[b] - m.w[a]) - integral);
+    rows_out.phi.push_back(std::move(row));
   }
 }
 
-Eigen::MatrixXd matrix_of(const std::vector<std::vector<double>>& rows,
-                          const std::vector<std::size_t>& cols) {
-  Eigen::MatrixXd A(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(cols.size()));
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    for (std::size_t j = 0; j < cols.size(); ++j) {
-      A(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(j)) = rows[r][cols[j]];
-    }
+/// The torque library for top speed `w_max` over runs of `t_span` s and the angle `orders`.
+std::vector<Candidate> torque_library(const model::Model& reference, double w_max, double t_span,
+                                      const std::vector<double>& angle_orders) {
+  const double eps = 0.01 * w_max;
+  const model::Machine& mm = reference.params.motor;
+  const auto plain = [](std::string text, std::string unit, Basis basis, std::array<double, 4> k,
+                        std::string reading) {
+    return Candidate{{std::move(text), std::move(unit), std::move(reading)}, basis, k};
+  };
+  std::vector<Candidate> library = {
+      plain("1", "N m", b_const, {0.0, 0.0, 0.0, 1.0},
+            "a constant torque: a load, or an offset of a measured current"),
+      plain("sign(w)", "N m", b_sign, {eps, 0.0, 0.0, 1.0}, "against the motion: Coulomb friction"),
+      plain("w", "N m s/rad", b_w, {0.0, 0.0, 0.0, 1.0}, "proportional to speed: viscous friction"),
+      plain("w|w|", "N m s^2/rad^2", b_w_abs_w, {0.0, 0.0, 0.0, 1.0},
+            "quadratic in speed: windage, a fan or fluid drag"),
+      plain("w^3", "N m s^3/rad^3", b_w3, {0.0, 0.0, 0.0, 1.0},
+            "cubic in speed: drag rising faster than quadratic"),
+      plain("i", "N m/A", b_i, {0.0, 0.0, 0.0, 1.0},
+            "scales with the current: a torque-constant error or a current-sensor gain"),
+      plain("|i| sign(w)", "N m/A", b_abs_i, {eps, 0.0, 0.0, 1.0},
+            "friction that grows with the load the current carries"),
+      plain("-(Kt/R) tanh(i/0.01)", "V", b_drop, {mm.Kt_Nm_A / mm.R_ohm, 0.0, 0.0, 1.0},
+            "a voltage drop against the current in the motor circuit: brush contact drop"),
+  };
+  Candidate dead = plain("-(Kt/R) tanh(v/0.01 supply)", "V", nullptr,
+                         {mm.Kt_Nm_A / mm.R_ohm, 0.01 * reference.params.supply_V, 0.0, 1.0},
+                         "a voltage lost from the drive's output in its direction: a dead band of the drive");
+  dead.dead_band = true;
+  library.push_back(std::move(dead));
+  // Stribeck-like drops at a twentieth and a fifth of the top speed, exponential and Gaussian.
+  for (double scale : {0.05, 0.2}) {
+    const double ws = scale * w_max;
+    const std::string reading = "friction falling from rest with speed: Stribeck";
+    library.push_back(
+        plain(fmt::format("sign(w) exp(-|w|/{:.3g})", ws), "N m", b_stribeck, {eps, ws, 1.0, 1.0}, reading));
+    library.push_back(plain(fmt::format("sign(w) exp(-(w/{:.3g})^2)", ws), "N m", b_stribeck,
+                            {eps, ws, 2.0, 1.0}, reading));
   }
-  return A;
+  // Friction levels that fade over a run, on a grid of a tenth, a third and all of its span.
+  for (double share : {0.1, 0.33, 1.0}) {
+    const double tau = share * t_span;
+    if (!(tau > 0.0)) continue;
+    library.push_back(
+        plain(fmt::format("sign(w) exp(-t/{:.3g})", tau), "N m", b_decay, {eps, tau, 0.0, 1.0},
+              fmt::format("a friction level that fades during the run (tau {:.3g} s): warm-up", tau)));
+  }
+  // Angle harmonics: once per revolution always, and the residual's strongest orders; each
+  // as a torque and as a current-scaled torque, as its sin and cos pair (the cos is the sin a
+  // quarter turn on).
+  std::vector<double> orders = {1.0};
+  for (double order : angle_orders) {
+    if (order != 1.0) orders.push_back(order);
+  }
+  const auto add_harmonic = [&](const std::string& prefix, const char* unit, Basis basis, double order,
+                                const std::string& per) {
+    library.push_back({{fmt::format("{}sin({:g} theta)", prefix, order), unit, per, order, false},
+                       basis,
+                       {order, 0.0, 0.0, 1.0}});
+    library.push_back({{fmt::format("{}cos({:g} theta)", prefix, order), unit, per, order, true},
+                       basis,
+                       {order, std::numbers::pi / 2.0, 0.0, 1.0}});
+  };
+  for (double order : orders) {
+    add_harmonic("", "N m", b_sin, order,
+                 order == 1.0
+                     ? "once per revolution: an imbalance, a bent shaft or an eccentric load"
+                     : fmt::format("{:g} per revolution: cogging or a load periodic in the angle", order));
+  }
+  for (double order : orders) {
+    add_harmonic(
+        "i ", "N m/A", b_i_sin, order,
+        fmt::format("scales with the current, {:g} per revolution: torque ripple (Kt varying with the angle)",
+                    order));
+  }
+  return library;
 }
 
-/// The least-squares solution of A x = y, its residual sum of squares and the standard errors
-/// of x (covariance_statistics: infinite for a column the data do not determine).
-struct Solved {
-  Eigen::VectorXd x;
-  Eigen::VectorXd se;
-  double rss = 0.0;
+/// What the model leaves of the validation speed RMS, in noise floors, above which the speed
+/// reading's errors are looked for (below, the rest is the noise's).
+constexpr double k_reading_above_floor = 1.2;
+
+/// The described terms of `set` and the reference model with them as shaft torques.
+struct TorqueTerms {
+  Described d;
+  model::Model model;
 };
 
-Solved solve(const Eigen::MatrixXd& A, const Eigen::VectorXd& y) {
-  Solved s;
-  s.x = A.colPivHouseholderQr().solve(y);
-  const Eigen::VectorXd residual = A * s.x - y;
-  s.rss = residual.squaredNorm();
-  Eigen::MatrixXd correlation;
-  double sigma = 0.0;
-  covariance_statistics(A, residual, s.se, correlation, sigma);
-  return s;
+TorqueTerms torque_terms(const std::vector<Candidate>& library, const std::vector<std::size_t>& set,
+                         const Rows& train, const Rows& validate, const model::Model& reference) {
+  std::vector<Column> cols;
+  for (const Candidate& cand : library) cols.push_back(cand.col);
+  TorqueTerms out;
+  out.d = describe(cols, set, train, validate, [&](std::size_t k) {
+    return library[k].basis == b_i_sin ? std::string("i ") : std::string();
+  });
+  out.model = reference;
+  std::size_t q = 0;
+  for (std::size_t j = 0; j < set.size(); ++j) {
+    const Candidate& cand = library[set[j]];
+    if (cand.col.cos_of_pair) continue;
+    const DiscrepancyTerm& t = out.d.terms[q++];
+    if (cand.dead_band) {
+      // Simulated as the bridge's deadband (duty lost per period) when the model has none.
+      if (t.coefficient > 0.0 && !reference.effect("hbridge")) {
+        model::Effect e = model::default_effect("hbridge");
+        e.set("R_on_ohm", 0.0);
+        e.set("deadband", std::min(t.coefficient / reference.params.supply_V, 0.3));
+        out.model.effects.push_back(std::move(e));
+      }
+      continue;
+    }
+    std::array<double, 4> k = cand.k;
+    if (cand.col.order != 0.0) k[1] = t.phase_rad;
+    k[3] = t.coefficient;
+    out.model.shaft_terms.push_back({t.equation, nullptr, k, cand.basis});
+  }
+  return out;
 }
 
-std::string signed_number(double v) { return fmt::format("{}{:.4g}", v < 0.0 ? "- " : "+ ", std::abs(v)); }
+/// The terms of `set` largest part first.
+std::vector<DiscrepancyTerm> ranked(const Described& d) {
+  std::vector<std::size_t> order(d.terms.size());
+  for (std::size_t q = 0; q < order.size(); ++q) order[q] = q;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t x, std::size_t z) { return d.parts[x] > d.parts[z]; });
+  std::vector<DiscrepancyTerm> out;
+  for (std::size_t q : order) out.push_back(d.terms[q]);
+  return out;
+}
+
+/// Backward pruning on the held-out runs: a term (a harmonic with its pair) whose removal, the
+/// rest refitted, does not raise the validation speed RMS leaves. Returns the RMS of what stays.
+double prune_held_out(const std::vector<Candidate>& library, std::vector<std::size_t>& active,
+                      const Rows& train, const Rows& validate, const model::Model& reference,
+                      const GapData& data, const std::vector<OutputFloor>& floors, std::size_t f_rpm,
+                      std::vector<std::string>& dropped) {
+  auto held_out = [&](const std::vector<std::size_t>& set) {
+    return gap_detail::evaluate(torque_terms(library, set, train, validate, reference).model, data, floors)
+        .rms[f_rpm];
+  };
+  auto without = [&](const std::vector<std::size_t>& set, std::size_t j) {
+    std::vector<std::size_t> rest;
+    const bool pair = library[set[j]].col.order != 0.0;
+    for (std::size_t q = 0; q < set.size(); ++q) {
+      if (q != j && !(pair && q == j + 1)) rest.push_back(set[q]);
+    }
+    return rest;
+  };
+  double rms_all = held_out(active);
+  while (active.size() > 1) {
+    std::size_t drop = active.size();
+    double best = rms_all;
+    for (std::size_t j = 0; j < active.size(); ++j) {
+      if (library[active[j]].col.cos_of_pair) continue;
+      const std::vector<std::size_t> rest = without(active, j);
+      if (rest.empty()) continue;
+      const double r = held_out(rest);
+      if (r <= best) {
+        best = r;
+        drop = j;
+      }
+    }
+    if (drop == active.size()) break;
+    dropped.push_back(library[active[drop]].col.text);
+    active = without(active, drop);
+    rms_all = best;
+  }
+  return rms_all;
+}
+
+/// The joint refit of the kept torque terms with the nominal scales and the reference's
+/// catalog effects; adopted when the held-out runs gain over the terms stacked on the model.
+void refit_jointly(DiscrepancyResult& out, std::size_t first_term, const GapData& data,
+                   const std::vector<OutputFloor>& floors, std::size_t f_rpm,
+                   const std::function<bool()>& stop) {
+  JointFit joint;
+  try {
+    std::vector<bool> phased;
+    for (std::size_t s = first_term; s < out.model.shaft_terms.size(); ++s) {
+      const Basis basis = out.model.shaft_terms[s].basis_it;
+      phased.push_back(basis == b_sin || basis == b_i_sin);
+    }
+    joint = joint_refit(out.model, first_term, phased, data, stop);
+  } catch (const Error& e) {
+    out.joint = fmt::format("not run: {}", e.what());
+    return;
+  }
+  const double rms = gap_detail::evaluate(joint.model, data, floors).rms[f_rpm];
+  std::string nominal;
+  for (const auto& [name, value] : joint.nominal) nominal += fmt::format(", {} {:.4g}", name, value);
+  if (!(rms < out.rms_after_rpm)) {
+    out.joint = fmt::format(
+        "refitted with{} the held-out rpm RMS is {:.3g}, not below {:.3g}: the terms stay as fitted",
+        nominal.empty() ? " the terms alone," : nominal.substr(1) + ",", rms, out.rms_after_rpm);
+    return;
+  }
+  out.joint = fmt::format("held-out rpm RMS {:.3g} -> {:.3g}{}{}", out.rms_after_rpm, rms,
+                          nominal.empty() ? "" : " with", nominal.empty() ? "" : nominal.substr(1));
+  out.rms_after_rpm = rms;
+  // The shaft terms are the model's last ones, in the order of the terms that are torques.
+  const std::size_t first = joint.model.shaft_terms.size() - joint.coefficient.size();
+  for (DiscrepancyTerm& t : out.terms) {
+    if (t.place != "shaft") continue;
+    for (std::size_t s = first; s < joint.model.shaft_terms.size(); ++s) {
+      model::ShaftTerm& st = joint.model.shaft_terms[s];
+      if (st.equation != t.equation) continue;
+      const std::size_t j = s - first;
+      t.coefficient = joint.coefficient[j];
+      t.std_error = joint.coefficient_se[j];
+      if (t.order != 0.0) {
+        t.phase_rad = joint.phase[j];
+        t.phase_se_rad = joint.phase_se[j];
+        const std::string lead = t.basis.rfind("i ", 0) == 0 ? "i " : "";
+        t.equation = fmt::format("{} {} * {}sin({:g} theta {} rad)", signed_number(t.coefficient), t.unit,
+                                 lead, t.order, signed_number(t.phase_rad));
+      } else {
+        const std::string basis = t.basis;
+        t.equation = fmt::format("{} {} * {}", signed_number(t.coefficient), t.unit, basis);
+      }
+      st.equation = t.equation;
+      break;
+    }
+  }
+  out.model = std::move(joint.model);
+}
+
+/// The shaft stage on `data`: the torque library's weak form (the measured current through
+/// `i_map`), forward selection, backward pruning on the held-out runs and the joint refit. Fills
+/// `out`'s terms, model, windows, shares, rms_after_rpm (from rms_before_rpm), note and joint.
+void shaft_stage(const model::Model& reference, const GapData& data, const std::vector<Candidate>& library,
+                 double w_max, std::array<double, 2> i_map, const std::vector<OutputFloor>& floors,
+                 std::size_t f_rpm, const std::function<bool()>& stop, DiscrepancyResult& out) {
+  const model::Compiled c(reference);
+  Rows train;
+  Rows validate;
+  for (const Run& run : data.train) windows(c, run, 0, library, w_max, i_map, train);
+  for (const ScoredRun& sr : data.validate)
+    windows(c, sr.run, sr.first_scored, library, w_max, i_map, validate);
+  out.train_windows = train.y.size();
+  out.validation_windows = validate.y.size();
+  // Forward selection fits a few columns at a time: the windows must outnumber the library and
+  // be enough (k_discrepancy_min_windows) to tell a term from noise at three standard errors.
+  const std::size_t needed = std::max(k_discrepancy_min_windows, library.size() + 1);
+  if (train.y.size() < needed) {
+    out.note = fmt::format("too few windows in which the shaft turns ({} of 20 ms; {} needed)",
+                           train.y.size(), needed);
+    return;
+  }
+  std::vector<Column> cols;
+  for (const Candidate& cand : library) cols.push_back(cand.col);
+  std::vector<std::size_t> active = select_forward(cols, train, validate);
+  if (active.empty()) {
+    out.note = "no term of the library explains a clear part of the torque residual";
+    return;
+  }
+  // Kept only where the held-out runs gain: the model with the terms is simulated on the
+  // validation runs; the terms leave altogether when it does not beat the reference there.
+  const double rms_all =
+      prune_held_out(library, active, train, validate, reference, data, floors, f_rpm, out.dropped);
+  if (!(rms_all < out.rms_before_rpm)) {
+    out.note = fmt::format(
+        "the terms found ({}) do not lower the validation speed RMS once simulated with the model; none kept",
+        library[active.front()].col.text);
+    return;
+  }
+  TorqueTerms kept = torque_terms(library, active, train, validate, reference);
+  out.terms = ranked(kept.d);
+  out.train_explained_pct = kept.d.train_pct;
+  out.validation_explained_pct = kept.d.validation_pct;
+  out.model = std::move(kept.model);
+  out.rms_after_rpm = rms_all;
+  refit_jointly(out, reference.shaft_terms.size(), data, floors, f_rpm, stop);
+}
+
+/// `data` with the speed reading's errors (fit_speed_reading's terms) taken out of the measured
+/// speed: rpm = (rpm_m - offset) / (gain + sum e sin(N theta + phase)), theta the measured angle.
+GapData read_right(const GapData& data, const std::vector<DiscrepancyTerm>& reading) {
+  GapData out = data;
+  auto correct = [&](Run& run) {
+    const Measured m = measured_of(run);
+    for (std::size_t o = 0; o < run.outputs.size(); ++o) {
+      if (run.outputs[o] != "rpm") continue;
+      for (std::size_t n = 0; n < run.measured[o].size(); ++n) {
+        double offset = 0.0;
+        double gain = 1.0;
+        for (const DiscrepancyTerm& t : reading) {
+          if (t.basis == "rpm offset") offset = t.coefficient;
+          if (t.basis == "rpm gain") gain = t.coefficient;
+          if (t.order != 0.0) gain += t.coefficient * std::sin(t.order * m.theta[n] + t.phase_rad);
+        }
+        run.measured[o][n] = (run.measured[o][n] - offset) / gain;
+      }
+    }
+  };
+  for (Run& run : out.train) correct(run);
+  for (ScoredRun& sr : out.validate) correct(sr.run);
+  return out;
+}
+
+/// A reading error explains the speed instead of torques when the held-out rpm RMS it leaves
+/// is below this share of what the torques (with a reading error after them) leave.
+constexpr double k_reading_first_wins = 0.8;
 
 }  // namespace
 
 DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& data,
                                   const std::vector<double>& angle_orders,
-                                  const std::vector<OutputFloor>& floors) {
+                                  const std::vector<OutputFloor>& floors, const std::function<bool()>& stop) {
   DiscrepancyResult out;
   out.model = reference;
   const std::size_t f_rpm = gap_detail::floor_index(floors, "rpm");
@@ -239,300 +480,87 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
     out.note = "the shaft never turns in the training runs";
     return out;
   }
-  const double eps = 0.01 * w_max;
   double t_span = 0.0;
   for (const Run& run : data.train) {
     if (!run.inputs.t_s.empty()) t_span = std::max(t_span, run.inputs.t_s.back());
   }
-  const model::Machine& mm = reference.params.motor;
-  std::vector<Candidate> library = {
-      {"1",
-       "N m",
-       b_const,
-       {0.0, 0.0, 0.0, 1.0},
-       0.0,
-       "a constant torque: a load, or an offset of a measured current"},
-      {"sign(w)", "N m", b_sign, {eps, 0.0, 0.0, 1.0}, 0.0, "against the motion: Coulomb friction"},
-      {"w", "N m s/rad", b_w, {0.0, 0.0, 0.0, 1.0}, 0.0, "proportional to speed: viscous friction"},
-      {"w|w|",
-       "N m s^2/rad^2",
-       b_w_abs_w,
-       {0.0, 0.0, 0.0, 1.0},
-       0.0,
-       "quadratic in speed: windage, a fan or fluid drag"},
-      {"w^3",
-       "N m s^3/rad^3",
-       b_w3,
-       {0.0, 0.0, 0.0, 1.0},
-       0.0,
-       "cubic in speed: drag rising faster than quadratic"},
-      {"i",
-       "N m/A",
-       b_i,
-       {0.0, 0.0, 0.0, 1.0},
-       0.0,
-       "scales with the current: a torque-constant error or a current-sensor gain"},
-      {"|i| sign(w)",
-       "N m/A",
-       b_abs_i,
-       {eps, 0.0, 0.0, 1.0},
-       0.0,
-       "friction that grows with the load the current carries"},
-      {"-(Kt/R) tanh(i/0.01)",
-       "V",
-       b_drop,
-       {mm.Kt_Nm_A / mm.R_ohm, 0.0, 0.0, 1.0},
-       0.0,
-       "a voltage drop against the current in the motor circuit: brush contact drop"},
-  };
-  // Stribeck-like drops at a twentieth and a fifth of the top speed, exponential and Gaussian.
-  for (double scale : {0.05, 0.2}) {
-    const double ws = scale * w_max;
-    const std::string reading = "friction falling from rest with speed: Stribeck";
-    library.push_back(
-        {fmt::format("sign(w) exp(-|w|/{:.3g})", ws), "N m", b_stribeck, {eps, ws, 1.0, 1.0}, 0.0, reading});
-    library.push_back({fmt::format("sign(w) exp(-(w/{:.3g})^2)", ws),
-                       "N m",
-                       b_stribeck,
-                       {eps, ws, 2.0, 1.0},
-                       0.0,
-                       reading});
-  }
-  // Friction levels that fade over a run, on a grid of a tenth, a third and all of its span.
-  for (double share : {0.1, 0.33, 1.0}) {
-    const double tau = share * t_span;
-    if (!(tau > 0.0)) continue;
-    library.push_back(
-        {fmt::format("sign(w) exp(-t/{:.3g})", tau),
-         "N m",
-         b_decay,
-         {eps, tau, 0.0, 1.0},
-         0.0,
-         fmt::format("a friction level that fades during the run (tau {:.3g} s): warm-up", tau)});
-  }
-  // Angle harmonics: once per revolution always, and the residual's strongest orders; each
-  // as a torque and as a current-scaled torque.
+  const std::vector<Candidate> library = torque_library(reference, w_max, t_span, angle_orders);
+  out.library_size = library.size();
+  out.rms_before_rpm = gap_detail::evaluate(reference, data, floors).rms[f_rpm];
+  out.rms_after_rpm = out.rms_before_rpm;
+
+  // The circuit first: a current reading's gain and offset, once confirmed, are taken out of
+  // the measured current before the torque the model lacks is computed from it.
+  const Finding circuit = fit_circuit(c, data, [&](std::array<double, 2> i_map) {
+    Rows train;
+    Rows validate;
+    for (const ScoredRun& sr : data.validate) windows(c, sr.run, sr.first_scored, {}, w_max, i_map, validate);
+    return Eigen::Map<const Eigen::VectorXd>(validate.y.data(), static_cast<Eigen::Index>(validate.y.size()))
+        .squaredNorm();
+  });
+  out.library_size += circuit.columns;
   std::vector<double> orders = {1.0};
   for (double order : angle_orders) {
     if (order != 1.0) orders.push_back(order);
   }
-  // A harmonic as its sin and cos pair (the cos is the sin a quarter turn on).
-  const auto add_harmonic = [&](const std::string& prefix, const char* unit, const auto& basis, double order,
-                                const std::string& per) {
-    library.push_back(
-        {fmt::format("{}sin({:g} theta)", prefix, order), unit, basis, {order, 0.0, 0.0, 1.0}, order, per});
-    library.push_back({fmt::format("{}cos({:g} theta)", prefix, order),
-                       unit,
-                       basis,
-                       {order, std::numbers::pi / 2.0, 0.0, 1.0},
-                       order,
-                       per});
-  };
-  for (double order : orders) {
-    add_harmonic("", "N m", b_sin, order,
-                 order == 1.0
-                     ? "once per revolution: an imbalance, a bent shaft or an eccentric load"
-                     : fmt::format("{:g} per revolution: cogging or a load periodic in the angle", order));
+  // The shaft, then the speed reading's errors in what the model with its terms still misses
+  // (looked for only where that stands above the noise) ...
+  DiscrepancyResult shaft_first = out;
+  shaft_stage(reference, data, library, w_max, circuit.i_map, floors, f_rpm, stop, shaft_first);
+  if (shaft_first.rms_after_rpm > k_reading_above_floor * out.floor_rpm) {
+    Finding speed = fit_speed_reading(shaft_first.model, data, orders, shaft_first.rms_after_rpm);
+    out.library_size += speed.columns;
+    for (DiscrepancyTerm& t : speed.terms) shaft_first.terms.push_back(std::move(t));
   }
-  for (double order : orders) {
-    add_harmonic(
-        "i ", "N m/A", b_i_sin, order,
-        fmt::format("scales with the current, {:g} per revolution: torque ripple (Kt varying with the angle)",
-                    order));
+  // ... or the speed reading's errors first, taken out of the measured speed, then the shaft:
+  // whichever leaves the held-out runs less (the shaft's unless the reading's is clearly so).
+  DiscrepancyResult reading_first = out;
+  Finding reading;
+  if (out.rms_before_rpm > k_reading_above_floor * out.floor_rpm) {
+    double rms_read = out.rms_before_rpm;
+    reading = fit_speed_reading(reference, data, orders, rms_read);
   }
-  out.library_size = library.size();
-
-  std::vector<double> y;
-  std::vector<std::vector<double>> phi;
-  for (const Run& run : data.train) windows(c, run, 0, library, w_max, y, phi);
-  std::vector<double> yv;
-  std::vector<std::vector<double>> phiv;
-  for (const ScoredRun& sr : data.validate) windows(c, sr.run, sr.first_scored, library, w_max, yv, phiv);
-  out.train_windows = y.size();
-  out.validation_windows = yv.size();
-  // Forward selection fits a few columns at a time: the windows must outnumber the library and
-  // be enough (k_discrepancy_min_windows) to tell a term from noise at three standard errors.
-  const std::size_t needed = std::max(k_discrepancy_min_windows, library.size() + 1);
-  if (y.size() < needed) {
-    out.note =
-        fmt::format("too few windows in which the shaft turns ({} of 20 ms; {} needed)", y.size(), needed);
-    return out;
-  }
-  const Eigen::Map<const Eigen::VectorXd> Y(y.data(), static_cast<Eigen::Index>(y.size()));
-
-  // Forward stepwise sparse regression: of the terms (a harmonic with its sin/cos pair) that
-  // remove at least k_discrepancy_threshold of the training residual the model leaves and
-  // stand three standard errors from 0, the one that lowers the training residual most joins,
-  // provided it lowers the validation residual too (a term that does not carry over to
-  // held-out runs describes the training runs' noise); one at a time, so of collinear
-  // columns only one joins.
-  std::vector<std::size_t> active;
-  const Eigen::Map<const Eigen::VectorXd> Yv(yv.data(), static_cast<Eigen::Index>(yv.size()));
-  auto validation_rss = [&](const std::vector<std::size_t>& set, const Eigen::VectorXd& xi) {
-    if (yv.empty()) return 0.0;
-    return set.empty() ? Yv.squaredNorm() : (Yv - matrix_of(phiv, set) * xi).squaredNorm();
-  };
-  const double rss0 = Y.squaredNorm();
-  double rss = rss0;
-  double rss_v = validation_rss({}, {});
-  while (active.size() < library.size()) {
-    std::vector<std::pair<double, std::vector<std::size_t>>> options;
-    std::vector<Eigen::VectorXd> solutions;
-    for (std::size_t k = 0; k < library.size(); ++k) {
-      if (std::find(active.begin(), active.end(), k) != active.end()) continue;
-      if (library[k].order != 0.0 && library[k].k[1] != 0.0) continue;  // joins with its sin column
-      std::vector<std::size_t> trial = active;
-      trial.push_back(k);
-      if (library[k].order != 0.0) trial.push_back(k + 1);
-      Solved fit = solve(matrix_of(phi, trial), Y);
-      if (rss - fit.rss < k_discrepancy_threshold * rss0) continue;
-      // A harmonic stands clear by its amplitude (its sin or cos part alone may be near 0).
-      const auto j0 = static_cast<Eigen::Index>(active.size());
-      const bool clear = library[k].order != 0.0 ? std::hypot(fit.x[j0], fit.x[j0 + 1]) >=
-                                                       3.0 * std::max(fit.se[j0], fit.se[j0 + 1])
-                                                 : std::abs(fit.x[j0]) >= 3.0 * fit.se[j0];
-      if (!clear) continue;
-      options.emplace_back(fit.rss, std::move(trial));
-      solutions.push_back(std::move(fit.x));
+  out = std::move(shaft_first);
+  if (!reading.terms.empty()) {
+    const GapData corrected = read_right(data, reading.terms);
+    reading_first.rms_before_rpm = gap_detail::evaluate(reference, corrected, floors).rms[f_rpm];
+    reading_first.rms_after_rpm = reading_first.rms_before_rpm;
+    shaft_stage(reference, corrected, library, w_max, circuit.i_map, floors, f_rpm, stop, reading_first);
+    if (reading_first.rms_after_rpm < k_reading_first_wins * out.rms_after_rpm) {
+      for (DiscrepancyTerm& t : reading.terms) reading_first.terms.push_back(std::move(t));
+      reading_first.rms_before_rpm = out.rms_before_rpm;
+      out = std::move(reading_first);
     }
-    std::vector<std::size_t> order(options.size());
-    for (std::size_t q = 0; q < order.size(); ++q) order[q] = q;
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t x, std::size_t y2) { return options[x].first < options[y2].first; });
-    bool joined = false;
-    for (std::size_t q : order) {
-      const double r_v = validation_rss(options[q].second, solutions[q]);
-      if (!yv.empty() && !(r_v < rss_v)) continue;
-      active = options[q].second;
-      rss = options[q].first;
-      rss_v = r_v;
-      joined = true;
-      break;
-    }
-    if (!joined) break;
   }
-  if (active.empty()) {
-    out.note = "no term of the library explains a clear part of the torque residual";
-    return out;
-  }
-  // The selected terms as a model: coefficients in physical units with their standard errors,
-  // sin/cos pairs combined into one harmonic, largest part of the fitted residual first.
-  auto described = [&](const std::vector<std::size_t>& set, model::Model& m,
-                       std::vector<DiscrepancyTerm>& terms, double& train_pct, double& validation_pct) {
-    const Eigen::MatrixXd A = matrix_of(phi, set);
-    const Solved fit = solve(A, Y);
-    const Eigen::VectorXd& coef = fit.x;
-    train_pct = 100.0 * (1.0 - fit.rss / Y.squaredNorm());
-    validation_pct =
-        yv.empty() ? 0.0
-                   : 100.0 * (1.0 - (Yv - matrix_of(phiv, set) * coef).squaredNorm() / Yv.squaredNorm());
-    m = reference;
-    std::vector<std::pair<double, DiscrepancyTerm>> ranked;
-    for (std::size_t j = 0; j < set.size(); ++j) {
-      const Candidate& cand = library[set[j]];
-      const auto J = static_cast<Eigen::Index>(j);
-      DiscrepancyTerm t;
-      t.basis = cand.text;
-      t.reading = cand.reading;
-      t.coefficient = coef[J];
-      t.std_error = fit.se[J];
-      t.unit = cand.unit;
-      if (cand.order != 0.0) {
-        if (cand.k[1] != 0.0) continue;  // the cos column joins its sin column, the next one
-        const double cs = coef[J];
-        const double cc = coef[J + 1];
-        const double amp = std::hypot(cs, cc);
-        const double ses = fit.se[J];
-        const double sec = fit.se[J + 1];
-        const std::string lead = cand.basis == b_i_sin ? "i " : "";
-        t.order = cand.order;
-        t.phase_rad = std::atan2(cc, cs);
-        t.coefficient = amp;
-        t.std_error = std::hypot(cs * ses, cc * sec) / amp;
-        t.phase_se_rad = std::hypot(cc * ses, cs * sec) / (amp * amp);
-        t.basis = fmt::format("{}sin({:g} theta + phase)", lead, cand.order);
-        t.equation = fmt::format("{} {} * {}sin({:g} theta {} rad)", signed_number(amp), cand.unit, lead,
-                                 cand.order, signed_number(t.phase_rad));
-        m.shaft_terms.push_back({t.equation, nullptr, {cand.order, t.phase_rad, 0.0, amp}, cand.basis});
-        ranked.emplace_back((A.col(J) * cs + A.col(J + 1) * cc).norm(), t);
-        continue;
-      }
-      t.equation = fmt::format("{} {} * {}", signed_number(t.coefficient), t.unit, cand.text);
-      std::array<double, 4> k = cand.k;
-      k[3] = t.coefficient;
-      m.shaft_terms.push_back({t.equation, nullptr, k, cand.basis});
-      ranked.emplace_back((A.col(J) * coef[J]).norm(), t);
-    }
-    std::stable_sort(ranked.begin(), ranked.end(),
-                     [](const auto& x, const auto& z) { return x.first > z.first; });
-    terms.clear();
-    for (auto& [part, t] : ranked) terms.push_back(std::move(t));
-  };
-  // Kept only where the held-out runs gain: the model with the terms is simulated on the
-  // validation runs, and a term (a harmonic with its pair) whose removal, the rest refitted,
-  // does not raise the validation speed RMS leaves; the terms leave altogether when the
-  // model with them does not beat the reference there.
-  out.rms_before_rpm = gap_detail::evaluate(reference, data, floors).rms[f_rpm];
-  auto held_out = [&](const std::vector<std::size_t>& set) {
-    model::Model m;
-    std::vector<DiscrepancyTerm> terms;
-    double tp = 0.0;
-    double vp = 0.0;
-    described(set, m, terms, tp, vp);
-    return gap_detail::evaluate(m, data, floors).rms[f_rpm];
-  };
-  auto without = [&](const std::vector<std::size_t>& set, std::size_t j) {
-    std::vector<std::size_t> rest;
-    const bool pair = library[set[j]].order != 0.0;
-    for (std::size_t q = 0; q < set.size(); ++q) {
-      if (q != j && !(pair && q == j + 1)) rest.push_back(set[q]);
-    }
-    return rest;
-  };
-  double rms_all = held_out(active);
-  while (active.size() > 1) {
-    std::size_t drop = active.size();
-    double best = rms_all;
-    for (std::size_t j = 0; j < active.size(); ++j) {
-      if (library[active[j]].order != 0.0 && library[active[j]].k[1] != 0.0) continue;
-      const std::vector<std::size_t> rest = without(active, j);
-      if (rest.empty()) continue;
-      const double r = held_out(rest);
-      if (r <= best) {
-        best = r;
-        drop = j;
-      }
-    }
-    if (drop == active.size()) break;
-    out.dropped.push_back(library[active[drop]].text);
-    active = without(active, drop);
-    rms_all = best;
-  }
-  if (!(rms_all < out.rms_before_rpm)) {
-    out.note = fmt::format(
-        "the terms found ({}) do not lower the validation speed RMS once simulated with the model; none kept",
-        library[active.front()].text);
-    out.rms_after_rpm = out.rms_before_rpm;
-    return out;
-  }
-  described(active, out.model, out.terms, out.train_explained_pct, out.validation_explained_pct);
-  out.rms_after_rpm = rms_all;
+  for (const DiscrepancyTerm& t : circuit.terms) out.terms.push_back(t);
+  if (!out.terms.empty()) out.note.clear();
   return out;
 }
 
 std::vector<model::Effect> catalog_seeds(const DiscrepancyResult& result, const model::Model& reference) {
   std::vector<model::Effect> seeds;
+  const auto seeded = [&](std::string_view name) {
+    return reference.effect(name) != nullptr ||
+           std::any_of(seeds.begin(), seeds.end(), [&](const model::Effect& e) { return e.name == name; });
+  };
   for (const DiscrepancyTerm& t : result.terms) {
-    const bool torque_harmonic = t.order != 0.0 && t.basis.rfind("sin(", 0) == 0;
-    if (torque_harmonic && !reference.effect("cogging")) {
+    const bool torque_harmonic = t.place == "shaft" && t.order != 0.0 && t.basis.rfind("sin(", 0) == 0;
+    const bool drop = t.basis == "-(Kt/R) tanh(i/0.01)" || t.basis == "tanh(i/0.01)";
+    const bool dead = t.basis == "-(Kt/R) tanh(v/0.01 supply)" || t.basis == "tanh(v/0.01 supply)";
+    if (torque_harmonic && !seeded("cogging")) {
       model::Effect e = model::default_effect("cogging");
       e.set("T_c_Nm", std::min(t.coefficient, 0.02));
       e.set("N_per_rev", t.order);
       e.set("phase_rad", t.phase_rad);
       seeds.push_back(std::move(e));
-    } else if (t.basis == "-(Kt/R) tanh(i/0.01)" && t.coefficient > 0.0 && !reference.effect("brush_drop")) {
+    } else if (drop && t.coefficient > 0.0 && !seeded("brush_drop")) {
       model::Effect e = model::default_effect("brush_drop");
       e.set("V_b_V", std::min(t.coefficient, 3.0));
+      seeds.push_back(std::move(e));
+    } else if (dead && t.coefficient > 0.0 && !seeded("hbridge")) {
+      // The bridge's deadband is the duty it loses: V_d / supply.
+      model::Effect e = model::default_effect("hbridge");
+      e.set("deadband", std::min(t.coefficient / reference.params.supply_V, 0.3));
       seeds.push_back(std::move(e));
     }
   }

@@ -9,18 +9,27 @@
 // the torque the model lacks satisfies (weak form: no derivative of a noisy speed)
 //   J (w(b) - w(a)) - int_a^b T dt = sum_k xi_k int_a^b phi_k dt.
 // The library phi_k: a constant, sign(w), w, w|w|, w^3, Stribeck-like drops
-// sign(w) exp(-|w|/w_s) and sign(w) exp(-(w/w_s)^2) at two speed scales, and sin and cos of
-// the strongest orders of the angle in the speed residual (inertia is a nominal parameter:
-// the refit's). A counting estimator's half-window lag is taken out of the measured speed
-// first. Forward stepwise sparse regression on the training runs adds one term at a time
-// while each removes a clear share of the residual (k_discrepancy_threshold), stands clear
-// of 0 and lowers the validation residual too, so of collinear terms only one joins. The
-// validation runs say how much of their torque residual the terms explain, and the terms,
-// added to the model as shaft torques, are simulated on them to say how far the speed gap
-// shrinks. Torques only: what the model misses on the voltage side (a delay, a drop) shows
-// here as the torque it causes, which a term of this library fits only in part.
+// sign(w) exp(-|w|/w_s) and sign(w) exp(-(w/w_s)^2) at two speed scales, friction levels
+// fading as exp(-t/tau), |i| sign(w), Kt i, sin and cos of the angle once per revolution and at
+// the strongest orders of the speed residual (plain and times i), and the voltage side as the
+// torque it costs: a drop against the current and a dead band of the drive (inertia is a
+// nominal parameter: the refit's). A counting estimator's half-window lag is taken out of the
+// measured speed first. Forward stepwise sparse regression on the training runs adds one term
+// at a time while each removes a clear share of the residual (k_discrepancy_threshold), stands
+// clear of 0 and lowers the validation residual too, so of collinear terms only one joins. The
+// terms, added to the model as shaft torques, are simulated on the validation runs and kept
+// only where the speed gap shrinks there, then refitted jointly with the nominal scales and the
+// model's catalog effects (discrepancy_joint.cpp), the joint model kept when the held-out runs
+// gain again.
+// Beside the shaft (discrepancy_side.cpp): where the current is measured, the armature
+// circuit's own weak form (a current reading's gain and offset, told from a resistance and a
+// constant voltage by the torque equation, which sees a reading's error too; a brush drop; a
+// dead band; a back-emf error), and the speed reading's offset, gain and error periodic in the
+// angle, tried after the shaft terms and before them, the order that leaves the held-out runs
+// clearly less winning.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -39,13 +48,16 @@ inline constexpr double k_discrepancy_window_s = 0.02;
 /// Fits the discrepancy of `reference` on the training runs of `data` and scores it on the
 /// validation runs (speed must be measured). `angle_orders`: the orders of the motor angle
 /// the library's harmonics use.
+/// `stop`: asked during the joint refit, true ends it there (a time budget).
 DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& data,
                                   const std::vector<double>& angle_orders,
-                                  const std::vector<OutputFloor>& floors);
+                                  const std::vector<OutputFloor>& floors,
+                                  const std::function<bool()>& stop = {});
 
 /// Catalog effects whose shape a surviving term has, started from the term's values: an
 /// angle harmonic of the torque -> cogging with its order, amplitude and phase; a drop
-/// against the current -> brush_drop. Effects `reference` already has are left out.
+/// against the current -> brush_drop; a voltage lost in the drive's direction -> hbridge with
+/// that deadband. Effects `reference` already has are left out.
 std::vector<model::Effect> catalog_seeds(const DiscrepancyResult& result, const model::Model& reference);
 
 }  // namespace mcg::fit

@@ -190,9 +190,10 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   if (!diagnosed || settings.discrepancy) {
     if (settings.progress) settings.progress("fitting the catalog-free discrepancy terms");
     // The reference is the diagnosis' model (for unexplained: the best candidate's).
-    report.discrepancy =
-        fit_discrepancy(report.candidates.front().model, data,
-                        angle_orders(report.candidates.front().model, data.train, 2), report.floors);
+    const auto deadline = settings.deadline;
+    report.discrepancy = fit_discrepancy(
+        report.candidates.front().model, data, angle_orders(report.candidates.front().model, data.train, 2),
+        report.floors, [deadline] { return std::chrono::steady_clock::now() > deadline; });
     if (!diagnosed) seed_catalog(report, data, settings, before.score);
   }
   report.simulated_before = before.simulated;

@@ -170,6 +170,9 @@ struct DiscrepancyTerm {
   double order = 0.0;        ///< cycles per revolution of an angle harmonic, else 0
   double phase_rad = 0.0;    ///< its phase (coefficient = amplitude), with its standard error
   double phase_se_rad = 0.0;
+  /// Where it acts: "shaft" (a torque), "circuit" (a voltage in the armature circuit), "current
+  /// reading" or "speed reading" (an error of the measured channel, not of the machine).
+  std::string place = "shaft";
 };
 
 /// A catalog effect started from a discrepancy term's values, fitted and scored.
@@ -195,6 +198,8 @@ struct DiscrepancyResult {
   std::string note;              ///< why nothing was fitted, when `terms` is empty
   std::vector<std::string> dropped;    ///< terms selected but left out: the held-out runs did not gain
   std::vector<DiscrepancySeed> seeds;  ///< catalog effects seeded from the terms
+  /// The joint refit of the shaft terms with the nominal scales: what it gave on the held-out runs.
+  std::string joint;
 };
 
 /// The diagnosis.

@@ -243,6 +243,7 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
     const DiscrepancyResult& d = *report.discrepancy;
     for (const auto& t : d.terms) w.meta("discrepancy_term", t.equation + "  (" + t.reading + ")");
     for (const auto& t : d.dropped) w.meta("discrepancy_dropped", t + " (the held-out runs do not gain)");
+    if (!d.joint.empty()) w.meta("discrepancy_joint", d.joint);
     for (const auto& sd : d.seeds) {
       w.meta("discrepancy_seed", fmt::format("{} (validation rpm RMS {}{})", sd.effect, number(sd.rms_rpm),
                                              sd.closes ? ", closes the gap" : ""));
@@ -307,13 +308,15 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
       out << "discrepancy (catalog-free): " << d.note << "\n";
     } else {
       out << fmt::format(
-          "discrepancy (catalog-free, {} of {} library terms kept): the torque the model lacks on the "
-          "motor shaft, w in rad/s at the motor, theta in rad:\n",
+          "discrepancy (catalog-free, {} of {} library terms kept): what the model lacks, on the motor "
+          "shaft, in its circuit or in a reading, w in rad/s at the motor, theta in rad:\n",
           d.terms.size(), d.library_size);
       for (const auto& t : d.terms) {
-        out << fmt::format("  {}   (+- {:.2g} {})   {}\n", t.equation, t.std_error, t.unit, t.reading);
+        out << fmt::format("  {}: {}   (+- {:.2g} {})   {}\n", t.place, t.equation, t.std_error, t.unit,
+                           t.reading);
       }
       for (const auto& t : d.dropped) out << "  left out, the held-out runs do not gain: " << t << "\n";
+      if (!d.joint.empty()) out << "  joint refit with the nominal scales: " << d.joint << "\n";
       for (const auto& sd : d.seeds) {
         out << fmt::format("  seeds the catalog: {} (validation rpm RMS {:.2f}{})\n", sd.effect, sd.rms_rpm,
                            sd.closes ? ", closes the gap" : "");
