@@ -385,6 +385,45 @@ TEST(GapDecision, AnUndeterminedCandidateIsNeverTheDiagnosis) {
   EXPECT_EQ(with_current.size(), speed_only.size() + 1);
 }
 
+// Every row of the gap CSV has the header's columns, so that the flags column is the flags:
+// a status of several clauses or an error message with commas stays one cell.
+TEST(GapCsv, EveryRowHasTheHeadersColumnsWhateverTheStatusSays) {
+  gap_detail::Candidates cands;
+  cands.none = scored("none", 20.0, {});
+  cands.none.status = "as given";
+  cands.pm = scored("param_mismatch", 15.0, {"param_mismatch.Kt_scale"});
+  GapCandidate friction = scored("friction_levels", 1.3, {"friction_levels.Tc_Nm"});
+  friction.status = "fitted, budget spent, param_mismatch.R_scale pinned";
+  friction.significant = true;
+  friction.flags = {{FitFlag::Kind::at_bound, {"friction_levels.Tc_Nm"}}};
+  GapCandidate failed = scored("dead_time", 18.0, {"dead_time.tau_d_s"});
+  failed.status = "fit failed: run.csv: column 'rpm', row 3: invalid";
+  cands.singles = {friction, failed};
+  cands.best_single = "friction_levels";
+  GapReport report;
+  report.floors = {OutputFloor{"rpm", {}, 2.0}};
+  gap_detail::decide(cands, true, 1, report);
+  std::ostringstream csv;
+  write_gap_csv(csv, report);
+  std::istringstream lines(csv.str());
+  std::string line;
+  std::size_t rows = 0;
+  std::ptrdiff_t columns = 0;
+  while (std::getline(lines, line)) {
+    if (line.empty() || line.front() == '#') continue;
+    if (rows++ == 0) {
+      ASSERT_TRUE(line.ends_with(",status,flags")) << line;
+      columns = std::count(line.begin(), line.end(), ',');
+    }
+    EXPECT_EQ(std::count(line.begin(), line.end(), ','), columns) << line;
+  }
+  EXPECT_EQ(rows, report.candidates.size() + 1);
+  EXPECT_NE(csv.str().find(
+                ",fitted; budget spent; param_mismatch.R_scale pinned,friction_levels.Tc_Nm at a bound\n"),
+            std::string::npos)
+      << csv.str();
+}
+
 // The friction candidates start where the data put them: the levels a model lacks are read off
 // the quasi-steady stretches and starts from rest of the training runs, net of what the model's
 // own friction shows through the same estimate.
