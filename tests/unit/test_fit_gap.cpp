@@ -265,6 +265,53 @@ TEST(GapData, SingleFileIsSplitAtTheEventNearestSixtyPercent) {
       << data.split_note;
 }
 
+// An automatic split trains on what it scores: a run that reverses after the event nearest
+// 60 % is split later, where training has seen the reverse drive; --split is taken as given,
+// and its note says what training lacks; a run no split in 40-80 % covers is refused.
+TEST(GapData, AutomaticSplitTrainsOnBothDirectionsOrRefuses) {
+  Program p = steps(3.0, 2.0, 8.0, 1, 2, false);
+  for (std::size_t n = 0; n < p.v.size(); ++n) p.v[n] = n < 1500 ? 3.0 : n < 2000 ? 6.0 : -6.0;
+  const table::Table t = measure(p, {}, 1, "reverse.csv");
+  const GapData data = prepare_gap_data({t}, {}, model::builtin_rig(), 0.6);
+  const std::size_t split = data.validate[0].first_scored;
+  EXPECT_GT(split, 2000U) << data.split_note;
+  EXPECT_LE(split, 2400U) << data.split_note;
+  EXPECT_EQ(data.train[0].inputs.t_s.size(), split);
+  EXPECT_LT(data.train[0].inputs.v_V.back(), 0.0);
+  EXPECT_EQ(data.split_note.find("although"), std::string::npos) << data.split_note;
+
+  const GapData given = prepare_gap_data({t}, {}, model::builtin_rig(), 0.6, true);
+  EXPECT_EQ(given.validate[0].first_scored, 2000U);
+  EXPECT_NE(given.split_note.find("; as --split asks, although training never drives reverse"),
+            std::string::npos)
+      << given.split_note;
+
+  // Reversed only in the last 10 %: no split in 40-80 % trains on it.
+  for (std::size_t n = 0; n < p.v.size(); ++n) p.v[n] = n < 2700 ? 4.0 : -4.0;
+  const table::Table late = measure(p, {}, 1, "late.csv");
+  try {
+    prepare_gap_data({late}, {}, model::builtin_rig(), 0.6);
+    FAIL() << "a split that never trains on the reverse drive was taken";
+  } catch (const Error& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("late.csv: no split in 40-80 % of its duration trains on what it scores "
+                                   "(at t = 1.800 s training never drives reverse); choose one with --split "
+                                   "or give --validate runs"),
+        std::string::npos)
+        << e.what();
+  }
+  // A staircase 0.12 (k + 1)^2 V, 0.3 s a step: training to the event nearest 60 % holds at most
+  // 4.3 V of the 12 V scored, and so does every event in 40-80 % (the 7.68 V step begins at 2.1 s,
+  // the next event at 2.4 s is past 80 %): the split goes to 75 % of the duration, 2.25 s.
+  for (std::size_t n = 0; n < p.v.size(); ++n)
+    p.v[n] = 0.12 * std::pow(static_cast<double>(n / 300 + 1), 2.0);
+  const GapData stairs = prepare_gap_data({measure(p, {}, 1, "stairs.csv")}, {}, model::builtin_rig(), 0.6);
+  EXPECT_EQ(stairs.validate[0].first_scored, 2250U) << stairs.split_note;
+  const auto& trained = stairs.train[0].inputs.v_V;
+  EXPECT_GE(*std::max_element(trained.begin(), trained.end()), k_split_level_share * 12.0)
+      << stairs.split_note;
+}
+
 TEST(GapData, CurrentAtTheAdcRailsIsNotMeasured) {
   Program p = steps(1.0, 12.0, 14.0, 2, 0, false);  // 12 V into a stalled motor: about 3 A
   const table::Table t = measure(p, {}, 2, "rails.csv");

@@ -232,7 +232,7 @@ int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
   };
   const std::vector<table::Table> train = load(options.train);
   const std::vector<table::Table> validate = load(options.validate);
-  GapData data = prepare_gap_data(train, validate, model.params, options.split_fraction);
+  GapData data = prepare_gap_data(train, validate, model.params, options.split_fraction, options.split_given);
   for (auto& run : data.train) run.gear_ratio = options.gear_ratio;
   for (auto& sr : data.validate) sr.run.gear_ratio = options.gear_ratio;
   settings.threads = options.threads;
