@@ -469,6 +469,13 @@ TEST(GapCsv, EveryRowHasTheHeadersColumnsWhateverTheStatusSays) {
                 ",fitted; budget spent; param_mismatch.R_scale pinned,friction_levels.Tc_Nm at a bound\n"),
             std::string::npos)
       << csv.str();
+  // With --format text the summary is on stdout: the diagnosis' flags are warnings on stderr.
+  std::ostringstream err;
+  Diagnostics diag(err, "mcg-fit gap");
+  report.candidates.front().warnings = {"friction_levels.Tc_Nm = 10 N m is at its upper bound"};
+  warn_flags(report, diag);
+  EXPECT_EQ(err.str(),
+            "mcg-fit gap: warning: friction_levels: friction_levels.Tc_Nm = 10 N m is at its upper bound\n");
 }
 
 // The friction candidates start where the data put them: the levels a model lacks are read off

@@ -209,6 +209,11 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   return report;
 }
 
+void warn_flags(const GapReport& report, Diagnostics& diag) {
+  const GapCandidate& diagnosis = report.candidates.front();
+  for (const auto& w : diagnosis.warnings) diag.warning(fmt::format("{}: {}", diagnosis.name, w));
+}
+
 int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
   const auto started = std::chrono::steady_clock::now();
   model::Model model;
@@ -253,6 +258,7 @@ int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
   }
   if (options.format == "text") {
     write_gap_text(out, report);
+    warn_flags(report, diag);
   } else {
     write_gap_csv(out, report);
     write_gap_text(diag.stream(), report);

@@ -245,6 +245,9 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
 void write_gap_csv(std::ostream& out, const GapReport& report);
 /// The human summary (the same content with the regime tables and residual checks).
 void write_gap_text(std::ostream& out, const GapReport& report);
+/// The diagnosis' honest-numbers findings as warnings on `diag`, "NAME: warning" (with
+/// --format text, whose summary is on stdout).
+void warn_flags(const GapReport& report, Diagnostics& diag);
 /// The validation time series for plotting: run, t, inputs, measured, before, after and
 /// both residuals per output.
 void write_gap_residuals(std::ostream& out, const GapReport& report, const GapData& data);
