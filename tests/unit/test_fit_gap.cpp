@@ -109,6 +109,34 @@ TEST(GapBands, SinusoidPowerLandsInItsBandWithItsRms) {
   EXPECT_NEAR(share, 1.0, 1e-12);
 }
 
+// Sampled at 100 Hz or 20 Hz, the bands end at the Nyquist frequency: no "50-50 Hz" band, and
+// a tone just below Nyquist lands in the band that holds it.
+TEST(GapBands, BandsEndAtTheNyquistFrequency) {
+  for (const double dt : {0.01, 0.05}) {
+    const double nyquist = 0.5 / dt;
+    std::vector<double> r(4096);
+    for (std::size_t n = 0; n < r.size(); ++n) {
+      r[n] = 2.0 * std::sin(2.0 * std::numbers::pi * 0.9 * nyquist * static_cast<double>(n) * dt);
+    }
+    const auto bands = band_breakdown(r, dt);
+    ASSERT_EQ(bands.size(), 4U);
+    const std::size_t top = dt == 0.01 ? 2 : 1;
+    EXPECT_EQ(bands[top].regime, fmt::format("{:g}-{:g} Hz", top == 2 ? 10.0 : 1.0, nyquist));
+    EXPECT_GT(bands[top].share, 0.99);
+    EXPECT_NEAR(bands[top].rms, 2.0 / std::sqrt(2.0), 0.03);
+    double share = 0.0;
+    for (std::size_t b = 0; b < bands.size(); ++b) {
+      share += bands[b].share;
+      if (b > top) {
+        EXPECT_EQ(bands[b].samples, 0U) << bands[b].regime;
+        EXPECT_EQ(bands[b].share, 0.0) << bands[b].regime;
+        EXPECT_NE(bands[b].regime.find("beyond Nyquist"), std::string::npos) << bands[b].regime;
+      }
+    }
+    EXPECT_NEAR(share, 1.0, 1e-12);
+  }
+}
+
 TEST(GapWhiteness, WhiteNoisePassesDelayedInputAndColouredNoiseFail) {
   std::mt19937_64 rng(7);
   std::normal_distribution<double> normal(0.0, 1.0);
