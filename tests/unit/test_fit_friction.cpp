@@ -1,13 +1,13 @@
 // Friction identification: the report's friction values come back from simulated runs.
-#include "fit/friction.hpp"
-
-#include "common/error.hpp"
-#include "test_fit_support.hpp"
-#include "test_support_error.hpp"
-
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+
+#include "common/error.hpp"
+#include "fit/friction.hpp"
+#include "test_fit_support.hpp"
+#include "test_support_error.hpp"
 
 namespace mcg::fit {
 namespace {
@@ -160,10 +160,18 @@ TEST(FitFrictionErrors, BadDataIsNamed) {
   // A ramp and a single level: speeds at one or two levels only.
   const auto narrow = measure(rig, Program{}.hold(0.0, 0.2, 0).ramp(0.0, 0.6, 2.0, 0).hold(3.0, 1.0, 0).inputs, 7);
   EXPECT_EQ(error_of({narrow}).substr(0, 62), "clutch state 0: no excitation in the needed range: 2 distinct ");
+  // Without clutch and load columns the run is the motor alone: the same stuck motor.
+  auto alone = stuck;
+  for (const char* name : {"clutch", "r_load"}) {
+    const auto at = std::find(alone.names.begin(), alone.names.end(), name) - alone.names.begin();
+    alone.names.erase(alone.names.begin() + at);
+    alone.columns.erase(alone.columns.begin() + at);
+  }
+  EXPECT_EQ(error_of({alone}), error_of({stuck}));
   auto missing = stuck;
-  missing.names.erase(missing.names.begin() + 2);
-  missing.columns.erase(missing.columns.begin() + 2);
-  EXPECT_EQ(error_of({missing}), "sim.csv: missing column 'clutch' (has: t,v,r_load,rpm)");
+  missing.names.erase(missing.names.begin() + 1);
+  missing.columns.erase(missing.columns.begin() + 1);
+  EXPECT_EQ(error_of({missing}), "sim.csv: missing column 'v' (has: t,clutch,r_load,rpm)");
   auto short_run = measure(rig, Program{}.hold(1.0, 0.05, 0).inputs, 8);
   EXPECT_EQ(error_of({short_run}), "sim.csv: too short: 50 rows (at least 100 needed)");
   FrictionOptions bad;

@@ -109,6 +109,34 @@ TEST(GapBands, SinusoidPowerLandsInItsBandWithItsRms) {
   EXPECT_NEAR(share, 1.0, 1e-12);
 }
 
+// Sampled at 100 Hz or 20 Hz, the bands end at the Nyquist frequency: no "50-50 Hz" band, and
+// a tone just below Nyquist lands in the band that holds it.
+TEST(GapBands, BandsEndAtTheNyquistFrequency) {
+  for (const double dt : {0.01, 0.05}) {
+    const double nyquist = 0.5 / dt;
+    std::vector<double> r(4096);
+    for (std::size_t n = 0; n < r.size(); ++n) {
+      r[n] = 2.0 * std::sin(2.0 * std::numbers::pi * 0.9 * nyquist * static_cast<double>(n) * dt);
+    }
+    const auto bands = band_breakdown(r, dt);
+    ASSERT_EQ(bands.size(), 4U);
+    const std::size_t top = dt == 0.01 ? 2 : 1;
+    EXPECT_EQ(bands[top].regime, fmt::format("{:g}-{:g} Hz", top == 2 ? 10.0 : 1.0, nyquist));
+    EXPECT_GT(bands[top].share, 0.99);
+    EXPECT_NEAR(bands[top].rms, 2.0 / std::sqrt(2.0), 0.03);
+    double share = 0.0;
+    for (std::size_t b = 0; b < bands.size(); ++b) {
+      share += bands[b].share;
+      if (b > top) {
+        EXPECT_EQ(bands[b].samples, 0U) << bands[b].regime;
+        EXPECT_EQ(bands[b].share, 0.0) << bands[b].regime;
+        EXPECT_NE(bands[b].regime.find("beyond Nyquist"), std::string::npos) << bands[b].regime;
+      }
+    }
+    EXPECT_NEAR(share, 1.0, 1e-12);
+  }
+}
+
 TEST(GapWhiteness, WhiteNoisePassesDelayedInputAndColouredNoiseFail) {
   std::mt19937_64 rng(7);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -265,6 +293,53 @@ TEST(GapData, SingleFileIsSplitAtTheEventNearestSixtyPercent) {
       << data.split_note;
 }
 
+// An automatic split trains on what it scores: a run that reverses after the event nearest
+// 60 % is split later, where training has seen the reverse drive; --split is taken as given,
+// and its note says what training lacks; a run no split in 40-80 % covers is refused.
+TEST(GapData, AutomaticSplitTrainsOnBothDirectionsOrRefuses) {
+  Program p = steps(3.0, 2.0, 8.0, 1, 2, false);
+  for (std::size_t n = 0; n < p.v.size(); ++n) p.v[n] = n < 1500 ? 3.0 : n < 2000 ? 6.0 : -6.0;
+  const table::Table t = measure(p, {}, 1, "reverse.csv");
+  const GapData data = prepare_gap_data({t}, {}, model::builtin_rig(), 0.6);
+  const std::size_t split = data.validate[0].first_scored;
+  EXPECT_GT(split, 2000U) << data.split_note;
+  EXPECT_LE(split, 2400U) << data.split_note;
+  EXPECT_EQ(data.train[0].inputs.t_s.size(), split);
+  EXPECT_LT(data.train[0].inputs.v_V.back(), 0.0);
+  EXPECT_EQ(data.split_note.find("although"), std::string::npos) << data.split_note;
+
+  const GapData given = prepare_gap_data({t}, {}, model::builtin_rig(), 0.6, true);
+  EXPECT_EQ(given.validate[0].first_scored, 2000U);
+  EXPECT_NE(given.split_note.find("; as --split asks, although training never drives reverse"),
+            std::string::npos)
+      << given.split_note;
+
+  // Reversed only in the last 10 %: no split in 40-80 % trains on it.
+  for (std::size_t n = 0; n < p.v.size(); ++n) p.v[n] = n < 2700 ? 4.0 : -4.0;
+  const table::Table late = measure(p, {}, 1, "late.csv");
+  try {
+    prepare_gap_data({late}, {}, model::builtin_rig(), 0.6);
+    FAIL() << "a split that never trains on the reverse drive was taken";
+  } catch (const Error& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("late.csv: no split in 40-80 % of its duration trains on what it scores "
+                                   "(at t = 1.800 s training never drives reverse); choose one with --split "
+                                   "or give --validate runs"),
+        std::string::npos)
+        << e.what();
+  }
+  // A staircase 0.12 (k + 1)^2 V, 0.3 s a step: training to the event nearest 60 % holds at most
+  // 4.3 V of the 12 V scored, and so does every event in 40-80 % (the 7.68 V step begins at 2.1 s,
+  // the next event at 2.4 s is past 80 %): the split goes to 75 % of the duration, 2.25 s.
+  for (std::size_t n = 0; n < p.v.size(); ++n)
+    p.v[n] = 0.12 * std::pow(static_cast<double>(n / 300 + 1), 2.0);
+  const GapData stairs = prepare_gap_data({measure(p, {}, 1, "stairs.csv")}, {}, model::builtin_rig(), 0.6);
+  EXPECT_EQ(stairs.validate[0].first_scored, 2250U) << stairs.split_note;
+  const auto& trained = stairs.train[0].inputs.v_V;
+  EXPECT_GE(*std::max_element(trained.begin(), trained.end()), k_split_level_share * 12.0)
+      << stairs.split_note;
+}
+
 TEST(GapData, CurrentAtTheAdcRailsIsNotMeasured) {
   Program p = steps(1.0, 12.0, 14.0, 2, 0, false);  // 12 V into a stalled motor: about 3 A
   const table::Table t = measure(p, {}, 2, "rails.csv");
@@ -383,6 +458,52 @@ TEST(GapDecision, AnUndeterminedCandidateIsNeverTheDiagnosis) {
   const auto with_current = gap_detail::mismatch_free({}, model::builtin_rig(), true);
   EXPECT_EQ(std::count(with_current.begin(), with_current.end(), "param_mismatch.R_scale"), 1);
   EXPECT_EQ(with_current.size(), speed_only.size() + 1);
+}
+
+// Every row of the gap CSV has the header's columns, so that the flags column is the flags:
+// a status of several clauses or an error message with commas stays one cell.
+TEST(GapCsv, EveryRowHasTheHeadersColumnsWhateverTheStatusSays) {
+  gap_detail::Candidates cands;
+  cands.none = scored("none", 20.0, {});
+  cands.none.status = "as given";
+  cands.pm = scored("param_mismatch", 15.0, {"param_mismatch.Kt_scale"});
+  GapCandidate friction = scored("friction_levels", 1.3, {"friction_levels.Tc_Nm"});
+  friction.status = "fitted, budget spent, param_mismatch.R_scale pinned";
+  friction.significant = true;
+  friction.flags = {{FitFlag::Kind::at_bound, {"friction_levels.Tc_Nm"}}};
+  GapCandidate failed = scored("dead_time", 18.0, {"dead_time.tau_d_s"});
+  failed.status = "fit failed: run.csv: column 'rpm', row 3: invalid";
+  cands.singles = {friction, failed};
+  cands.best_single = "friction_levels";
+  GapReport report;
+  report.floors = {OutputFloor{"rpm", {}, 2.0}};
+  gap_detail::decide(cands, true, 1, report);
+  std::ostringstream csv;
+  write_gap_csv(csv, report);
+  std::istringstream lines(csv.str());
+  std::string line;
+  std::size_t rows = 0;
+  std::ptrdiff_t columns = 0;
+  while (std::getline(lines, line)) {
+    if (line.empty() || line.front() == '#') continue;
+    if (rows++ == 0) {
+      ASSERT_TRUE(line.ends_with(",status,flags")) << line;
+      columns = std::count(line.begin(), line.end(), ',');
+    }
+    EXPECT_EQ(std::count(line.begin(), line.end(), ','), columns) << line;
+  }
+  EXPECT_EQ(rows, report.candidates.size() + 1);
+  EXPECT_NE(csv.str().find(
+                ",fitted; budget spent; param_mismatch.R_scale pinned,friction_levels.Tc_Nm at a bound\n"),
+            std::string::npos)
+      << csv.str();
+  // With --format text the summary is on stdout: the diagnosis' flags are warnings on stderr.
+  std::ostringstream err;
+  Diagnostics diag(err, "mcg-fit gap");
+  report.candidates.front().warnings = {"friction_levels.Tc_Nm = 10 N m is at its upper bound"};
+  warn_flags(report, diag);
+  EXPECT_EQ(err.str(),
+            "mcg-fit gap: warning: friction_levels: friction_levels.Tc_Nm = 10 N m is at its upper bound\n");
 }
 
 // The friction candidates start where the data put them: the levels a model lacks are read off

@@ -95,6 +95,51 @@ TEST(ModelEffects, ValuesBeyondTheDefaultRangeReadBackWithTheirBounds) {
   }
 }
 
+// Any motor: an effect's torque levels may reach twice the motor's own stall torque in a fit
+// (its viscous coefficient twice stall torque per no-load speed), so a motor 200 times the
+// rig's stall torque is fitted without [bounds]; the rig's catalog ranges stand, and a fitted
+// value beyond them reads back.
+TEST(ModelEffects, TorqueLevelsAreBoundedByTheMotorsOwnSize) {
+  Model big;
+  big.params.motor.Kt_Nm_A *= 20.0;
+  big.params.motor.Ke_V_s_rad *= 20.0;
+  big.params.motor.R_ohm /= 10.0;
+  for (const char* name : {"friction_levels", "friction_asymmetry", "dead_time"}) {
+    big.effects.push_back(default_effect(name));
+  }
+  Model rig;
+  rig.effects = big.effects;
+  const double stall_Nm = big.params.motor.Kt_Nm_A * big.params.supply_V / big.params.motor.R_ohm;
+  const double free_rad_s = big.params.supply_V / big.params.motor.Ke_V_s_rad;
+  ASSERT_GT(2.0 * stall_Nm, 10.0);
+  ASSERT_GT(2.0 * stall_Nm / free_rad_s, 1.0);
+  auto info = [](const Model& m, const std::string& name) {
+    for (const auto& p : parameters(m)) {
+      if (p.name == name) return p;
+    }
+    ADD_FAILURE() << name;
+    return ParamInfo{};
+  };
+  EXPECT_DOUBLE_EQ(info(big, "friction_levels.Tc_Nm").upper, 2.0 * stall_Nm);
+  EXPECT_DOUBLE_EQ(info(big, "friction_levels.Tc_Nm").lower, 0.0);
+  EXPECT_DOUBLE_EQ(info(big, "friction_levels.c1_Nm_s_rad").upper, 2.0 * stall_Nm / free_rad_s);
+  EXPECT_DOUBLE_EQ(info(big, "friction_asymmetry.dT_Nm").lower, -2.0 * stall_Nm);
+  EXPECT_DOUBLE_EQ(info(big, "friction_asymmetry.dT_Nm").upper, 2.0 * stall_Nm);
+  EXPECT_DOUBLE_EQ(info(big, "dead_time.tau_d_s").upper, 0.05);
+  EXPECT_DOUBLE_EQ(info(rig, "friction_levels.Tc_Nm").upper, 10.0);
+  EXPECT_DOUBLE_EQ(info(rig, "friction_levels.c1_Nm_s_rad").upper, 1.0);
+
+  Model fitted = big;
+  set_parameter(fitted, "friction_levels.Tc_Nm", 0.8 * stall_Nm);
+  config::Ini ini;
+  model_to_ini(fitted, ini);
+  std::ostringstream text;
+  ini.write(text);
+  std::istringstream back(text.str());
+  const Model read = model_from_ini(config::Ini::parse(back, "big.ini"));
+  EXPECT_DOUBLE_EQ(get_parameter(read, "friction_levels.Tc_Nm"), 0.8 * stall_Nm) << text.str();
+}
+
 TEST(ModelEffects, ParseErrorsNameTheBadText) {
   EXPECT_EQ(error_of("stribeck:v_s_rad_s=8a"), "--effect: stribeck.v_s_rad_s: invalid number '8a'");
   EXPECT_EQ(error_of("stribeck:v_s_rad_s"), "--effect: expected key=value, got 'v_s_rad_s'");

@@ -145,6 +145,7 @@ std::vector<RegimeStat> band_breakdown(std::span<const double> residual, double 
     }
   }
   double total = 0.0;
+  const double nyquist_hz = 0.5 / dt_s;
   if (n > 0) {
     Eigen::FFT<double> fft;
     std::vector<std::complex<double>> spectrum;
@@ -154,20 +155,23 @@ std::vector<RegimeStat> band_breakdown(std::span<const double> residual, double 
       const double weight = (k == 0 || k == padded / 2) ? 1.0 : 2.0;
       const double power = weight * std::norm(spectrum[k]) / static_cast<double>(padded);
       const double f_hz = static_cast<double>(k) / (static_cast<double>(padded) * dt_s);
+      // A band that starts at or above the Nyquist frequency holds nothing: the Nyquist bin
+      // closes the band below it.
       std::size_t b = edges.size() - 1;
-      while (b > 0 && f_hz < edges[b]) --b;
+      while (b > 0 && (f_hz < edges[b] || edges[b] >= nyquist_hz)) --b;
       bands[b].sum_sq += power;
       total += power;
     }
   }
   std::vector<RegimeStat> out;
-  const double nyquist_hz = 0.5 / dt_s;
   for (std::size_t b = 0; b < edges.size(); ++b) {
     RegimeStat s;
     s.group = "band";
-    const double hi = b + 1 < edges.size() ? edges[b + 1] : nyquist_hz;
-    s.regime = fmt::format("{:g}-{:g} Hz", edges[b], hi);
-    s.samples = finite;
+    const bool above = b > 0 && edges[b] >= nyquist_hz;
+    const double hi = b + 1 < edges.size() ? std::min(edges[b + 1], nyquist_hz) : nyquist_hz;
+    s.regime = above ? fmt::format("{:g} Hz and above (beyond Nyquist)", edges[b])
+                     : fmt::format("{:g}-{:g} Hz", edges[b], hi);
+    s.samples = above ? 0 : finite;
     s.rms = finite > 0 ? std::sqrt(bands[b].sum_sq / static_cast<double>(finite)) : k_nan;
     s.share = total > 0.0 ? bands[b].sum_sq / total : 0.0;
     out.push_back(std::move(s));

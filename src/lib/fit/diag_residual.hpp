@@ -54,7 +54,9 @@ struct RegimeContext {
 /// kept (samples = 0) so that tables of several models line up.
 std::vector<RegimeStat> regime_breakdown(const RegimeContext& context, std::span<const double> residual);
 
-/// The frequency bands of band_breakdown(), Hz: [0, 1), [1, 10), [10, 50), [50, Nyquist].
+/// The frequency bands of band_breakdown(), Hz: [0, 1), [1, 10), [10, 50), [50, Nyquist]; a
+/// band ends at the Nyquist frequency when that is lower, and one that starts at or above it
+/// is empty (0 samples, left out of the tables).
 const std::vector<double>& band_edges_hz();
 
 /// Breakdown of the residual's power over frequency bands (periodogram of the mean-included

@@ -69,8 +69,9 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
   } else {
     in.v_V = table.col("v");
   }
-  in.clutch = direct && !table.has("clutch") ? std::vector<double>(n, 0.0) : table.col("clutch");
-  in.r_load_ohm = direct && !table.has("r_load") ? std::vector<double>(n, model::k_open_circuit) : table.col("r_load");
+  // A run without clutch and load columns is the motor alone, as in make_run.
+  in.clutch = table.has("clutch") ? table.col("clutch") : std::vector<double>(n, 0.0);
+  in.r_load_ohm = table.has("r_load") ? table.col("r_load") : std::vector<double>(n, model::k_open_circuit);
   model::validate_inputs(in, table.source, table.first_line);
   std::vector<double> omega;
   if (!options.position_column.empty()) {

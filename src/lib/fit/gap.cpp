@@ -210,6 +210,11 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   return report;
 }
 
+void warn_flags(const GapReport& report, Diagnostics& diag) {
+  const GapCandidate& diagnosis = report.candidates.front();
+  for (const auto& w : diagnosis.warnings) diag.warning(fmt::format("{}: {}", diagnosis.name, w));
+}
+
 int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
   const auto started = std::chrono::steady_clock::now();
   model::Model model;
@@ -233,7 +238,7 @@ int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
   };
   const std::vector<table::Table> train = load(options.train);
   const std::vector<table::Table> validate = load(options.validate);
-  GapData data = prepare_gap_data(train, validate, model.params, options.split_fraction);
+  GapData data = prepare_gap_data(train, validate, model.params, options.split_fraction, options.split_given);
   for (auto& run : data.train) run.gear_ratio = options.gear_ratio;
   for (auto& sr : data.validate) sr.run.gear_ratio = options.gear_ratio;
   settings.threads = options.threads;
@@ -254,6 +259,7 @@ int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
   }
   if (options.format == "text") {
     write_gap_text(out, report);
+    warn_flags(report, diag);
   } else {
     write_gap_csv(out, report);
     write_gap_text(diag.stream(), report);

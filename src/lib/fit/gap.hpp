@@ -107,14 +107,24 @@ struct GapData {
   std::string split_note;  ///< empty unless a single file was split
 };
 
+/// An automatic split's training rows must hold, in each direction the scored rows drive, a
+/// drive level at least this share of the largest the scored rows hold.
+inline constexpr double k_split_level_share = 0.5;
+
 /// Builds the training and validation sets from tables. With no validation table and one
 /// training table, that table is split at the event (clutch or relay change, jump > 1 V)
 /// nearest to split_fraction of its duration, within 40-80 %, else at split_fraction itself:
 /// the rows before train; the whole file is simulated for validation but only the rows
-/// after the split are scored. Outputs compared: rpm and i where measured. Current samples
-/// at the ADC rails (from `# i_measurement: ... range A..B A`) are dropped as not measured.
+/// after the split are scored. Unless the split was given (`split_given`: --split), training
+/// must cover what is scored: every direction the scored rows drive and the motor turns, and
+/// in each, a drive level of at least k_split_level_share of the scored rows' largest; when
+/// that split does not, the nearest one in 40-80 % that does is taken (other events first,
+/// then every 5 % of the duration), and when none does it throws, asking for --split or
+/// --validate runs. A given split that does not cover says so in the split note.
+/// Outputs compared: rpm and i where measured. Current samples at the ADC rails (from
+/// `# i_measurement: ... range A..B A`) are dropped as not measured.
 GapData prepare_gap_data(const std::vector<table::Table>& train, const std::vector<table::Table>& validate,
-                         const model::Params& params, double split_fraction);
+                         const model::Params& params, double split_fraction, bool split_given = false);
 
 /// Per validation output: the measured series (scored rows only, NaN elsewhere) and the
 /// noise floor of its measurement chain.
@@ -240,6 +250,9 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
 void write_gap_csv(std::ostream& out, const GapReport& report);
 /// The human summary (the same content with the regime tables and residual checks).
 void write_gap_text(std::ostream& out, const GapReport& report);
+/// The diagnosis' honest-numbers findings as warnings on `diag`, "NAME: warning" (with
+/// --format text, whose summary is on stdout).
+void warn_flags(const GapReport& report, Diagnostics& diag);
 /// The validation time series for plotting: run, t, inputs, measured, before, after and
 /// both residuals per output.
 void write_gap_residuals(std::ostream& out, const GapReport& report, const GapData& data);
@@ -253,6 +266,7 @@ struct GapOptions {
   std::string residuals;        ///< path of the residual series, empty = none
   unsigned threads = 0;
   double split_fraction = 0.6;
+  bool split_given = false;      ///< --split was given: the split is taken as it is
   std::vector<std::string> fix;  ///< "NAME=VALUE": measured, so never rescaled by a refit
   std::vector<std::string> exclude;  ///< catalog effects not tried
   double from_s = -std::numeric_limits<double>::infinity();  ///< time range of each run

@@ -1,17 +1,17 @@
 // The gap diagnosis' data: the training and validation runs, the split of a single file, the
 // measurement chain of each run and the noise floors it implies.
-#include "fit/gap_parts.hpp"
-
-#include "common/demand.hpp"
-#include "common/error.hpp"
-#include "measurement/measurement.hpp"
-#include "table/table.hpp"
-
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <span>
+
+#include "common/demand.hpp"
+#include "common/error.hpp"
+#include "fit/gap_parts.hpp"
+#include "measurement/measurement.hpp"
+#include "table/table.hpp"
 
 namespace mcg::fit {
 
@@ -42,6 +42,103 @@ std::size_t split_row(const model::Inputs& in, double fraction, bool& at_event) 
   at_event = best != rows;
   if (at_event) return best;
   return static_cast<std::size_t>(std::lower_bound(in.t_s.begin(), in.t_s.end(), target) - in.t_s.begin());
+}
+
+/// What rows [first, last) of a run excite, per direction (0 forward, 1 reverse): the largest
+/// drive level |v| that way, and whether the measured speed turns that way (beyond 5 % of the
+/// run's largest speed, so that noise around standstill does not count).
+struct Coverage {
+  std::array<double, 2> level{0.0, 0.0};
+  std::array<bool, 2> turns{false, false};
+};
+
+Coverage coverage(const Run& run, std::size_t first, std::size_t last) {
+  Coverage c;
+  const auto& v = run.inputs.v_V;
+  double v_max = 0.0;
+  for (double x : v) v_max = std::max(v_max, std::abs(x));
+  for (std::size_t n = first; n < last; ++n) {
+    if (std::abs(v[n]) > 1e-3 * v_max) {
+      const std::size_t d = v[n] > 0.0 ? 0 : 1;
+      c.level[d] = std::max(c.level[d], std::abs(v[n]));
+    }
+  }
+  const auto it = std::find(run.outputs.begin(), run.outputs.end(), "rpm");
+  if (it == run.outputs.end()) return c;
+  const auto& y = run.measured[static_cast<std::size_t>(it - run.outputs.begin())];
+  double y_max = 0.0;
+  for (double x : y) {
+    if (std::isfinite(x)) y_max = std::max(y_max, std::abs(x));
+  }
+  for (std::size_t n = first; n < last; ++n) {
+    if (std::isfinite(y[n]) && std::abs(y[n]) > 0.05 * y_max) c.turns[y[n] > 0.0 ? 0 : 1] = true;
+  }
+  return c;
+}
+
+/// What the training rows before `split` lack of what the scored rows after it hold (empty:
+/// nothing): a drive direction, a direction the motor turns, or the range of drive levels
+/// (its largest level in a direction below k_split_level_share of the scored part's).
+std::string split_lacks(const Run& run, std::size_t split) {
+  const Coverage train = coverage(run, 0, split);
+  const Coverage scored = coverage(run, split, run.inputs.t_s.size());
+  for (std::size_t d = 0; d < 2; ++d) {
+    const char* way = d == 0 ? "forward" : "reverse";
+    if (scored.level[d] > 0.0 && train.level[d] == 0.0) return fmt::format("training never drives {}", way);
+    if (scored.turns[d] && !train.turns[d]) return fmt::format("the motor never turns {} in training", way);
+    if (train.level[d] < k_split_level_share * scored.level[d]) {
+      return fmt::format("training's largest {} drive {:.3g} V is below {:.0f} % of the {:.3g} V scored", way,
+                         train.level[d], 100.0 * k_split_level_share, scored.level[d]);
+    }
+  }
+  return {};
+}
+
+/// The automatic split: split_row()'s choice when training covers what is scored (split_lacks),
+/// else the nearest to `fraction` of the other events in 40-80 % of the duration, then of
+/// the rows at 40, 45, ..., 80 %, that covers it. Throws when none does.
+std::size_t covering_split(const Run& run, const std::string& source, double fraction, bool& at_event) {
+  const model::Inputs& in = run.inputs;
+  const std::size_t rows = in.t_s.size();
+  const std::size_t first = split_row(in, fraction, at_event);
+  const auto fits = [&](std::size_t n) { return n >= 50 && rows - n >= 50 && split_lacks(run, n).empty(); };
+  if (fits(first)) return first;
+  const double t0 = in.t_s.front();
+  const double span = in.t_s.back() - t0;
+  const double target = t0 + fraction * span;
+  const auto nearest_first = [&](std::vector<std::size_t> rows_in) {
+    std::stable_sort(rows_in.begin(), rows_in.end(), [&](std::size_t a, std::size_t b) {
+      return std::abs(in.t_s[a] - target) < std::abs(in.t_s[b] - target);
+    });
+    return rows_in;
+  };
+  std::vector<std::size_t> events;
+  for (std::size_t e : event_rows(in)) {
+    if (in.t_s[e] >= t0 + 0.4 * span && in.t_s[e] <= t0 + 0.8 * span) events.push_back(e);
+  }
+  for (std::size_t e : nearest_first(events)) {
+    if (fits(e)) {
+      at_event = true;
+      return e;
+    }
+  }
+  std::vector<std::size_t> grid;
+  for (int k = 0; k <= 8; ++k) {
+    const double t = t0 + (0.4 + 0.05 * k) * span;
+    grid.push_back(
+        static_cast<std::size_t>(std::lower_bound(in.t_s.begin(), in.t_s.end(), t) - in.t_s.begin()));
+  }
+  for (std::size_t n : nearest_first(grid)) {
+    if (fits(n)) {
+      at_event = false;
+      return n;
+    }
+  }
+  fail(
+      "{}: no split in 40-80 % of its duration trains on what it scores (at t = {:.3f} s {}); choose one "
+      "with "
+      "--split or give --validate runs",
+      source, in.t_s[std::min(first, rows - 1)], split_lacks(run, std::min(first, rows - 1)));
 }
 
 Run truncate(const Run& run, std::size_t rows) {
@@ -143,7 +240,7 @@ std::vector<OutputFloor> noise_floors(const GapData& data) {
 }  // namespace gap_detail
 
 GapData prepare_gap_data(const std::vector<table::Table>& train, const std::vector<table::Table>& validate,
-                         const model::Params& params, double split_fraction) {
+                         const model::Params& params, double split_fraction, bool split_given) {
   if (train.empty()) fail("--train: no training file");
   GapData data;
   // make_run() drops the current samples at the rails of the run's stated chain.
@@ -166,18 +263,25 @@ GapData prepare_gap_data(const std::vector<table::Table>& train, const std::vect
     const table::Table& t = train.front();
     Run whole = make(t);
     bool at_event = false;
-    const std::size_t split = split_row(whole.inputs, split_fraction, at_event);
+    if (whole.inputs.t_s.size() < 100) {
+      fail("{}: too short to split into training and validation parts (50 rows each)", t.source);
+    }
+    const std::size_t split = split_given ? split_row(whole.inputs, split_fraction, at_event)
+                                          : covering_split(whole, t.source, split_fraction, at_event);
     if (split < 50 || whole.inputs.t_s.size() - split < 50) {
       fail("{}: too short to split into training and validation parts (50 rows each)", t.source);
     }
+    const std::string lacks = split_lacks(whole, split);
     data.train.push_back(truncate(whole, split));
     const double t_split = whole.inputs.t_s[split];
     const double pct = 100.0 * (t_split - whole.inputs.t_s.front()) /
                        (whole.inputs.t_s.back() - whole.inputs.t_s.front());
     data.split_note = fmt::format(
-        "single file split at t = {:.3f} s ({:.0f} % of its duration{}): rows before train, rows from there on "
-        "validate (simulated from the start, scored after the split)",
-        t_split, pct, at_event ? ", at an input event" : "");
+        "single file split at t = {:.3f} s ({:.0f} % of its duration{}): rows before train, rows from there "
+        "on "
+        "validate (simulated from the start, scored after the split){}",
+        t_split, pct, at_event ? ", at an input event" : "",
+        lacks.empty() ? "" : fmt::format("; as --split asks, although {}", lacks));
     data.validate.push_back(scored(t, std::move(whole), split));
   } else {
     for (const auto& t : train) data.train.push_back(make(t));

@@ -163,6 +163,13 @@ std::string params_text(const GapCandidate& c) {
   return out;
 }
 
+/// A report's text as one CSV cell: its commas (an error's message, a status of several
+/// clauses) become semicolons, so that no column after it shifts.
+std::string cell(std::string text) {
+  std::replace(text.begin(), text.end(), ',', ';');
+  return text;
+}
+
 /// The fit's flags in a few words each, "; " between them (the CSV's flags column).
 std::string flags_text(const GapCandidate& c) {
   std::string out;
@@ -270,7 +277,7 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
                 number(gap_after, 6), number(gap_shrink, 4), number(before_i, 6),
                 number(at_or_nan(c.rms, s.i), 6), number(c.train_rms_rpm, 6), number(c.score, 6),
                 number(c.fpe, 6), std::to_string(c.free.size()), std::to_string(c.added_parameters),
-                params_text(c), c.significant ? "1" : "0", c.status, flags_text(c)});
+                cell(params_text(c)), c.significant ? "1" : "0", cell(c.status), cell(flags_text(c))});
   }
   w.finish();
 }

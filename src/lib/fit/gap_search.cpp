@@ -332,11 +332,11 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   }
   const bool out_of_time = settings.deadline != std::chrono::steady_clock::time_point::max() &&
                            std::chrono::steady_clock::now() >= settings.deadline;
-  c.status = out_of_time         ? std::string(k_out_of_time) + ", fit stopped early"
+  c.status = out_of_time         ? std::string(k_out_of_time) + "; fit stopped early"
              : fit.nls.converged ? "fitted"
-                                 : "fitted, budget spent";
+                                 : "fitted; budget spent";
   if (!pinned.empty())
-    c.status += fmt::format(", {} pinned at the given value (a gauge)", fmt::join(pinned, " "));
+    c.status += fmt::format("; {} pinned at the given value (a gauge)", fmt::join(pinned, " "));
   c.evaluated = true;
   const Evaluation ev = evaluate(c.model, data, floors);
   c.score = ev.score;
@@ -360,7 +360,7 @@ std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& 
       c.name = jobs[k].name;
       c.effects = jobs[k].effects;
       c.model = jobs[k].start;
-      c.status = std::string(k_out_of_time) + ", not fitted";
+      c.status = std::string(k_out_of_time) + "; not fitted";
       c.score = k_nan;
       c.fpe = std::numeric_limits<double>::infinity();
       c.rms.assign(floors.size(), k_nan);

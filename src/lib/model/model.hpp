@@ -203,7 +203,10 @@ struct ParamInfo {
 
 /// The nominal parameters (named "section.key" as in the INI form, e.g. "motor.J_kg_m2",
 /// "motor.Kt_Nm_A", "motor.Tc_Nm", "motor.c1", "drive.dead_time_s") followed by every
-/// parameter of the active effects ("EFFECT.key").
+/// parameter of the active effects ("EFFECT.key"), with their fitting bounds: relative to the
+/// given model for the nominal ones; the catalog range for an effect's, widened for a level in
+/// N m to twice the motor's stall torque Kt supply_V / R (in N m s/rad to that per no-load
+/// speed supply_V / Ke) when that is larger.
 std::vector<ParamInfo> parameters(const Model& model);
 /// Why `value` is not a valid value of parameter `name` ("must be a finite number > 0", "out of
 /// range [0, 0.05]"), by the same rules the INI form checks; nullopt when it is, or for a name

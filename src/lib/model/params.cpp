@@ -59,6 +59,11 @@ struct NominalParam {
 
 /// Factor either way a machine constant may move from the given model's value in a fit.
 constexpr double k_bound_factor = 10.0;
+/// An effect's torque level may reach this multiple of the motor's stall torque in a fit
+/// (its viscous coefficient this multiple of stall torque per no-load speed), whatever its
+/// catalog range: a level above the stall torque holds the shaft at full supply, and the
+/// factor leaves room for a supply the model understates.
+constexpr double k_effect_stall_factor = 2.0;
 
 #define MCG_MACHINE_PARAMS(SEC, M)                                                                            \
   NominalParam{SEC, "R_ohm", "ohm", NominalParam::Bound::relative, 0, 0, NominalParam::Check::positive,                                \
@@ -326,6 +331,11 @@ std::vector<ParamInfo> parameters(const Model& model) {
     }
     out.push_back({std::string(section) + "." + np.key, v, lower, upper, np.unit});
   }
+  // Effect levels in torque units are bounded by the motor's own size too, so that a larger
+  // motor's friction fits: the catalog's range only widens (to k_effect_stall_factor stall
+  // torques, per no-load speed for a viscous coefficient; either sign for a signed one).
+  const double stall_Nm = copy.motor.Kt_Nm_A * copy.supply_V / copy.motor.R_ohm;
+  const double free_rad_s = copy.supply_V / copy.motor.Ke_V_s_rad;
   for (const auto& effect : model.effects) {
     const EffectSpec* spec = find_effect(effect.name);
     for (const auto& [key, value] : effect.params) {
@@ -338,6 +348,13 @@ std::vector<ParamInfo> parameters(const Model& model) {
             info.unit = p.unit;
           }
         }
+      }
+      const double size = info.unit == "N m"         ? k_effect_stall_factor * stall_Nm
+                          : info.unit == "N m s/rad" ? k_effect_stall_factor * stall_Nm / free_rad_s
+                                                     : 0.0;
+      if (std::isfinite(size) && size > info.upper) {
+        info.upper = size;
+        if (info.lower < 0.0) info.lower = std::min(info.lower, -size);
       }
       out.push_back(std::move(info));
     }

@@ -515,7 +515,7 @@ void Writer::row(std::span<const double> values) {
 void Writer::text_row(const std::vector<std::string>& cells) {
   MCG_DEMAND(cells.size() == m_names.size());
   for (std::size_t c = 0; c < cells.size(); ++c) {
-    MCG_DEMAND(cells[c].find_first_of("\n\r") == std::string::npos);
+    MCG_DEMAND(cells[c].find_first_of("\n\r,") == std::string::npos);
     if (c) m_buffer += ',';
     m_buffer += cells[c];
   }

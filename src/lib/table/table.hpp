@@ -157,7 +157,7 @@ class Writer {
   void row(std::span<const double> values);
   void row(std::initializer_list<double> values) { row(std::span<const double>(values.begin(), values.size())); }
   /// A row of cells already written as text (a report's names and numbers side by side), each as
-  /// it is: one line, no comma of its own beyond what the caller accepts in that column.
+  /// it is: one line and no comma (a comma in a cell would shift every column after it).
   void text_row(const std::vector<std::string>& cells);
   /// Flushes to the stream and checks it; call before the end of a successful run.
   void finish();

@@ -13,9 +13,9 @@ void FitGap::define(CLI::App& app) {
   gp->add_option("--train", gap.train, "runs the candidates are fitted on ('-' = stdin)")->required();
   gp->add_option("--validate", gap.validate,
                  "held-out runs they are scored on (none: one --train file is split)");
-  gp->add_option("--split", gap.split_fraction, "training share of a single file that is split")
-      ->check(mcg::Range(0.2, 0.8))
-      ->capture_default_str();
+  m_split = gp->add_option("--split", gap.split_fraction, "training share of a single file that is split")
+                ->check(mcg::Range(0.2, 0.8))
+                ->capture_default_str();
   gp->add_option("--format", gap.format, "csv (summary on stderr) or text")
       ->check(CLI::IsMember({"csv", "text"}))
       ->capture_default_str();
@@ -46,6 +46,7 @@ void FitGap::define(CLI::App& app) {
 }
 
 int FitGap::run(Io& io) {
+  options.split_given = m_split != nullptr && m_split->count() > 0;
   Diagnostics gap(io.diag.stream(), io.diag.prefix() + " gap");
   const int status = fit::run_gap(options, io.out, gap);
   return status != 0 ? status : gap.status();

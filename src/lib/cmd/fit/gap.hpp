@@ -19,6 +19,9 @@ class FitGap final : public Command {
   }
   void define(CLI::App& app) override;
   int run(Io& io) override;
+
+ private:
+  CLI::Option* m_split = nullptr;
 };
 
 }  // namespace mcg::cmd
