@@ -247,6 +247,10 @@ struct SimOptions {
   /// bound it; the clutch spring's period does, and under the brush drop half the fastest
   /// electrical time constant (L/R = 1.05 ms for the rig's motor: 524 us).
   double max_step_s = 1e-3;
+  /// Also bound the step by half the fastest circuit's L/R (524 us for the rig's motor), as
+  /// before the exponential step made it unnecessary: the fits keep it (the gap search's
+  /// diagnoses were settled with it); mcg-sim's runs drop it (within 0.005 rpm RMS).
+  bool circuit_bound = true;
 };
 
 class PlantImpl;

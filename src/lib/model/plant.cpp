@@ -427,7 +427,7 @@ class PlantImpl {
     const Machine& mm = m_c.p.motor;
     // A torque of the shaft angle (cogging, a discrepancy term) varies within a millisecond at
     // speed: its model keeps the electrical bound, which resolves the angle as it always did.
-    const bool electrical_bound = !m_exp_circuits || !m_c.motor_torque.empty();
+    const bool electrical_bound = m_opt.circuit_bound || !m_exp_circuits || !m_c.motor_torque.empty();
     if (electrical_bound && !m_motor_quasi) h = std::min(h, 0.5 * mm.L_H / (mm.R_ohm + m_c.R_on2 + m_c.R_s));
     if (electrical_bound && gen_circuit() && !gen_quasi_static()) {
       h = std::min(h, 0.5 * m_c.p.generator.L_H / (m_c.p.generator.R_ohm + m_r_load));
