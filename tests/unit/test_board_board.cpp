@@ -181,9 +181,9 @@ TEST(BoardBoard, AWrittenGainChangesTheClosedLoop) {
   for (const auto& [s, kp] : {std::pair{low, 16.0}, std::pair{high, 64.0}}) {
     EXPECT_GT(s.error_rpm, 0.0);
     EXPECT_LT(s.error_rpm, 400.0);  // the motor turns
-    // Within about two counts of the 16 ms window (one count = 1/16 pulse/ms of error), as
-    // rpm and duty are read 15 ms apart.
-    EXPECT_NEAR(s.duty_permille, kp * s.error_rpm * 2048.0 / 60000.0, kp * 0.15);
+    // Within about three counts of the 16 ms window (one count = 1/16 pulse/ms of error), as
+    // rpm and duty are read 15 ms apart while the quantised loop hunts by a count or two.
+    EXPECT_NEAR(s.duty_permille, kp * s.error_rpm * 2048.0 / 60000.0, kp * 0.1875);
   }
   EXPECT_LT(high.error_rpm, low.error_rpm / 2.0) << "kp 16: " << low.error_rpm << " rpm, kp 64: " << high.error_rpm;
 }

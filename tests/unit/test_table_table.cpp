@@ -226,6 +226,12 @@ TEST(TableWrite, NumbersAreExactlyPrintfG) {
   std::vector<double> values{1.0, -1.0, 0.5, 9.9999999995, 9.9999999994999, 99999.999995, 1e-4, 9.99999999995e-5,
                              0.00010000000005, 1e10, 9999999999.5, 9999999999.4999, 123456789012345.0, 1e15,
                              0.1 + 0.2, 1e-300, 5e-324, -1.7976931348623157e308};
+  // Integers, printed on their own path: every width, and at each power of ten.
+  for (double x = 1.0; x <= 1e10; x *= 10.0) {
+    for (double v : {x - 1.0, x, x + 1.0, 2.0 * x, 9.0 * x + 7.0}) {
+      if (v != 0.0) values.insert(values.end(), {v, -v});
+    }
+  }
   for (int n = 0; n < 60000; ++n) {
     values.push_back(std::pow(10.0, decade(rng)) * ((rng() & 1U) != 0U ? -1.0 : 1.0));
     const std::uint64_t bits = rng();

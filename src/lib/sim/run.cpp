@@ -380,6 +380,7 @@ class Simulation {
         m_rng(opt.seed),
         m_row(c.names.size()) {
     m_sim.max_step_s = opt.max_step_s;
+    m_sim.circuit_bound = false;
   }
 
   /// Starts the model at `omega0_rad_s`, a closed loop's controller output at duty `duty0`.

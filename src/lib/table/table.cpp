@@ -36,6 +36,17 @@ constexpr std::array<double, 23> k_pow10{1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6
 constexpr std::string_view k_digit_pairs =
     "00010203040506070809101112131415161718192021222324252627282930313233343536373839404142434445464748495051525354555657585960616263646566676869707172737475767778798081828384858687888990919293949596979899";
 
+/// Writes the `count` lowest decimal digits of v, zero-padded, so that they end at `end`.
+void put_digits(char* end, std::uint32_t v, int count) {
+  for (; count >= 2; count -= 2) {  // two digits a division
+    const std::size_t pair = v % 100U;
+    v /= 100U;
+    end -= 2;
+    std::copy_n(k_digit_pairs.data() + 2 * pair, 2, end);
+  }
+  if (count == 1) end[-1] = static_cast<char>('0' + v);
+}
+
 /// Writes v (finite, not zero) as printf's "%.{digits}g" (general, trailing zeros dropped), the
 /// same characters as std::to_chars(general, digits). Values printed in fixed notation with at
 /// most 15 digits take a fast path: v scaled by an exact power of ten to a `digits`-digit integer,
@@ -45,6 +56,15 @@ constexpr std::string_view k_digit_pairs =
 /// fast on a simulator's columns.
 char* format_general(char* p, double v, int digits) {
   const double a = std::fabs(v);
+  if (a < 1e9 && a < k_pow10[static_cast<std::size_t>(digits)] && std::trunc(a) == a) {
+    // An integer of at most `digits` digits prints as itself (a clutch state, a voltage level).
+    auto n = static_cast<std::uint32_t>(a);
+    int count = 1;
+    while (count < 9 && n >= static_cast<std::uint32_t>(k_pow10[static_cast<std::size_t>(count)])) ++count;
+    if (v < 0) *p++ = '-';
+    put_digits(p + count, n, count);
+    return p + count;
+  }
   if (digits <= 15 && a >= 1e-4 && a < 1e15) {
     // x = floor(log10(a)), maybe one off at a power of ten: the range checks below catch that.
     int x = 0;
@@ -68,13 +88,12 @@ char* format_general(char* p, double v, int digits) {
       if (n >= top / 10 && n < top && x < digits && x >= -4) {
         std::array<char, 16> dig{};
         int nd = digits;
-        int j = digits;
-        for (; j >= 2; j -= 2) {  // two digits a division
-          const auto pair = static_cast<std::size_t>(n % 100);
-          n /= 100;
-          std::copy_n(k_digit_pairs.data() + 2 * pair, 2, dig.data() + j - 2);
+        if (digits > 8) {  // the low eight digits and the rest, each in 32-bit arithmetic
+          put_digits(dig.data() + digits, static_cast<std::uint32_t>(n % 100000000U), 8);
+          put_digits(dig.data() + digits - 8, static_cast<std::uint32_t>(n / 100000000U), digits - 8);
+        } else {
+          put_digits(dig.data() + digits, static_cast<std::uint32_t>(n), digits);
         }
-        if (j == 1) dig[0] = static_cast<char>('0' + n);
         while (nd > 1 && dig[static_cast<std::size_t>(nd - 1)] == '0') --nd;
         if (v < 0) *p++ = '-';
         if (x < 0) {

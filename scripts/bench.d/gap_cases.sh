@@ -1,0 +1,49 @@
+# mcg-fit gap as users run it (whole process, CSV in, both cores, the default budget) on each
+# public gap case: train.csv and validate.csv of every directory under GAP_CASES (default: the
+# shared data beside the project's checkout, ../shared/data/gap-cases; the rows say so when it
+# is absent). One run a case; the rows name the diagnosis, and the total is set against the
+# goal (the eight cases in <= 40 s together on 2 cores). GAP_REAL names a real capture to
+# diagnose against itself as train and validate (a row says when none is given). Sourced by
+# scripts/bench.sh (row, met, wanted, $work, $raw, $root).
+if wanted gap_cases; then
+  cases=${GAP_CASES:-$root/../shared/data/gap-cases}
+  if [[ ! -d $cases ]]; then
+    row "\`mcg-fit gap\` on each public gap case" whole-process "<= 40 s for the eight together" \
+      "not measured: no gap cases at ${cases##*/} (set GAP_CASES)" "missed (no data)"
+  else
+    total_ms=0
+    n=0
+    for dir in "$cases"/*/; do
+      name=$(basename "$dir")
+      [[ -f $dir/train.csv && -f $dir/validate.csv ]] || continue
+      t0=$(date +%s%N)
+      status=0
+      mcg-fit gap --train "$dir/train.csv" --validate "$dir/validate.csv" >"$work/gap_$name.csv" \
+        2>"$work/gap_$name.err" || status=$?
+      t1=$(date +%s%N)
+      ms=$(((t1 - t0) / 1000000))
+      total_ms=$((total_ms + ms))
+      n=$((n + 1))
+      verdict=$(grep -v '^#' "$work/gap_$name.csv" | awk -F, 'NR == 2 {print $1; exit}')
+      echo "== mcg-fit gap on $name: $ms ms, exit $status, diagnosis ${verdict:-none}" >>"$raw"
+      row "\`mcg-fit gap\` on the public case $name (train + validate CSV, 2 cores)" whole-process \
+        "(the eight <= 40 s together)" "$(awk -v m="$ms" 'BEGIN {printf "%.1f", m / 1000}') s, diagnosis ${verdict:-none}, exit $status" "-"
+    done
+    s=$(awk -v m="$total_ms" 'BEGIN {printf "%.1f", m / 1000}')
+    row "\`mcg-fit gap\` on the $n public gap cases, one after another" whole-process "<= 40 s together" \
+      "$s s" "$(met "$s" "<=" 40)"
+  fi
+  if [[ -n ${GAP_REAL:-} && -f $GAP_REAL ]]; then
+    t0=$(date +%s%N)
+    status=0
+    mcg-fit gap --train "$GAP_REAL" --validate "$GAP_REAL" >"$work/gap_real.csv" 2>"$work/gap_real.err" || status=$?
+    t1=$(date +%s%N)
+    s=$(awk -v a="$t0" -v b="$t1" 'BEGIN {printf "%.1f", (b - a) / 1e9}')
+    rows_in=$(grep -vc '^#' "$GAP_REAL")
+    row "\`mcg-fit gap\` on a real capture (${GAP_REAL##*/}, $((rows_in - 1)) rows)" whole-process "<= 10 s" \
+      "$s s, exit $status" "$(met "$s" "<=" 10)"
+  else
+    row "\`mcg-fit gap\` on a real capture of about 7000 rows" whole-process "<= 10 s" \
+      "not measured: no real v/rpm capture ships with the project (set GAP_REAL)" "missed (no data)"
+  fi
+fi
