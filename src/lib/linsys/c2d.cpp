@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <vector>
 
 namespace mcg::linsys {
@@ -123,11 +124,12 @@ Poly sampled_denominator(const Poly& den, double dt_s, const std::string& what) 
 /// on the circle. n + 1 further points check the result: where P disagrees there with its
 /// system by more than k_numerator_tolerance of max |P| the evaluation is not accurate enough
 /// and c2d refuses it; coefficients below that noise are zero.
-Poly numerator(const Sampled& sampled, const Sampled& check, const Eigen::RowVectorXd& c, const Poly& den_z,
-               const std::string& what) {
+std::optional<Poly> numerator(const Sampled& sampled, const Sampled& check, const Eigen::RowVectorXd& c,
+                              const Poly& den_z, const std::string& what, double& disagreement) {
   const Eigen::MatrixXd& phi = sampled.phi;
   const double d = sampled.d;
   const Eigen::Index n = phi.rows();
+  disagreement = 0.0;
   if (n == 0) return trim(Poly{d});
   const std::size_t m = static_cast<std::size_t>(n) + 1;
   constexpr double k_two_pi = 2.0 * std::numbers::pi;
@@ -200,12 +202,9 @@ Poly numerator(const Sampled& sampled, const Sampled& check, const Eigen::RowVec
         eval(den_z, z) * (Eigen::PartialPivLU<Eigen::MatrixXcd>(full).determinant() / det_phi);
     residual = std::max(residual, std::abs(other - value_at(z)));
   }
-  if (v_max == 0.0) return {};
-  if (!(residual <= k_numerator_tolerance * v_max)) {
-    fail("{}: cannot be discretised accurately: the numerator agrees with the sampled system only to {:.1g} of "
-         "its size (at most {:g}); the poles or the sample period are too far apart",
-         what, residual / v_max, k_numerator_tolerance);
-  }
+  if (v_max == 0.0) return Poly{};
+  disagreement = residual / v_max;
+  if (!(residual <= k_numerator_tolerance * v_max)) return std::nullopt;
   const double noise = std::max(residual, static_cast<double>(m) * std::numeric_limits<double>::epsilon() * v_max);
   for (double& x : p) {
     if (std::abs(x) <= 8.0 * noise) x = 0.0;
@@ -396,6 +395,18 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
     }
     return make_z(h_num, den, dt_s, delay);
   };
+  // Over the mapped poles first; where the root finder cannot place them (a 64-fold pole) over
+  // Φ's own characteristic polynomial, if the sampled system agrees with that.
+  auto discretise = [&](const Sampled& sampled, const Sampled& check, long delay) {
+    double off = 0.0;
+    if (auto num = numerator(sampled, check, ss.c, den_z, what, off)) return finish(*num, den_z, delay);
+    const Poly den_phi = charpoly(sampled.phi);
+    double off_phi = 0.0;
+    if (auto num = numerator(sampled, check, ss.c, den_phi, what, off_phi)) return finish(*num, den_phi, delay);
+    fail("{}: cannot be discretised accurately: the numerator agrees with the sampled system only to {:.1g} of "
+         "its size (at most {:g}); the poles or the sample period are too far apart",
+         what, std::min(off, off_phi), k_numerator_tolerance);
+  };
   if (method == C2dMethod::zoh) {
     long d = 0;
     double theta = 0.0;
@@ -424,8 +435,7 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
       // z·N0 + N1 + D·den: one bordered determinant with the column z·Γ0 + Γ1.
       return Sampled{phi_full, gamma, gamma1, ss.d};
     };
-    return finish(numerator(sample(0), sample(k_check_squarings), ss.c, den_z, what), den_z,
-                  theta == 0.0 ? d : d + 1);
+    return discretise(sample(0), sample(k_check_squarings), theta == 0.0 ? d : d + 1);
   }
   if (method == C2dMethod::foh) {
     const long d = whole_delay(g, dt_s, what, "foh");
@@ -441,7 +451,7 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
       const Eigen::VectorXd gamma = gamma1 + (phi - Eigen::MatrixXd::Identity(n, n)) * gamma2;
       return Sampled{phi, none, gamma, ss.d + (ss.c * gamma2)(0)};
     };
-    return finish(numerator(sample(0), sample(k_check_squarings), ss.c, den_z, what), den_z, d);
+    return discretise(sample(0), sample(k_check_squarings), d);
   }
   const long d = whole_delay(g, dt_s, what, "impulse");
   if (!g.strictly_proper()) fail("{}: impulse invariance needs a strictly proper transfer function", what);
@@ -449,7 +459,7 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
   auto sample = [&](int extra) {
     return Sampled{checked_exp(ss.a * dt_s, what, extra), ss.b * dt_s, none, 0.0};
   };
-  return finish(numerator(sample(0), sample(k_check_squarings), ss.c, den_z, what), den_z, d);
+  return discretise(sample(0), sample(k_check_squarings), d);
 }
 
 }  // namespace mcg::linsys
