@@ -1,18 +1,17 @@
 // Discretisation of continuous transfer functions.
 #include "linsys/c2d.hpp"
 
-#include "common/error.hpp"
-#include "config/ini.hpp"
-
-#include <unsupported/Eigen/MatrixFunctions>
-
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <unsupported/Eigen/MatrixFunctions>
 #include <vector>
+
+#include "common/error.hpp"
+#include "config/ini.hpp"
 
 namespace mcg::linsys {
 
@@ -402,10 +401,14 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
     if (auto num = numerator(sampled, check, ss.c, den_z, what, off)) return finish(*num, den_z, delay);
     const Poly den_phi = charpoly(sampled.phi);
     double off_phi = 0.0;
-    if (auto num = numerator(sampled, check, ss.c, den_phi, what, off_phi)) return finish(*num, den_phi, delay);
-    fail("{}: cannot be discretised accurately: the numerator agrees with the sampled system only to {:.1g} of "
-         "its size (at most {:g}); the poles or the sample period are too far apart",
-         what, std::min(off, off_phi), k_numerator_tolerance);
+    if (auto num = numerator(sampled, check, ss.c, den_phi, what, off_phi)) {
+      return finish(*num, den_phi, delay);
+    }
+    fail(
+        "{}: cannot be discretised accurately: the numerator agrees with the sampled system only to {:.1g} "
+        "of "
+        "its size (at most {:g}); the poles or the sample period are too far apart",
+        what, std::min(off, off_phi), k_numerator_tolerance);
   };
   if (method == C2dMethod::zoh) {
     long d = 0;
