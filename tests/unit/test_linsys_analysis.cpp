@@ -125,6 +125,20 @@ TEST(LinsysMargins, StabilityIsDecidedOrRefused) {
   EXPECT_FALSE(schur_cohn_stable({1.0, 0.0, 1.0}));
 }
 
+TEST(LinsysMargins, AnIllPosedGainSplitsTheStableRanges) {
+  // L = −1 (−1 − 0/z): 1 + K·L = 1 − K is stable for every K but 1, where it vanishes.
+  Tf g = parse_tf("-1-0/z", "t").tf;
+  g.dt_s = 0.001;
+  g = fold_delay(g, "t");
+  EXPECT_FALSE(closed_loop_stable(g));
+  const auto ranges = stable_gain_ranges(g);
+  ASSERT_EQ(ranges.size(), 2u);
+  EXPECT_EQ(ranges[0].k_low, 0.0);
+  EXPECT_EQ(ranges[0].k_high, 1.0);
+  EXPECT_EQ(ranges[1].k_low, 1.0);
+  EXPECT_TRUE(std::isinf(ranges[1].k_high));
+}
+
 TEST(LinsysMargins, StabilityAgreesWithTheStableGainRange) {
   // A day-long delay on 1/(s+1): gains below 1 are stable, and so is K = 1 itself.
   Tf g = parse_tf("1/(s+1)", "t").tf;

@@ -271,3 +271,39 @@ TEST(LinsysC2d, TinyGainsAndOverflowingPoles) {
 
 }  // namespace
 }  // namespace mcg::linsys
+
+namespace mcg::linsys {
+namespace {
+
+TEST(LinsysC2d, SampledDenominatorIsTheMappedPoles) {
+  // Poles −1, 0.7 and 16 at 1 s: Φ's eigenvalues span 0.37..8.9e6. det(zI − Φ)'s constant term
+  // is −e^(T·Σp) = −e^15.7; expanding Φ's characteristic polynomial was 5e-10 off.
+  const Tf h = c2d(parse_tf("1/((s+1)*(s-0.7)*(s-16))", "t").tf, 1.0, C2dMethod::zoh, 0.0, "t");
+  const Poly d = trim(h.den);
+  ASSERT_EQ(d.size(), 4U);
+  EXPECT_NEAR(d[3] / d[0] / -std::exp(15.7), 1.0, 1e-14);
+  EXPECT_NEAR(d[1] / d[0] / -(std::exp(-1.0) + std::exp(0.7) + std::exp(16.0)), 1.0, 1e-14);
+}
+
+TEST(LinsysC2d, RefusesWhatItCannotSampleAccurately) {
+  // Found by fuzz_c2d: unstable poles near 16 and 18 ± 1.4j at 0.997 s. Every state-space
+  // evaluation in double is 1e-4 off (a 80-digit reference); c2d answered it, now refuses.
+  Tf g;
+  g.num = {0.019792381547502673, 0.92136363599949411, 10.744121754052518, 0.49839515925895972};
+  g.den = {1,
+           -68.570643178888801,
+           1762.5639179490554,
+           -20123.396676690776,
+           85951.404097417413,
+           4567.0619336282543,
+           -38259.742805785878};
+  try {
+    (void)c2d(g, 0.99726320655061007, C2dMethod::zoh, 0.0, "--plant");
+    FAIL() << "an inaccurate sampled system was answered";
+  } catch (const mcg::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot be discretised accurately"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace mcg::linsys

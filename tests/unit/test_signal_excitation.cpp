@@ -145,6 +145,25 @@ TEST(SignalMultisine, SchroederPhaseFormula) {
   EXPECT_NEAR(std::abs(phi[3]), std::numbers::pi, 1e-12);
 }
 
+TEST(SignalMultisine, RotatedLinesMatchTheirCosines) {
+  // Each line is rotated sample to sample between exact values: over a long period with
+  // harmonics near N/2 it stays within 1e-13 of sum cos(2 pi h k / N + phi), scaled to the peak.
+  const std::size_t period = 99991;
+  const std::vector<int> h{1, 4999, 49990};
+  const std::vector<double> phi{0.3, -2.0, 1.0};
+  const auto x = multisine_signal(period, 1.0, period, h, phi);
+  std::vector<double> direct(period, 0.0);
+  double peak = 0.0;
+  for (std::size_t k = 0; k < period; ++k) {
+    for (std::size_t j = 0; j < h.size(); ++j) {
+      const auto hk = static_cast<double>((static_cast<std::size_t>(h[j]) * k) % period);
+      direct[k] += std::cos(2 * std::numbers::pi * hk / static_cast<double>(period) + phi[j]);
+    }
+    peak = std::max(peak, std::abs(direct[k]));
+  }
+  for (std::size_t k = 0; k < period; ++k) ASSERT_NEAR(x[k], direct[k] / peak, 1e-13) << "sample " << k;
+}
+
 TEST(SignalMultisine, IsPeriodicAndHasPowerOnlyAtItsLines) {
   const std::size_t period = 200;
   const std::vector<int> h{3, 7, 40};

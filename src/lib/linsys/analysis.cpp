@@ -371,12 +371,10 @@ std::vector<GainRange> stable_gain_ranges(const Tf& loop) {
     // Many probes for a long delay in z (a crossover per 2π/τ): Schur–Cohn, not eigenvalues.
     const Tf probed = scaled(loop, probe);
     double tau_s = 1.0;
+    // Never joined across a boundary gain: there a root lies on the boundary or at infinity (L = -1
+    // is stable for every K but 1, where 1 + K·L vanishes identically).
     if (loop.discrete() ? schur_cohn_stable(characteristic(probed, tau_s, nullptr)) : closed_loop_stable(probed)) {
-      if (!out.empty() && out.back().k_high == a) {
-        out.back().k_high = b;
-      } else {
-        out.push_back(GainRange{a, b});
-      }
+      out.push_back(GainRange{a, b});
     }
   }
   return out;

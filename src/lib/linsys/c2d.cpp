@@ -1,17 +1,17 @@
 // Discretisation of continuous transfer functions.
 #include "linsys/c2d.hpp"
 
-#include "common/error.hpp"
-#include "config/ini.hpp"
-
-#include <unsupported/Eigen/MatrixFunctions>
-
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
 #include <numbers>
+#include <optional>
+#include <unsupported/Eigen/MatrixFunctions>
 #include <vector>
+
+#include "common/error.hpp"
+#include "config/ini.hpp"
 
 namespace mcg::linsys {
 
@@ -53,6 +53,8 @@ long whole_delay(const Tf& g, double dt_s, const std::string& what, const char* 
 /// How far a numerator may disagree with its state-space system, relative to its largest value
 /// on the unit circle, before c2d refuses it (see numerator()).
 constexpr double k_numerator_tolerance = 1e-6;
+/// Squarings more than needed in the exponential the numerator is checked against.
+constexpr int k_check_squarings = 3;
 
 /// det of an (n+1)×(n+1) matrix that is upper Hessenberg but for its dense last row and column,
 /// by Gaussian elimination with partial pivoting in O(n²): below the diagonal of column k only
@@ -81,8 +83,37 @@ Complex bordered_hessenberg_det(Eigen::MatrixXcd& b) {
   return det * b(last, last);
 }
 
-/// P(z) = det [[zI − Φ, z·g0 + g1], [−C, d]] = det(zI − Φ)·(C(zI − Φ)^−1(z·g0 + g1) + d): the
-/// numerator over det(zI − Φ) of the sampled system, of degree <= n.
+/// A sampled system: Φ, the input column z·g0 + g1 of the bordered numerator, the direct term d.
+struct Sampled {
+  Eigen::MatrixXd phi;
+  Eigen::VectorXd g0;
+  Eigen::VectorXd g1;
+  double d = 0.0;
+};
+
+/// The sampled system's denominator D(z) = Π (z − e^(p_i·T)) over the poles p_i of G: Φ's
+/// eigenvalues mapped exactly. Not det(zI − Φ) expanded from Φ: with poles of e^(pT) from 0.5 to
+/// 1e8 (unstable poles at a 1 s period) that expansion lost D's small coefficients (det Φ was 2e-5
+/// wrong where e^(T·trace A) is exact); the mapped roots keep each coefficient to its rounding,
+/// and a cluster (a repeated pole, split by the root finder) keeps its symmetric functions.
+Poly sampled_denominator(const Poly& den, double dt_s, const std::string& what) {
+  std::vector<Complex> mapped;
+  for (const Complex& p : roots(den)) {
+    mapped.push_back(std::exp(p * dt_s));
+    if (!std::isfinite(std::abs(mapped.back()))) {
+      fail("{}: e^(A*dt) overflows: a pole p with Re(p)*dt above 709 has no sampled value", what);
+    }
+  }
+  Poly d = from_roots(mapped);
+  for (double x : d) {
+    if (!std::isfinite(x)) fail("{}: the sampled system's denominator overflows", what);
+  }
+  return d;
+}
+
+/// P(z) = D(z)·(C(zI − Φ)^−1(z·g0 + g1) + d), D = sampled_denominator(): the numerator over D of
+/// the sampled system, of degree <= n. The bracket is det [[zI − Φ, z·g0 + g1], [−C, d]] over
+/// det(zI − Φ), both from one Hessenberg form of Φ.
 ///
 /// Not as det(zI − Φ + ΓC) − det(zI − Φ): for a short sample period ΓC is tiny beside Φ ≈ I
 /// and that difference cancels to nothing (1/(s+1)^6 at 1 ms: a numerator of 1e-21 beside
@@ -92,9 +123,12 @@ Complex bordered_hessenberg_det(Eigen::MatrixXcd& b) {
 /// on the circle. n + 1 further points check the result: where P disagrees there with its
 /// system by more than k_numerator_tolerance of max |P| the evaluation is not accurate enough
 /// and c2d refuses it; coefficients below that noise are zero.
-Poly numerator(const Eigen::MatrixXd& phi, const Eigen::VectorXd& g0, const Eigen::VectorXd& g1,
-               const Eigen::RowVectorXd& c, double d, const std::string& what) {
+std::optional<Poly> numerator(const Sampled& sampled, const Sampled& check, const Eigen::RowVectorXd& c,
+                              const Poly& den_z, const std::string& what, double& disagreement) {
+  const Eigen::MatrixXd& phi = sampled.phi;
+  const double d = sampled.d;
   const Eigen::Index n = phi.rows();
+  disagreement = 0.0;
   if (n == 0) return trim(Poly{d});
   const std::size_t m = static_cast<std::size_t>(n) + 1;
   constexpr double k_two_pi = 2.0 * std::numbers::pi;
@@ -109,18 +143,23 @@ Poly numerator(const Eigen::MatrixXd& phi, const Eigen::VectorXd& g0, const Eige
     h = hd.matrixH();
     q = hd.matrixQ();
   }
-  const Eigen::VectorXcd g0q = (q.transpose() * g0).cast<Complex>();
-  const Eigen::VectorXcd g1q = (q.transpose() * g1).cast<Complex>();
+  const Eigen::VectorXcd g0q = (q.transpose() * sampled.g0).cast<Complex>();
+  const Eigen::VectorXcd g1q = (q.transpose() * sampled.g1).cast<Complex>();
   const Eigen::RowVectorXcd cq = (c * q).cast<Complex>();
   Eigen::MatrixXcd b(n + 1, n + 1);
   auto value_at = [&](Complex z) {
     b.setZero();
     b.topLeftCorner(n, n) = -h.cast<Complex>();
     b.topLeftCorner(n, n).diagonal().array() += z;
+    b(n, n) = 1.0;
+    const Complex det_phi = bordered_hessenberg_det(b);
+    b.setZero();
+    b.topLeftCorner(n, n) = -h.cast<Complex>();
+    b.topLeftCorner(n, n).diagonal().array() += z;
     b.topRightCorner(n, 1) = g0q * z + g1q;
     b.bottomLeftCorner(1, n) = -cq;
     b(n, n) = d;
-    return bordered_hessenberg_det(b);
+    return eval(den_z, z) * (bordered_hessenberg_det(b) / det_phi);
   };
   auto angle = [&](std::size_t k, double shift) {
     return offset + shift + k_two_pi * static_cast<double>(k) / static_cast<double>(m);
@@ -145,12 +184,26 @@ Poly numerator(const Eigen::MatrixXd& phi, const Eigen::VectorXd& g0, const Eige
     const Complex z = std::polar(1.0, angle(k, std::numbers::pi / static_cast<double>(m)));
     residual = std::max(residual, std::abs(eval(p, z) - value_at(z)));
   }
-  if (v_max == 0.0) return {};
-  if (!(residual <= k_numerator_tolerance * v_max)) {
-    fail("{}: cannot be discretised accurately: the numerator agrees with the sampled system only to {:.1g} of "
-         "its size (at most {:g}); the poles or the sample period are too far apart",
-         what, residual / v_max, k_numerator_tolerance);
+  // The same values by another rounding path at three points: `check`, the exponential with more
+  // squarings, by full LUs (not of a Hessenberg form). Where e^(AT) or the circle's view of it is
+  // ill-conditioned (poles of e^(pT) = 1e13 seen from |z| = 1, a companion form far from normal)
+  // the two disagree, though each agrees with its own interpolant.
+  for (std::size_t k = 0; k < 3 && k < m; ++k) {
+    const Complex z = std::polar(1.0, angle(k * (m / 3), std::numbers::pi / static_cast<double>(m)));
+    Eigen::MatrixXcd full = Eigen::MatrixXcd::Zero(n + 1, n + 1);
+    full.topLeftCorner(n, n) = -check.phi.cast<Complex>();
+    full.topLeftCorner(n, n).diagonal().array() += z;
+    const Complex det_phi = Eigen::PartialPivLU<Eigen::MatrixXcd>(full.topLeftCorner(n, n)).determinant();
+    full.topRightCorner(n, 1) = (check.g0 * z + check.g1).cast<Complex>();
+    full.bottomLeftCorner(1, n) = -c.cast<Complex>();
+    full(n, n) = check.d;
+    const Complex other =
+        eval(den_z, z) * (Eigen::PartialPivLU<Eigen::MatrixXcd>(full).determinant() / det_phi);
+    residual = std::max(residual, std::abs(other - value_at(z)));
   }
+  if (v_max == 0.0) return Poly{};
+  disagreement = residual / v_max;
+  if (!(residual <= k_numerator_tolerance * v_max)) return std::nullopt;
   const double noise = std::max(residual, static_cast<double>(m) * std::numeric_limits<double>::epsilon() * v_max);
   for (double& x : p) {
     if (std::abs(x) <= 8.0 * noise) x = 0.0;
@@ -165,10 +218,10 @@ Poly numerator(const Eigen::MatrixXd& phi, const Eigen::VectorXd& g0, const Eige
 /// small beside the norm but not beside Γ's smallest entries (T^6/720 = 1.4e-21 for a sixth
 /// order at 1 ms came out 1e-6 wrong); the series, summed until its terms are 1e-100 of the
 /// sum, is accurate entry by entry for the small ‖M‖ of a short sample period.
-Eigen::MatrixXd checked_exp(const Eigen::MatrixXd& m, const std::string& what) {
+Eigen::MatrixXd checked_exp(const Eigen::MatrixXd& m, const std::string& what, int extra_squarings = 0) {
   const double norm = m.cwiseAbs().colwise().sum().maxCoeff();
-  int squarings = 0;
-  if (norm > 0.5) squarings = std::min(2000, static_cast<int>(std::ceil(std::log2(norm / 0.5))));
+  int squarings = extra_squarings;
+  if (norm > 0.5) squarings += std::min(2000, static_cast<int>(std::ceil(std::log2(norm / 0.5))));
   const Eigen::MatrixXd x = m * std::ldexp(1.0, -squarings);
   Eigen::MatrixXd e = Eigen::MatrixXd::Identity(m.rows(), m.cols());
   Eigen::MatrixXd term = e;
@@ -325,6 +378,8 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
   const StateSpace ss = realise(scaled(g, 1.0 / gain));
   const Eigen::Index n = ss.a.rows();
   const Eigen::VectorXd none = Eigen::VectorXd::Zero(n);
+  // Every hold samples the poles over one period: its denominator is the same.
+  const Poly den_z = sampled_denominator(trim(g.den), dt_s, what);
   // The holds keep the DC gain, H(1) = G(0). Where den's coefficients cancel at z = 1 (poles
   // near 1: (1 − a)² is 1e-6 made of terms near 2) an accurate numerator over the rounded den
   // still misses it by 1e-10; a rescaling within that rounding restores it, so a step settles
@@ -339,6 +394,22 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
     }
     return make_z(h_num, den, dt_s, delay);
   };
+  // Over the mapped poles first; where the root finder cannot place them (a 64-fold pole) over
+  // Φ's own characteristic polynomial, if the sampled system agrees with that.
+  auto discretise = [&](const Sampled& sampled, const Sampled& check, long delay) {
+    double off = 0.0;
+    if (auto num = numerator(sampled, check, ss.c, den_z, what, off)) return finish(*num, den_z, delay);
+    const Poly den_phi = charpoly(sampled.phi);
+    double off_phi = 0.0;
+    if (auto num = numerator(sampled, check, ss.c, den_phi, what, off_phi)) {
+      return finish(*num, den_phi, delay);
+    }
+    fail(
+        "{}: cannot be discretised accurately: the numerator agrees with the sampled system only to {:.1g} "
+        "of "
+        "its size (at most {:g}); the poles or the sample period are too far apart",
+        what, std::min(off, off_phi), k_numerator_tolerance);
+  };
   if (method == C2dMethod::zoh) {
     long d = 0;
     double theta = 0.0;
@@ -347,24 +418,27 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
     Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n + 1, n + 1);
     m.topLeftCorner(n, n) = ss.a;
     m.topRightCorner(n, 1) = ss.b;
-    auto block_exp = [&](double t, Eigen::MatrixXd& phi, Eigen::VectorXd& psi) {
-      const Eigen::MatrixXd e = checked_exp(m * t, what);
-      phi = e.topLeftCorner(n, n);
-      psi = e.topRightCorner(n, 1);
+    auto sample = [&](int extra) {
+      auto block_exp = [&](double t, Eigen::MatrixXd& phi, Eigen::VectorXd& psi) {
+        const Eigen::MatrixXd e = checked_exp(m * t, what, extra);
+        phi = e.topLeftCorner(n, n);
+        psi = e.topRightCorner(n, 1);
+      };
+      Eigen::MatrixXd phi;
+      Eigen::VectorXd gamma;
+      block_exp(dt_s - theta, phi, gamma);
+      if (theta == 0.0) return Sampled{phi, none, gamma, ss.d};
+      Eigen::MatrixXd phi_theta;
+      Eigen::VectorXd psi_theta;
+      block_exp(theta, phi_theta, psi_theta);
+      const Eigen::VectorXd gamma1 = phi * psi_theta;
+      Eigen::MatrixXd phi_full;
+      Eigen::VectorXd unused;
+      block_exp(dt_s, phi_full, unused);
+      // z·N0 + N1 + D·den: one bordered determinant with the column z·Γ0 + Γ1.
+      return Sampled{phi_full, gamma, gamma1, ss.d};
     };
-    Eigen::MatrixXd phi;
-    Eigen::VectorXd gamma;
-    block_exp(dt_s - theta, phi, gamma);
-    if (theta == 0.0) return finish(numerator(phi, none, gamma, ss.c, ss.d, what), charpoly(phi), d);
-    Eigen::MatrixXd phi_theta;
-    Eigen::VectorXd psi_theta;
-    block_exp(theta, phi_theta, psi_theta);
-    const Eigen::VectorXd gamma1 = phi * psi_theta;
-    Eigen::MatrixXd phi_full;
-    Eigen::VectorXd unused;
-    block_exp(dt_s, phi_full, unused);
-    // z·N0 + N1 + D·den: one bordered determinant with the column z·Γ0 + Γ1.
-    return finish(numerator(phi_full, gamma, gamma1, ss.c, ss.d, what), charpoly(phi_full), d + 1);
+    return discretise(sample(0), sample(k_check_squarings), theta == 0.0 ? d : d + 1);
   }
   if (method == C2dMethod::foh) {
     const long d = whole_delay(g, dt_s, what, "foh");
@@ -372,19 +446,23 @@ Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const s
     m.topLeftCorner(n, n) = ss.a * dt_s;
     m.block(0, n, n, 1) = ss.b * dt_s;
     m(n, n + 1) = 1.0;
-    const Eigen::MatrixXd e = checked_exp(m, what);
-    const Eigen::MatrixXd phi = e.topLeftCorner(n, n);
-    const Eigen::VectorXd gamma1 = e.block(0, n, n, 1);
-    const Eigen::VectorXd gamma2 = e.block(0, n + 1, n, 1);
-    const Eigen::VectorXd gamma = gamma1 + (phi - Eigen::MatrixXd::Identity(n, n)) * gamma2;
-    const double dd = ss.d + (ss.c * gamma2)(0);
-    return finish(numerator(phi, none, gamma, ss.c, dd, what), charpoly(phi), d);
+    auto sample = [&](int extra) {
+      const Eigen::MatrixXd e = checked_exp(m, what, extra);
+      const Eigen::MatrixXd phi = e.topLeftCorner(n, n);
+      const Eigen::VectorXd gamma1 = e.block(0, n, n, 1);
+      const Eigen::VectorXd gamma2 = e.block(0, n + 1, n, 1);
+      const Eigen::VectorXd gamma = gamma1 + (phi - Eigen::MatrixXd::Identity(n, n)) * gamma2;
+      return Sampled{phi, none, gamma, ss.d + (ss.c * gamma2)(0)};
+    };
+    return discretise(sample(0), sample(k_check_squarings), d);
   }
   const long d = whole_delay(g, dt_s, what, "impulse");
   if (!g.strictly_proper()) fail("{}: impulse invariance needs a strictly proper transfer function", what);
-  const Eigen::MatrixXd phi = checked_exp(ss.a * dt_s, what);
   // T·z·C·adj(zI − Φ)·B: the column z·(T·B).
-  return finish(numerator(phi, ss.b * dt_s, none, ss.c, 0.0, what), charpoly(phi), d);
+  auto sample = [&](int extra) {
+    return Sampled{checked_exp(ss.a * dt_s, what, extra), ss.b * dt_s, none, 0.0};
+  };
+  return discretise(sample(0), sample(k_check_squarings), d);
 }
 
 }  // namespace mcg::linsys

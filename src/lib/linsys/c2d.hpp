@@ -44,6 +44,8 @@ Poly ss_numerator(const Eigen::MatrixXd& a, const Eigen::VectorXd& b, const Eige
 ///           removing the roots at s = 0 (z = 1).
 ///  impulse: H(z) = T·Z{g(kT)} for strictly proper G.
 /// Delays other than ZOH's must be whole samples (then z^−k). prewarp_rad_s = 0: none.
+/// The holds' denominator is Π(z − e^(p·T)) over G's poles; their numerator is refused
+/// ("cannot be discretised accurately") where two evaluations of the sampled system disagree.
 /// Throws mcg::Error naming `what` for an improper G or a bad delay.
 Tf c2d(const Tf& g, double dt_s, C2dMethod method, double prewarp_rad_s, const std::string& what);
 

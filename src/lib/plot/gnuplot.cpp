@@ -227,7 +227,7 @@ void run_live(const Options& o, Spec spec, const std::string& program) {
   std::ifstream file;
   if (path != "-") {
     file.open(path, std::ios::binary);
-    if (!file) fail("{}: cannot open: {}", path, std::strerror(errno));
+    if (!file) fail("{}: cannot open: {}", printable_name(path), std::strerror(errno));
   }
   std::istream& in = path == "-" ? std::cin : file;
   table::Reader reader(in, display_label(path));
@@ -296,7 +296,7 @@ void run_live(const Options& o, Spec spec, const std::string& program) {
       const std::string text = gnuplot.read_until(marker, k_frame_timeout_ms);
       if (spec.output.kind == Output::Kind::png) {
         if (std::rename(part_path.c_str(), final_path.c_str()) != 0) {
-          fail("-o {}: cannot replace: {}", final_path, std::strerror(errno));
+          fail("-o {}: cannot replace: {}", printable_name(final_path), std::strerror(errno));
         }
       } else if (spec.output.kind == Output::Kind::dumb) {
         // On a terminal each frame replaces the last (cursor home, clear to the end).
@@ -347,7 +347,7 @@ void run(const Options& o) {
   if (o.live && !plot) fail("--live draws: give -o FILE.png, --term dumb, or a window (no --script alone)");
   if (o.live && spec.output.kind != Output::Kind::png && spec.output.kind != Output::Kind::dumb &&
       spec.output.kind != Output::Kind::window) {
-    fail("--live rewrites a PNG, a text plot or a window; not {}", o.output);
+    fail("--live rewrites a PNG, a text plot or a window; not {}", printable_name(o.output));
   }
   const bool tall = spec.mode == Mode::bode || spec.mode == Mode::rlocus;
   if (text) {
@@ -373,15 +373,15 @@ void run(const Options& o) {
 
   if (!o.script.empty()) {
     std::ofstream file(o.script, std::ios::binary);
-    if (!file) fail("--script {}: cannot open: {}", o.script, std::strerror(errno));
+    if (!file) fail("--script {}: cannot open: {}", printable_name(o.script), std::strerror(errno));
     file << script;
     file.close();
-    if (!file) fail("--script {}: write failed", o.script);
+    if (!file) fail("--script {}: write failed", printable_name(o.script));
   }
   if (!plot) return;
   // Fail here, not in gnuplot, which would carry on and write the image to stdout.
   if (!o.output.empty() && !std::ofstream(o.output, std::ios::binary | std::ios::app)) {
-    fail("-o {}: cannot open: {}", o.output, std::strerror(errno));
+    fail("-o {}: cannot open: {}", printable_name(o.output), std::strerror(errno));
   }
   std::vector<std::string> argv{program, "-d"};
   if (spec.output.kind == Output::Kind::window) argv.emplace_back("-persist");

@@ -18,7 +18,7 @@ namespace mcg::signal {
 /// whose product asks for more are refused, naming them, before anything is allocated.
 inline constexpr std::size_t k_max_rows = 10'000'000;
 
-/// The most cosine terms (lines x samples of one period) a multisine computes: about 2.5 s of
+/// The most terms (lines x samples of one period) a multisine computes: about 0.6 s of
 /// one core.
 inline constexpr double k_max_multisine_terms = 2e8;
 
