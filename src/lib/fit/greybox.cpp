@@ -323,7 +323,8 @@ void fit_warnings(const NlsResult& n, const std::vector<std::pair<double, double
     const auto k = static_cast<std::size_t>(i);
     const double v = n.values[i];
     const auto [lo, hi] = bounds[k];
-    const std::string unit = units[k].empty() ? "" : " " + units[k];
+    // A scale's unit is "1": printed after a number it would read as a second value.
+    const std::string unit = units[k].empty() || units[k] == "1" ? "" : " " + units[k];
     if (const std::string why = impossible(n.names[k], v); !why.empty()) {
       add(Kind::impossible, {n.names[k]}, fmt::format("{} = {:.6g}{} {}", n.names[k], v, unit, why));
       continue;
