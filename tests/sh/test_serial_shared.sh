@@ -60,6 +60,13 @@ check "and the board dropped no block for them" eval 'grep -q "^tx_drops = 0 " g
 settings() { grep -Ev '^(;|\[|stream |duty |seq_state |tx_drops )' "$1"; }
 check "the settings the owner answered from what it holds are the board's" eval 'diff <(settings get0.ini) <(settings get3.ini) &&
   [ "$(settings get3.ini | wc -l)" -ge 24 ]'
+mcg-serial -p ./ttyH set rpm_cmd 515 > /dev/null
+mcg-serial -p ./ttyH set kp 7 > /dev/null
+mcg-serial -p ./ttyH get > get4.ini
+check "a full get right after two sets shows both (a write forgets what it changes)" eval \
+  'grep -q "^rpm_cmd = 515 " get4.ini && grep -q "^kp = 7 " get4.ini'
+mcg-serial -p ./ttyH set rpm_cmd 420 > /dev/null
+mcg-serial -p ./ttyH set kp 0 > /dev/null
 sleep 2
 check "the owner's own stream ended, it serves its clients still" eval '[ "$(rows owner.csv)" = 1500 ] && kill -0 $opid'
 check "the client stream: 12 s, every sample once, status 0" eval 'wait_bounded $cpid 30 && [ "$status" = 0 ] &&

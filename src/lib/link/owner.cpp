@@ -278,6 +278,9 @@ struct PortOwner::Impl {
   int log_client = -1;                       ///< who asked for the log dump
   std::uint8_t stream_reg = 0;
   std::uint8_t seq_state_reg = 0;
+  std::uint8_t exc_run_reg = 0;
+  std::uint8_t commit_reg = 0;
+  std::vector<std::uint8_t> staged_regs;  ///< the controller's set, which a commit makes active
   bool finishing = false;  ///< the owner's process is done: serve the rest, then end
 
   /// A configuration register's value as the board last answered a read of it.
@@ -289,6 +292,7 @@ struct PortOwner::Impl {
   std::vector<Held> held;
   std::uint64_t generation = 0;   ///< bumped whenever the held values are forgotten
   bool sequence_may_play = true;  ///< until a read of seq_state says it stopped
+  bool excitation_may_run = true;  ///< until a read of exc_run says it stopped
   std::optional<Frame> version;   ///< the board's answer to MCG_CMD_VERSION (it never changes)
 
   Held* held_for(int reg) {
@@ -303,10 +307,32 @@ struct PortOwner::Impl {
     for (auto& h : held) h.raw.reset();
   }
 
+  /// Forgets the held values a request `cmd` (naming register `reg`) may change: a write, its
+  /// register; a commit, the controller's set; a sequence or an excitation started, every value
+  /// (the board then writes registers itself). The log and sequence storage change none.
+  void forget_for(std::uint8_t cmd, int reg) {
+    if (cmd == MCG_CMD_LOG_START || cmd == MCG_CMD_LOG_DUMP || cmd == MCG_CMD_SEQ_WRITE ||
+        cmd == MCG_CMD_SEQ_CLEAR) {
+      return;
+    }
+    if (cmd != MCG_CMD_WRITE || reg < 0 || reg == seq_state_reg || reg == exc_run_reg) {
+      forget_held();
+      return;
+    }
+    ++generation;  // an answer to a read sent before the write may hold its old value
+    for (auto& h : held) {
+      const bool staged = std::find(staged_regs.begin(), staged_regs.end(), h.reg) != staged_regs.end();
+      if (h.reg == reg || (reg == commit_reg && staged)) h.raw.reset();
+    }
+  }
+
+  /// The board may be writing registers itself (a sequence playing, an excitation running).
+  bool board_plays() const { return sequence_may_play || excitation_may_run; }
+
   /// Register `reg` as the owner may answer it: a configuration register while the stream is
-  /// on and no sequence may be writing registers, from the board's answer of less than k_held_s ago.
+  /// on and the board does not play, from the board's answer of less than k_held_s ago.
   std::optional<std::int16_t> held_value(int reg) {
-    if (!anyone_streams(-1) || sequence_may_play) return {};
+    if (!anyone_streams(-1) || board_plays()) return {};
     const Held* h = held_for(reg);
     if (h == nullptr || !h->raw || now_s() - h->at_s > k_held_s) return {};
     return h->raw;
@@ -407,7 +433,7 @@ struct PortOwner::Impl {
       return;
     }
     if (!is_read(cmd)) {
-      forget_held();  // a write may change other registers (a mode switch, a commit)
+      forget_for(cmd, e.reg);
       return;
     }
     if (e.generation != generation) return;
@@ -430,21 +456,24 @@ struct PortOwner::Impl {
   /// The board just answered `raw` for register `reg`.
   void hold(int reg, std::int16_t raw) {
     if (reg == seq_state_reg) sequence_may_play = raw != MCG_SEQ_STOP;
+    if (reg == exc_run_reg) excitation_may_run = raw != 0;
     if (Held* h = held_for(reg)) {
       h->raw = raw;
       h->at_s = now_s();
     }
   }
 
-  /// In the line's spare room while streaming: the owner's own read of whichever configuration
-  /// register is due (seq_state first while a sequence may play).
+  /// In the line's spare room while streaming: the owner's own read of the configuration
+  /// registers due (seq_state and exc_run first while the board may play).
   void refresh_held() {
     const double now = now_s();
     if (waiting || !queue.empty() || !anyone_streams(-1) || now - last_client_s < k_client_quiet_s) return;
     Frame f;
     f.cmd = MCG_CMD_READ;
-    if (sequence_may_play) {
-      f.payload = {seq_state_reg};
+    if (board_plays()) {
+      if (sequence_may_play) f.payload.push_back(seq_state_reg);
+      if (excitation_may_run) f.payload.push_back(exc_run_reg);
+      if (f.payload.size() > 1) f.cmd = MCG_CMD_READ_LIST;
     } else {
       for (const Held& h : held) {
         if ((!h.raw || now - h.at_s > k_refresh_s) && f.payload.size() < k_refresh_list)
@@ -567,11 +596,11 @@ struct PortOwner::Impl {
     queue.pop_front();
     const Frame& f = p.frame;
     if (!is_read(f.cmd)) {
-      forget_held();
-      if (f.cmd == MCG_CMD_WRITE && f.payload.size() >= 3 && f.payload[0] == seq_state_reg &&
-          get_i16(f.payload, 1) != MCG_SEQ_STOP) {
+      const bool write = f.cmd == MCG_CMD_WRITE && f.payload.size() >= 3;
+      forget_for(f.cmd, write ? f.payload[0] : -1);
+      if (write && f.payload[0] == seq_state_reg && get_i16(f.payload, 1) != MCG_SEQ_STOP)
         sequence_may_play = true;
-      }
+      if (write && f.payload[0] == exc_run_reg && get_i16(f.payload, 1) != 0) excitation_may_run = true;
     }
     port->write_all(encode(f.cmd, f.payload), k_port_write_timeout_s);
     Expect e = expectation(p);
@@ -712,6 +741,11 @@ PortOwner::PortOwner(std::unique_ptr<Port> port) : m_impl(std::make_unique<Impl>
   m.port = std::move(port);
   m.stream_reg = require_register("stream").id;
   m.seq_state_reg = require_register("seq_state").id;
+  m.exc_run_reg = require_register("exc_run").id;
+  m.commit_reg = require_register("commit").id;
+  for (const RegisterInfo& reg : registers()) {
+    if (reg.staged) m.staged_regs.push_back(reg.id);
+  }
   // board_config's registers first (a capture's header needs them), then every other one that
   // only a write changes: not the duty a closed loop drives, a counter, or a sequence's state.
   for (const std::string_view name : config_register_names())
