@@ -14,6 +14,14 @@ cleanup() {
 }
 trap cleanup EXIT
 
+# require_tools TOOL...: ends the suite as skipped (exit 125) unless each TOOL is built in $tools.
+require_tools() {
+  local t
+  for t in "$@"; do
+    [[ -x "$tools/$t" ]] || { echo "skipped: $t not built"; exit 125; }
+  done
+}
+
 # check DESCRIPTION COMMAND...: runs COMMAND, counts a failure when it fails
 # (a shell expression: check DESCRIPTION eval 'EXPRESSION').
 check() {

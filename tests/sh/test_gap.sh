@@ -13,10 +13,8 @@
 set -euo pipefail
 tools=$1
 export PATH="$tools:$PATH"
-for t in mcg-sweep mcg-sim mcg-fit; do
-  [[ -x "$tools/$t" ]] || { echo "skipped: $t not built"; exit 125; }
-done
 source "$(dirname "$0")/lib.sh"
+require_tools mcg-sweep mcg-sim mcg-fit
 source "$(dirname "$0")/gap_lib.sh"
 
 # measure EFFECTS SEED: stdin (an input table) -> stdout (a measured run)

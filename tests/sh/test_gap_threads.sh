@@ -6,10 +6,8 @@
 set -euo pipefail
 tools=$1
 export PATH="$tools:$PATH"
-for t in mcg-sweep mcg-sim mcg-fit; do
-  [[ -x "$tools/$t" ]] || { echo "skipped: $t not built"; exit 125; }
-done
 source "$(dirname "$0")/lib.sh"
+require_tools mcg-sweep mcg-sim mcg-fit
 
 measure() { mcg-sim --encoder --noise-i 0.003 --adc --seed "$1" --effect dead_time:tau_d_s=0.004; }
 mcg-sweep prbs --bias 6 --amp 3 --clock 0.006 --duration 3 --clutch 0 --seed 5 | measure 1 >"$work/train.csv"

@@ -11,10 +11,8 @@
 set -euo pipefail
 tools=$1
 export PATH="$tools:$PATH"
-for t in mcg-sweep mcg-sim mcg-fit; do
-  [[ -x "$tools/$t" ]] || { echo "skipped: $t not built"; exit 125; }
-done
 source "$(dirname "$0")/lib.sh"
+require_tools mcg-sweep mcg-sim mcg-fit
 
 # motor_ini R L K J Ts Tc c1: a 12 V motor alone
 motor_ini() {

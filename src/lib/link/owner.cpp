@@ -188,6 +188,7 @@ Expect expectation(const Pending& p) {
   return e;
 }
 
+/// A request that changes nothing on the board (a read, the version).
 bool is_read(std::uint8_t cmd) {
   return cmd == MCG_CMD_READ || cmd == MCG_CMD_READ_MANY || cmd == MCG_CMD_READ_LIST ||
          cmd == MCG_CMD_VERSION;
