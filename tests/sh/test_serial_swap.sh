@@ -2,9 +2,9 @@
 # Controller swaps on a running rig, as a person makes them against the emulated board: a PI holds
 # 500 rpm, a board PID is loaded from another shell while a capture streams, and from the console
 # (tmux) while it records; each capture is checked sample by sample: the speed never leaves
-# 500 +- 25 rpm and the duty never drops to 0. A mode switch to pi with the gains zero is refused by
-# the board, from the shell and from the console, and the rig does not move; nor does a duty typed
-# while the PI owns it. Usage: test_serial_swap.sh TOOL_DIR SOURCE_DIR; exit 125 = skipped.
+# 500 +- 25 rpm and the duty never drops to 0. Two shells loading at once each commit their own
+# set. A mode switch to pi with the gains zero is refused by the board, from the shell and from
+# the console, and the rig does not move; nor does a duty typed while the PI owns it. Usage: test_serial_swap.sh TOOL_DIR SOURCE_DIR; exit 125 = skipped.
 tools=$1
 source "$(dirname "$0")/serial_lib.sh"
 export PATH="$tools:$PATH"
@@ -47,6 +47,21 @@ check "the board runs the PID" eval 'S get mode > v && same v pid'
 wait_bounded $spid 20
 check "the capture ran to its end without loss" eval '[ "$status" = 0 ] && [ ! -s shell.err ]'
 check "swap from the shell: 500 +- 25 rpm and duty > 0 in every sample" held shell.csv
+
+# Two shells load at once through a streaming port: the owner lets one stage the controller's set
+# at a time, so each load commits its own set whole (load checks the board runs it after the commit).
+S stream --seconds 30 > two.csv 2> two.err &
+spid=$!
+wait_rows two.csv 100
+loads() { local i; for i in 1 2 3 4; do S load "$1" > /dev/null 2>> "$1.err" || return 1; done; }
+loads pi.ini & apid=$!
+loads pid.ini & bpid=$!
+wait $apid; astatus=$?
+wait $bpid; bstatus=$?
+check "two shells loading at once: 8 loads, each committed whole" eval '[ $astatus = 0 ] && [ $bstatus = 0 ] &&
+  [ ! -s pi.ini.err ] && [ ! -s pid.ini.err ]' || cat pi.ini.err pid.ini.err
+kill "$spid" 2> /dev/null
+wait "$spid" 2> /dev/null
 
 # Back to the PI the same way, then the gains zeroed in open loop: a PI without gains is refused.
 check "back to the PI" eval 'S load pi.ini > /dev/null'

@@ -283,6 +283,9 @@ struct PortOwner::Impl {
   std::uint8_t commit_reg = 0;
   std::vector<std::uint8_t> staged_regs;  ///< the controller's set, which a commit makes active
   bool finishing = false;  ///< the owner's process is done: serve the rest, then end
+  int stager = -1;         ///< the client whose staged writes the shadow set holds
+  double stager_last_s = 0.0;        ///< when it last wrote the controller's set
+  std::vector<int> dropped_stagers;  ///< clients whose staged set the owner discarded
 
   /// A configuration register's value as the board last answered a read of it.
   struct Held {
@@ -518,6 +521,42 @@ struct PortOwner::Impl {
                        [&](const Client& c) { return !c.closed && c.id != except && c.stream; });
   }
 
+  /// `f` writes the board's shadow set: a register of the controller's set, or commit.
+  bool stages(const Frame& f) const {
+    if (f.cmd != MCG_CMD_WRITE || f.payload.size() < 3) return false;
+    return f.payload[0] == commit_reg ||
+           std::find(staged_regs.begin(), staged_regs.end(), f.payload[0]) != staged_regs.end();
+  }
+
+  /// Whether client `c` may write the shadow set with `f`: no other client's set is staged,
+  /// and `c`'s own was not discarded since it began (a discard, commit 0, begins afresh). A
+  /// commit 1 ends the client's hold; the owner refuses the others BUSY meanwhile, which the
+  /// board never answers to a staged write or a commit.
+  bool may_stage(Client& c, const Frame& f) {
+    const bool commit = f.payload[0] == commit_reg;
+    const std::int16_t value = get_i16(f.payload, 1);
+    const auto dropped = std::find(dropped_stagers.begin(), dropped_stagers.end(), c.id);
+    if (dropped != dropped_stagers.end()) {
+      if (!commit || value != 0) return false;
+      dropped_stagers.erase(dropped);
+    }
+    if (stager >= 0 && stager != c.id) return false;
+    stager = commit && value != 0 ? -1 : c.id;
+    stager_last_s = now_s();
+    return true;
+  }
+
+  /// Discards the shadow set of a stager that left or went silent (the board's commit 0).
+  void drop_stager(bool silent) {
+    if (silent) dropped_stagers.push_back(stager);
+    stager = -1;
+    Frame discard;
+    discard.cmd = MCG_CMD_WRITE;
+    discard.payload = {commit_reg};
+    put_i16(discard.payload, 0);
+    queue.push_back({-1, std::move(discard), nullptr});
+  }
+
   /// A whole frame from client `c`: queued for the board, or answered here when it would
   /// turn off a stream another client still reads.
   void from_client(Client& c, Frame f) {
@@ -535,6 +574,13 @@ struct PortOwner::Impl {
         send_to(c, reply);
         return;
       }
+    }
+    if (stages(f) && !may_stage(c, f)) {
+      Frame refusal;
+      refusal.cmd = static_cast<std::uint8_t>(MCG_CMD_WRITE | MCG_REPLY_BIT);
+      refusal.payload = {MCG_ST_BUSY};
+      send_to(c, refusal);
+      return;
     }
     if (auto reply = answer_here(f)) {
       send_to(c, *reply);
@@ -588,6 +634,7 @@ struct PortOwner::Impl {
 
   void send_next() {
     const double now = now_s();
+    if (stager >= 0 && now - stager_last_s > k_stage_idle_s) drop_stager(true);
     std::erase_if(expected, [&](const Expect& e) { return now - e.sent_s > k_forget_s; });
     if (waiting && now - last_sent_s >= k_hold_s) waiting = false;
     refresh_held();
@@ -619,6 +666,8 @@ struct PortOwner::Impl {
       if (!c.closed) continue;
       stopped_streaming = stopped_streaming || c.stream;
       std::erase_if(queue, [&](const Pending& p) { return p.client == c.id; });
+      std::erase(dropped_stagers, c.id);
+      if (c.id == stager) drop_stager(false);
       ::close(c.fd);
       c.fd = -1;
     }

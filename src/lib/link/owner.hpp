@@ -11,6 +11,10 @@
 
 namespace mcg::link {
 
+/// A client staging the controller's set through a shared port and silent this long loses the
+/// shadow set (PortOwner).
+inline constexpr double k_stage_idle_s = 5.0;
+
 /// The control socket of `port`: named after the device the path resolves to (so every
 /// spelling of one port finds the same owner), in $XDG_RUNTIME_DIR, else /tmp.
 std::string control_socket_path(const std::string& port);
@@ -37,6 +41,10 @@ std::unique_ptr<Port> open_shared_port(const std::string& port, int baud);
 /// request but reads since, are answered from what the owner holds; it rereads those
 /// registers in the line's spare room, so a client's capture starts without a dozen round
 /// trips between stream blocks. A keypad edit on the board shows within 5 s.
+/// The board's shadow set is one client's at a time: from its first staged write (or commit 0)
+/// to its commit 1 the others' staged writes and commits are refused BUSY; a client that leaves
+/// or stays silent for k_stage_idle_s loses it, the owner discards its set (commit 0) and
+/// refuses the rest of its set until it begins again with commit 0.
 class PortOwner {
  public:
   /// Takes `port` and listens on control_socket_path(port->name()), replacing a stale socket.

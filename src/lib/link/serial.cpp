@@ -73,6 +73,9 @@ std::string Connection::board_text() const {
 namespace {
 
 constexpr double k_pulses_to_rev = 1.0 / MCG_COUNTS_PER_REV;
+/// How long a writer waits for another client's staged set to be committed: a load takes under
+/// 2 s through a streaming port, and the owner discards a set silent for k_stage_idle_s.
+constexpr double k_stage_wait_s = k_stage_idle_s + 1.0;
 
 /// Writes `value` (engineering units) into `reg` and checks what the board holds: for a staged
 /// register the shadow value its answer reports, else the register read back. Returns the raw value
@@ -87,6 +90,12 @@ std::int16_t write_verified(Connection& c, const RegisterInfo& reg, double value
   try {
     held = c.session->write(reg, raw);
   } catch (const Refused& e) {
+    if (e.status() == MCG_ST_BUSY && reg.staged) {
+      fail(
+          "{}: writing {}: the port's owner discarded this writer's staged set (silent over {} s); "
+          "nothing was committed",
+          c.port->name(), reg.name, k_stage_idle_s);
+    }
     if (e.status() != MCG_ST_OWNED) throw;
     const RegisterInfo& mode = require_register("mode");
     fail("{}: writing {}: the controller owns {} in mode {}; set mode open first", c.port->name(), reg.name,
@@ -108,8 +117,26 @@ std::int16_t write_verified(Connection& c, const RegisterInfo& reg, double value
 
 /// Empties the board's shadow set (a copy of the active controller again), so that what follows
 /// stages onto the controller that runs and nothing another writer left half-done.
+/// Through a shared port another client may be staging a set of its own: its writes and commit
+/// come first (the owner answers BUSY until it commits), for up to k_stage_wait_s.
 void discard_staged(Connection& c) {
-  c.session->write(require_register("commit"), 0);
+  const RegisterInfo& commit = require_register("commit");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(k_stage_wait_s);
+  for (;;) {
+    try {
+      c.session->write(commit, 0);
+      break;
+    } catch (const Refused& e) {
+      if (e.status() != MCG_ST_BUSY) throw;
+      if (std::chrono::steady_clock::now() > deadline) {
+        fail(
+            "{}: another client of the port has been staging a controller for {} s without committing it; "
+            "nothing was written",
+            c.port->name(), k_stage_wait_s);
+      }
+      ::usleep(50'000);
+    }
+  }
   c.forget_frac_bits();
 }
 
