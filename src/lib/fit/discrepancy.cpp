@@ -91,7 +91,7 @@ void windows(const model::Compiled& c, const Run& run, std::size_t first,
                                       std::numeric_limits<std::size_t>::max());
   const model::Machine& mm = c.p.motor;
   const model::Machine& mg = c.p.generator;
-  const double R = mm.R_ohm + c.R_on2;
+  const double R = mm.R_ohm + c.circuit.R_series_ohm;
   // The current along the measured speed (measured where it is).
   std::vector<double> i(rows, 0.0);
   for (std::size_t n = 0; n + 1 < rows; ++n) {

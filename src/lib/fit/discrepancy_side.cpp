@@ -48,9 +48,8 @@ void circuit_windows(const model::Compiled& c, const Run& run, std::size_t first
   // The model's circuit at row n: the bridge's output v_b (held over the sample, as the plant
   // applies it) and the R it uses.
   auto bridge = [&](std::size_t n, double& R) {
-    double d = std::clamp(in.v_V[n], -supply, supply) / supply;
-    if (c.deadband > 0.0) d = std::copysign(std::max(0.0, std::abs(d) - c.deadband), d);
-    R = mm.R_ohm + c.R_on2 + std::abs(d) * c.R_s;
+    const double d = c.circuit.duty(std::clamp(in.v_V[n], -supply, supply) / supply);
+    R = mm.R_ohm + c.circuit.R_series_ohm + std::abs(d) * c.circuit.R_duty_ohm;
     return d * supply;
   };
   for (std::size_t a = first; a + width < rows; a += width) {
@@ -75,7 +74,8 @@ void circuit_windows(const model::Compiled& c, const Run& run, std::size_t first
       const double f = 1.0 / (1.0 - decay) - mm.L_H / (R * dt);
       const double w_eff = m.w[n] + f * (m.w[n + 1] - m.w[n]);
       lacking += dt * (R * i_ss + mm.Ke_V_s_rad * w_eff - v_b) +
-                 h * c.V_b * (std::tanh(m.i[n] / 0.01) + std::tanh(m.i[n + 1] / 0.01));
+                 h * c.circuit.V_sat_V *
+                     (std::tanh(m.i[n] / c.circuit.i_sat_A) + std::tanh(m.i[n + 1] / c.circuit.i_sat_A));
       row[c_offset] -= dt * R;
       row[c_gain] -= dt * R * i_ss;
       row[c_brush] -= h * (std::tanh(m.i[n] / 0.01) + std::tanh(m.i[n + 1] / 0.01));
@@ -102,7 +102,7 @@ Finding fit_circuit(const model::Compiled& c, const GapData& data,
   for (const ScoredRun& sr : data.validate) circuit_windows(c, sr.run, sr.first_scored, validate);
   out.columns = c_count;
   if (train.y.size() < std::max(k_discrepancy_min_windows, std::size_t{c_count} + 1)) return out;
-  const double R = c.p.motor.R_ohm + c.R_on2;
+  const double R = c.p.motor.R_ohm + c.circuit.R_series_ohm;
   const std::vector<Column> library = {
       {"1", "A", "", 0.0, false},
       {"R int i", "1", "", 0.0, false},

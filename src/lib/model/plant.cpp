@@ -1,7 +1,9 @@
 // The plant integrator: exponential RK4 between events, stick-slip and clutch events located
 // inside a step.
 //
-// The continuous state is y = [i_m, i_g, w_m, w_g, theta_m, theta_g, dT_m, dT_g]. The discrete
+// The continuous state is y = [i_m, i_g, w_m, w_g, theta_m, theta_g, x_m, x_g] (x: the windings'
+// extra states). The effects reach it only through the typed hooks of model/effects/compiled.hpp.
+// The discrete
 // mode is the clutch coupling (none, rigid, spring, slipping plates), for each body whether it is
 // stuck and, if moving, its direction. Each armature circuit's stiff linear part,
 // di/dt = -(R/L) i + ..., is stepped exactly (Cox and Matthews' ETDRK4: the rest of the
@@ -30,16 +32,14 @@ namespace mcg::model {
 namespace {
 
 constexpr int k_states = 8;
-enum : std::size_t { I_M, I_G, W_M, W_G, TH_M, TH_G, DT_M, DT_G };
+enum : std::size_t { I_M, I_G, W_M, W_G, TH_M, TH_G, X_M, X_G };
 using Vec = std::array<double, k_states>;
 
-/// Brush drop smoothing current (reference definition): V_b tanh(i / 0.01 A).
-constexpr double k_brush_i_A = 0.01;
-/// Circuits faster than this R/L, 1/s (the generator's R + r_load, the motor's R + switches),
+/// Circuits faster than this R/L, 1/s (the generator's R + r_load, the motor's R + series),
 /// are solved as algebraic: the current follows within 50 us, far below any mechanical time
-/// constant, and a step resolving it would be microseconds (with the brush drop's slope, less).
+/// constant, and a step resolving it would be microseconds (with a saturating drop's slope, less).
 constexpr double k_quasi_static_rate = 2e4;
-/// Shortest step the motor circuit is integrated at; a circuit the brush drop's slope makes
+/// Shortest step the motor circuit is integrated at; a circuit a saturating drop's slope makes
 /// faster than this (L / R_eff under 4 us) is solved as algebraic for that step.
 constexpr double k_min_circuit_step_s = 2e-6;
 /// Events handled inside one integration step before the step is accepted as is.
@@ -55,14 +55,14 @@ class PlantImpl {
  public:
   PlantImpl(const Model& model, const SimOptions& options, int initial_clutch) : m_c(model), m_opt(options) {
     m_y.fill(0.0);
-    m_y[DT_M] = m_c.dT0;
-    m_y[DT_G] = m_c.dT0;
+    m_y[X_M] = m_c.winding.x0;
+    m_y[X_G] = m_c.winding.x0;
     m_clutch = initial_clutch;
-    m_motor_quasi = (m_c.p.motor.R_ohm + m_c.R_on2) / m_c.p.motor.L_H > k_quasi_static_rate;
-    m_exp_circuits = m_c.V_b <= 0.0;
+    m_motor_quasi = (m_c.p.motor.R_ohm + m_c.circuit.R_series_ohm) / m_c.p.motor.L_H > k_quasi_static_rate;
+    m_exp_circuits = m_c.circuit.V_sat_V <= 0.0;
     m_t_engage = -std::numeric_limits<double>::infinity();
     if (m_clutch == 2) {
-      m_coupling = m_c.compliance ? Coupling::spring : Coupling::rigid;
+      m_coupling = spring() ? Coupling::spring : Coupling::rigid;
     }
     update_gen_mode();
   }
@@ -128,8 +128,8 @@ class PlantImpl {
     }
     double d = 0.0;
     const double v_b = bridge(d);
-    s.v_applied_V = v_b - (m_c.R_on2 + std::abs(d) * m_c.R_s) * s.i_A;
-    s.temp_rise_K = m_y[DT_M];
+    s.v_applied_V = v_b - (m_c.circuit.R_series_ohm + std::abs(d) * m_c.circuit.R_duty_ohm) * s.i_A;
+    s.temp_rise_K = m_y[X_M];
     s.clutch = m_clutch;
     s.stuck = m_stuck_m;
     return s;
@@ -149,37 +149,39 @@ class PlantImpl {
         m_gen_circuit && (m_c.p.generator.R_ohm + m_r_load) / m_c.p.generator.L_H > k_quasi_static_rate;
   }
   bool rigid() const { return m_coupling == Coupling::rigid; }
+  bool spring() const { return m_c.coupling.spring_k_Nm_rad > 0.0; }
+  bool winding_states() const { return m_c.winding.rate != nullptr; }
 
   /// Bridge output before the current-dependent drops: d' supply_V; d' is returned.
   double bridge(double& d_out) const {
     const double supply = m_c.p.supply_V;
-    double d = std::clamp(m_v / supply, -1.0, 1.0);
-    if (m_c.deadband > 0.0) d = std::copysign(std::max(0.0, std::abs(d) - m_c.deadband), d);
+    const double d = m_c.circuit.duty(std::clamp(m_v / supply, -1.0, 1.0));
     d_out = d;
     return d * supply;
   }
 
   double gen_resistance(const Vec& y) const {
     const double R = m_c.p.generator.R_ohm;
-    return m_c.thermal ? R * (1.0 + m_c.alpha * y[DT_G]) : R;
+    return winding_states() ? R * (1.0 + m_c.winding.R_per_x * y[X_G]) : R;
   }
 
-  /// The current of a circuit fast enough to be algebraic: R i + V_b tanh(i / 0.01 A) = emf.
+  /// The current of a circuit fast enough to be algebraic: R i + V_sat tanh(i / i_sat) = emf.
   /// g(i) rises monotonically: safeguarded Newton in the bracket [-|emf|/R, |emf|/R].
   double algebraic_current(double emf, double R) const {
-    if (m_c.V_b <= 0.0) return emf / R;
+    const double V_sat = m_c.circuit.V_sat_V, i_sat = m_c.circuit.i_sat_A;
+    if (V_sat <= 0.0) return emf / R;
     double lo = -std::abs(emf) / R;
     double hi = std::abs(emf) / R;
-    double i = emf / (R + m_c.V_b / k_brush_i_A);
+    double i = emf / (R + V_sat / i_sat);
     for (int it = 0; it < 60 && hi - lo > 1e-15; ++it) {
-      const double th = std::tanh(i / k_brush_i_A);
-      const double g = R * i + m_c.V_b * th - emf;
+      const double th = std::tanh(i / i_sat);
+      const double g = R * i + V_sat * th - emf;
       if (g > 0.0) {
         hi = i;
       } else {
         lo = i;
       }
-      const double slope = R + m_c.V_b / k_brush_i_A * (1.0 - th * th);
+      const double slope = R + V_sat / i_sat * (1.0 - th * th);
       double next = i - g / slope;
       if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
       if (std::abs(next - i) <= 1e-14 * (1.0 + std::abs(i))) return next;
@@ -189,23 +191,23 @@ class PlantImpl {
   }
 
   /// The generator current: the state, or the algebraic solution of
-  /// Ke w_g = (R + r_load) i + V_b tanh(i / 0.01 A) for a fast circuit.
+  /// Ke w_g = (R + r_load) i + drop(i) for a fast circuit.
   double gen_current(const Vec& y) const {
     if (!gen_circuit()) return 0.0;
     if (!gen_quasi_static()) return y[I_G];
     return algebraic_current(m_c.p.generator.Ke_V_s_rad * y[W_G], gen_resistance(y) + m_r_load);
   }
 
-  /// The motor circuit's resistance at duty d: winding (heated), switches, source share.
+  /// The motor circuit's resistance at duty d: winding (with its state), series, duty share.
   double motor_resistance(const Vec& y, double d) const {
     const Machine& mm = m_c.p.motor;
-    return (m_c.thermal ? mm.R_ohm * (1.0 + m_c.alpha * y[DT_M]) : mm.R_ohm) + m_c.R_on2 +
-           std::abs(d) * m_c.R_s;
+    return (winding_states() ? mm.R_ohm * (1.0 + m_c.winding.R_per_x * y[X_M]) : mm.R_ohm) +
+           m_c.circuit.R_series_ohm + std::abs(d) * m_c.circuit.R_duty_ohm;
   }
 
   /// The motor current: the state, or for a motor whose electrical time constant is far
   /// below the steps (a low-inductance gearmotor: L/R under 50 us) the algebraic solution of
-  /// v_b - Ke w = R i + V_b tanh(i / 0.01 A), so that no step has to resolve it.
+  /// v_b - Ke w = R i + drop(i), so that no step has to resolve it.
   double motor_current(const Vec& y) const {
     if (!m_motor_quasi) return y[I_M];
     double d = 0.0;
@@ -213,11 +215,11 @@ class PlantImpl {
     return algebraic_current(v_b - m_c.p.motor.Ke_V_s_rad * y[W_M], motor_resistance(y, d));
   }
 
-  /// Capacity of the clutch plates at time t (clutch_engage_lag).
+  /// Capacity of the clutch plates at time t (CouplingTerms::capacity).
   double capacity(double t) const {
     const double age = t - m_t_engage;
     if (age <= 0.0) return 0.0;
-    return m_c.T_max * (1.0 - std::exp(-age / m_c.tau_lag));
+    return m_c.coupling.capacity(m_c.coupling.capacity_k, age);
   }
 
   const Friction& motor_friction() const { return m_c.motor_side[static_cast<std::size_t>(m_clutch)]; }
@@ -244,7 +246,7 @@ class PlantImpl {
         Tg = 0.0;
         break;
       case Coupling::spring: {
-        const double Ts = m_c.k_spring * (y[TH_M] - y[TH_G] - m_phi0) + m_c.c_spring * (y[W_M] - y[W_G]);
+        const double Ts = m_c.coupling.spring_k_Nm_rad * (y[TH_M] - y[TH_G] - m_phi0) + m_c.c_spring * (y[W_M] - y[W_G]);
         Tm -= Ts;
         Tg += Ts;
         break;
@@ -265,42 +267,45 @@ class PlantImpl {
     const Machine& mg = m_c.p.generator;
     const double Rm = motor_resistance(y, d);
     const double i_m = motor_current(y);
+    const double load_Nm = std::abs(mm.Kt_Nm_A * i_m);
     if (m_motor_quasi) {
       dy[I_M] = 0.0;
     } else {
       double vm = v_b - Rm * i_m - mm.Ke_V_s_rad * y[W_M];
-      if (m_c.V_b > 0.0) vm -= m_c.V_b * std::tanh(i_m / k_brush_i_A);
+      if (m_c.circuit.V_sat_V > 0.0) vm -= m_c.circuit.drop(i_m);
       dy[I_M] = vm / mm.L_H;
     }
     const double i_g = gen_current(y);
     dy[I_G] = 0.0;
     if (gen_circuit() && !gen_quasi_static()) {
       double vg = mg.Ke_V_s_rad * y[W_G] - (gen_resistance(y) + m_r_load) * y[I_G];
-      if (m_c.V_b > 0.0) vg -= m_c.V_b * std::tanh(y[I_G] / k_brush_i_A);
+      if (m_c.circuit.V_sat_V > 0.0) vg -= m_c.circuit.drop(y[I_G]);
       dy[I_G] = vg / mg.L_H;
     }
     double Tm = 0.0, Tg = 0.0;
     drive_torques(y, t, m_coupling, i_m, i_g, Tm, Tg);
     if (rigid()) {
       const double a =
-          m_stuck_m ? 0.0 : (Tm - m_dir_m * m_c.kinetic(m_c.rigid, m_dir_m * y[W_M])) / m_c.J_total;
+          m_stuck_m ? 0.0 : (Tm - m_dir_m * m_c.kinetic(m_c.rigid, m_dir_m * y[W_M], load_Nm)) / m_c.J_total;
       dy[W_M] = a;
       dy[W_G] = a;
     } else {
-      dy[W_M] =
-          m_stuck_m ? 0.0 : (Tm - m_dir_m * m_c.kinetic(motor_friction(), m_dir_m * y[W_M])) / mm.J_kg_m2;
+      dy[W_M] = m_stuck_m ? 0.0
+                          : (Tm - m_dir_m * m_c.kinetic(motor_friction(), m_dir_m * y[W_M], load_Nm)) / mm.J_kg_m2;
       dy[W_G] = (m_stuck_g || !gen_present())
                     ? 0.0
                     : (Tg - m_dir_g * m_c.kinetic(m_c.gen, m_dir_g * y[W_G])) / mg.J_kg_m2;
     }
     dy[TH_M] = y[W_M];
     dy[TH_G] = y[W_G];
-    if (m_c.thermal) {
-      dy[DT_M] = (i_m * i_m * (Rm - m_c.R_on2 - std::abs(d) * m_c.R_s) - y[DT_M] / m_c.R_th) / m_c.C_th;
-      dy[DT_G] = (i_g * i_g * gen_resistance(y) - y[DT_G] / m_c.R_th) / m_c.C_th;
+    if (winding_states()) {
+      const WindingStates& w = m_c.winding;
+      dy[X_M] = w.rate(w.k, i_m * i_m * (Rm - m_c.circuit.R_series_ohm - std::abs(d) * m_c.circuit.R_duty_ohm),
+                       y[X_M]);
+      dy[X_G] = w.rate(w.k, i_g * i_g * gen_resistance(y), y[X_G]);
     } else {
-      dy[DT_M] = 0.0;
-      dy[DT_G] = 0.0;
+      dy[X_M] = 0.0;
+      dy[X_G] = 0.0;
     }
   }
 
@@ -320,16 +325,17 @@ class PlantImpl {
   }
 
   /// Decay rates lambda = -R/L, 1/s, of the armature circuits integrated as states (0 for every
-  /// other state, and for all of them under the brush drop, whose slope near zero current the
+  /// other state, and for all of them under a saturating drop, whose slope near zero current the
   /// step bound follows instead): the stiff linear part the exponential step takes exactly.
-  /// The winding's heating stays in the rest of the right-hand side.
+  /// The windings' states stay in the rest of the right-hand side.
   Vec linear_rates() const {
     Vec lam{};
     if (!m_exp_circuits) return lam;
     if (!m_motor_quasi) {
       double d = 0.0;
       bridge(d);
-      lam[I_M] = -(m_c.p.motor.R_ohm + m_c.R_on2 + std::abs(d) * m_c.R_s) / m_c.p.motor.L_H;
+      lam[I_M] = -(m_c.p.motor.R_ohm + m_c.circuit.R_series_ohm + std::abs(d) * m_c.circuit.R_duty_ohm) /
+                 m_c.p.motor.L_H;
     }
     if (gen_circuit() && !gen_quasi_static())
       lam[I_G] = -(m_c.p.generator.R_ohm + m_r_load) / m_c.p.generator.L_H;
@@ -421,20 +427,21 @@ class PlantImpl {
   }
 
   /// Largest step for accuracy: a fraction of the spring's time scale, and of the electrical
-  /// ones where the circuits take RK4 (under the brush drop).
+  /// ones where the circuits take RK4 (under a saturating drop).
   double step_limit() const {
     double h = m_opt.max_step_s;
     const Machine& mm = m_c.p.motor;
-    // A torque of the shaft angle (cogging, a discrepancy term) varies within a millisecond at
+    // A torque of the shaft angle (a ripple, a discrepancy term) varies within a millisecond at
     // speed: its model keeps the electrical bound, which resolves the angle as it always did.
     const bool electrical_bound = m_opt.circuit_bound || !m_exp_circuits || !m_c.motor_torque.empty();
-    if (electrical_bound && !m_motor_quasi) h = std::min(h, 0.5 * mm.L_H / (mm.R_ohm + m_c.R_on2 + m_c.R_s));
+    if (electrical_bound && !m_motor_quasi)
+      h = std::min(h, 0.5 * mm.L_H / (mm.R_ohm + m_c.circuit.R_series_ohm + m_c.circuit.R_duty_ohm));
     if (electrical_bound && gen_circuit() && !gen_quasi_static()) {
       h = std::min(h, 0.5 * m_c.p.generator.L_H / (m_c.p.generator.R_ohm + m_r_load));
     }
-    if (m_c.compliance && m_coupling == Coupling::spring) {
+    if (spring() && m_coupling == Coupling::spring) {
       const double inv_J = 1.0 / m_c.p.motor.J_kg_m2 + 1.0 / m_c.p.generator.J_kg_m2;
-      const double w_n = std::sqrt(m_c.k_spring * inv_J);
+      const double w_n = std::sqrt(m_c.coupling.spring_k_Nm_rad * inv_J);
       h = std::min(h, 0.3 / (w_n + m_c.c_spring * inv_J));
     }
     return h;
@@ -442,7 +449,7 @@ class PlantImpl {
 
   void integrate(double len) {
     const double h_lim = step_limit();
-    if (m_c.V_b <= 0.0 || (m_motor_quasi && !(gen_circuit() && !gen_quasi_static()))) {
+    if (m_c.circuit.V_sat_V <= 0.0 || (m_motor_quasi && !(gen_circuit() && !gen_quasi_static()))) {
       const std::optional<long> steps =
           to_integer(std::ceil(len / h_lim - 1e-9), 0L, std::numeric_limits<long>::max());
       if (!steps)
@@ -456,7 +463,7 @@ class PlantImpl {
       }
       return;
     }
-    // The brush drop's slope V_b/0.01 A adds up to 70 ohm per volt of drop near zero current:
+    // A saturating drop's slope V_sat/i_sat (100 ohm per volt of a brush drop) near zero current:
     // a stiff mode only while |i| is small, so the step follows the state.
     // Where that slope makes the motor circuit faster than k_min_circuit_step_s can follow
     // (a low-inductance motor with a strong drop, near zero current), the current is
@@ -465,11 +472,11 @@ class PlantImpl {
     double t = m_t;
     double remaining = len;
     while (remaining > 1e-15) {
-      double h_state = std::min(h_lim, brush_step_limit(h_lim));
+      double h_state = std::min(h_lim, drop_step_limit(h_lim));
       if (!algebraic && h_state < k_min_circuit_step_s) {
         m_motor_quasi = true;
         m_y[I_M] = motor_current(m_y);
-        h_state = std::min(h_lim, brush_step_limit(h_lim));
+        h_state = std::min(h_lim, drop_step_limit(h_lim));
       }
       const double n = std::max(1.0, std::ceil(remaining / h_state - 1e-9));
       const double h = remaining / n;
@@ -480,18 +487,18 @@ class PlantImpl {
     }
   }
 
-  /// Step bound from the brush drop's local slope, R_eff = R + (V_b/0.01 A) sech^2(i/0.01 A),
+  /// Step bound from the saturating drop's local slope, R_eff = R + (V_sat/i_sat) sech^2(i/i_sat),
   /// evaluated at the smallest |i| the current may reach within a step of h_max.
-  double brush_step_limit(double h_max) const {
+  double drop_step_limit(double h_max) const {
     Vec k;
     deriv(m_y, m_t, k);
     auto limit = [&](double i, double di, double R, double L) {
       const double i_min = std::max(0.0, std::abs(i) - std::abs(di) * h_max);
-      const double c = std::cosh(std::min(i_min / k_brush_i_A, 30.0));
-      return 0.5 * L / (R + m_c.V_b / k_brush_i_A / (c * c));
+      const double c = std::cosh(std::min(i_min / m_c.circuit.i_sat_A, 30.0));
+      return 0.5 * L / (R + m_c.circuit.V_sat_V / m_c.circuit.i_sat_A / (c * c));
     };
     const Machine& mm = m_c.p.motor;
-    double h = m_motor_quasi ? h_max : limit(m_y[I_M], k[I_M], mm.R_ohm + m_c.R_on2, mm.L_H);
+    double h = m_motor_quasi ? h_max : limit(m_y[I_M], k[I_M], mm.R_ohm + m_c.circuit.R_series_ohm, mm.L_H);
     if (gen_circuit() && !gen_quasi_static()) {
       const Machine& mg = m_c.p.generator;
       h = std::min(h, limit(m_y[I_G], k[I_G], mg.R_ohm + m_r_load, mg.L_H));
@@ -527,7 +534,13 @@ class PlantImpl {
     return std::clamp((bound - T0) / (T1 - T0), 0.0, 1.0);
   }
 
-  double motor_breakaway() const { return m_c.breakaway(rigid() ? m_c.rigid : motor_friction()); }
+  /// The torque the motor's shaft transmits at y, for the friction modifiers that need it.
+  double motor_load(const Vec& y) const {
+    return m_c.friction_load ? std::abs(m_c.p.motor.Kt_Nm_A * motor_current(y)) : 0.0;
+  }
+  double motor_breakaway(const Vec& y) const {
+    return m_c.breakaway(rigid() ? m_c.rigid : motor_friction(), motor_load(y));
+  }
   double gen_breakaway() const { return m_c.breakaway(m_c.gen); }
 
   void substep(double t0, double h_total) {
@@ -568,8 +581,8 @@ class PlantImpl {
             kind = EventKind::motor_zero;
           }
         }
-      } else if (std::abs(Tm1) > motor_breakaway()) {
-        const double s = break_fraction(Tm0, Tm1, motor_breakaway());
+      } else if (std::abs(Tm1) > motor_breakaway(y1)) {
+        const double s = break_fraction(Tm0, Tm1, motor_breakaway(y1));
         if (s < best) {
           best = s;
           kind = EventKind::motor_break;
@@ -641,7 +654,7 @@ class PlantImpl {
         m_y[W_M] = 0.0;
         if (rigid()) m_y[W_G] = 0.0;
         drive_torques(m_y, t, Tm, Tg);
-        if (std::abs(Tm) <= motor_breakaway()) {
+        if (std::abs(Tm) <= motor_breakaway(m_y)) {
           m_stuck_m = true;
         } else {
           m_dir_m = sign_of(Tm);
@@ -658,7 +671,7 @@ class PlantImpl {
         break;
       case EventKind::motor_break:
         drive_torques(m_y, t, Tm, Tg);
-        if (std::abs(Tm) > motor_breakaway()) {
+        if (std::abs(Tm) > motor_breakaway(m_y)) {
           m_stuck_m = false;
           m_dir_m = sign_of(Tm);
         }
@@ -676,7 +689,7 @@ class PlantImpl {
     }
   }
 
-  /// Torque the plates must carry to keep the shafts together (clutch_engage_lag), from the
+  /// Torque the plates must carry to keep the shafts together (a coupling's capacity), from the
   /// common acceleration of the locked pair: T = Tm - Fm - Jm a.
   double locked_torque(double t, double& Tm_out) const {
     double Tm = 0.0, Tg = 0.0;
@@ -684,7 +697,7 @@ class PlantImpl {
     Tm_out = Tm;
     const double w = m_y[W_M];
     const int dir = sign_of(w);
-    const double Fm = dir * m_c.kinetic(m_c.motor_side[2], dir * w);
+    const double Fm = dir * m_c.kinetic(m_c.motor_side[2], dir * w, motor_load(m_y));
     const double Fg = dir * m_c.kinetic(m_c.gen, dir * w);
     const double a = (Tm - Fm + Tg - Fg) / m_c.J_total;
     return Tm - Fm - m_c.p.motor.J_kg_m2 * a;
@@ -705,7 +718,7 @@ class PlantImpl {
   }
 
   void lock(double w) {
-    if (m_c.compliance) {
+    if (spring()) {
       m_coupling = Coupling::spring;
       m_phi0 = m_y[TH_M] - m_y[TH_G];
       m_stuck_m = m_stuck_g = (w == 0.0);
@@ -718,16 +731,16 @@ class PlantImpl {
     }
   }
 
-  /// A locked pair (clutch_engage_lag, rigid) slips again when the plates cannot carry the
+  /// A locked pair (rigid, with a capacity) slips again when the plates cannot carry the
   /// torque: moving, |T_req| > T_cap; at rest, the motor side alone exceeds its static level
   /// plus the capacity.
   void check_unlock(double t) {
-    if (!m_c.lag || m_coupling != Coupling::rigid || m_clutch != 2) return;
+    if (m_c.coupling.capacity == nullptr || m_coupling != Coupling::rigid || m_clutch != 2) return;
     const double cap = capacity(t);
     double Tm = 0.0;
     const double T_req = locked_torque(t, Tm);
     if (m_stuck_m) {
-      if (std::abs(Tm) > m_c.breakaway(m_c.motor_side[2]) + cap) {
+      if (std::abs(Tm) > m_c.breakaway(m_c.motor_side[2], motor_load(m_y)) + cap) {
         m_coupling = Coupling::slip;
         m_slip_dir = sign_of(Tm);
         m_stuck_g = true;
@@ -771,7 +784,7 @@ class PlantImpl {
     update_gen_mode();
     if (next == 2) {
       const double Jm = m_c.p.motor.J_kg_m2, Jg = m_c.p.generator.J_kg_m2;
-      if (m_c.lag) {
+      if (m_c.coupling.capacity != nullptr) {
         m_t_engage = m_t;
         if (m_y[W_M] == m_y[W_G]) {
           lock(m_y[W_M]);
@@ -779,7 +792,7 @@ class PlantImpl {
           m_coupling = Coupling::slip;
           m_slip_dir = sign_of(m_y[W_M] - m_y[W_G]);
         }
-      } else if (m_c.compliance) {
+      } else if (spring()) {
         m_coupling = Coupling::spring;
         m_phi0 = m_y[TH_M] - m_y[TH_G];
       } else {

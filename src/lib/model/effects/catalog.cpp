@@ -58,8 +58,10 @@ Compiled::Compiled(const Model& model) : p(model.params), delay_s(model.params.d
   gen = p.generator.friction;
   rigid = motor_side[2] + gen;
   J_total = p.motor.J_kg_m2 + p.generator.J_kg_m2;
-  c_spring = 2.0 * zeta_spring * std::sqrt(k_spring * p.motor.J_kg_m2 * p.generator.J_kg_m2 / J_total);
-  C_th = tau_th / R_th;
+  c_spring = 2.0 * coupling.zeta *
+             std::sqrt(coupling.spring_k_Nm_rad * p.motor.J_kg_m2 * p.generator.J_kg_m2 / J_total);
+  friction_load = std::any_of(friction_terms.begin(), friction_terms.end(),
+                              [](const FrictionTerm& t) { return t.breakaway != nullptr; });
 }
 
 void write_effect_catalog(std::ostream& out) {

@@ -9,9 +9,8 @@ namespace mcg::model::effects {
 namespace {
 
 void compile(const Effect& e, Compiled& c) {
-  c.compliance = true;
-  c.k_spring = e.get("k_Nm_per_rad");
-  c.zeta_spring = e.get("zeta");
+  c.coupling.spring_k_Nm_rad = e.get("k_Nm_per_rad");
+  c.coupling.zeta = e.get("zeta");
 }
 
 }  // namespace

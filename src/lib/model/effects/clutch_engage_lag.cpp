@@ -8,10 +8,12 @@ namespace mcg::model::effects {
 
 namespace {
 
+/// T_cap = T_max (1 - exp(-age/tau)), k = {T_max, tau}.
+double capacity(const std::array<double, 4>& k, double age_s) { return k[0] * (1.0 - std::exp(-age_s / k[1])); }
+
 void compile(const Effect& e, Compiled& c) {
-  c.lag = true;
-  c.T_max = e.get("T_max_Nm");
-  c.tau_lag = e.get("tau_s");
+  c.coupling.capacity = capacity;
+  c.coupling.capacity_k = {e.get("T_max_Nm"), e.get("tau_s"), 0.0, 0.0};
 }
 
 }  // namespace

@@ -1,10 +1,11 @@
-// The plant's hooks: the model with every effect resolved into plain numbers for the
-// integrator's inner loop (model/plant.cpp). An effect module (model/effects/<name>.cpp)
-// writes its parameters into these fields in its compile function; the plant reads them.
-// A new effect that fits these hooks touches no other file; one that needs a new kind of
-// physics adds its hook here and its use in plant.cpp.
+// The plant's hooks: the model with every effect resolved into plain numbers and functions for
+// the integrator's inner loop (model/plant.cpp). An effect module (model/effects/<name>.cpp)
+// fills these hooks in its compile function and keeps its equations there; the plant knows
+// the kinds of physics below, never an effect. A new effect that fits these hooks touches no
+// other file than its own and the catalog's registry.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <vector>
@@ -37,28 +38,58 @@ struct TorqueTerm {
   }
 };
 
+/// A friction modifier: added to every friction element's kinetic level at speed x = dir w
+/// (fn), and to its breakaway level (breakaway; nullptr adds nothing), given the element's
+/// own levels and load_Nm, the torque the motor's shaft transmits (|Kt i| of the motor for
+/// the motor's element and the rigid pair, 0 for the generator's own).
+struct FrictionTerm {
+  double (*fn)(const std::array<double, 4>& k, const Friction& f, double x, double load_Nm) = nullptr;
+  double (*breakaway)(const std::array<double, 4>& k, double load_Nm) = nullptr;
+  std::array<double, 4> k{};
+};
+
+/// Circuit voltage-drop terms. Motor: L di/dt = d' supply_V - (R + R_series + |d'| R_duty) i
+/// - Ke w - drop(i), d' = sign(d) max(0, |d| - deadband), d = v / supply_V clamped to 1;
+/// generator: L di/dt = Ke w - (R + r_load) i - drop(i). drop(i) = V_sat tanh(i / i_sat).
+struct CircuitTerms {
+  double R_series_ohm = 0.0;  ///< in series with the motor at any duty
+  double R_duty_ohm = 0.0;    ///< in series with the motor in proportion to the duty
+  double deadband = 0.0;      ///< duty lost per period
+  double V_sat_V = 0.0;       ///< saturating drop in both circuits (0: none)
+  double i_sat_A = 1.0;       ///< its current scale
+
+  double duty(double d) const { return deadband > 0.0 ? std::copysign(std::max(0.0, std::abs(d) - deadband), d) : d; }
+  double drop(double i_A) const { return V_sat_V * std::tanh(i_A / i_sat_A); }
+};
+
+/// Extra states, one per winding (motor, generator): x' = rate(k, P_W, x), P = i^2 R the
+/// winding's loss; the winding's resistance is R0 (1 + R_per_x x); x(0) = x0.
+struct WindingStates {
+  double (*rate)(const std::array<double, 4>& k, double P_W, double x) = nullptr;
+  std::array<double, 4> k{};
+  double R_per_x = 0.0;
+  double x0 = 0.0;
+};
+
+/// The engaged clutch: rigid, or a spring and damper (spring_k_Nm_rad > 0, damping ratio
+/// zeta of the two-rotor mode); with a capacity, the plates carry at most capacity(k, age_s)
+/// at age_s after an engage command and slip until they lock.
+struct CouplingTerms {
+  double spring_k_Nm_rad = 0.0;
+  double zeta = 0.0;
+  double (*capacity)(const std::array<double, 4>& k, double age_s) = nullptr;
+  std::array<double, 4> capacity_k{};
+};
+
 struct Compiled {
   /// The nominal parameters; an effect may change them (param_mismatch scales them).
   Params p;
   /// Transport delay of the applied voltage, s (the nominal drive.dead_time_s plus effects).
   double delay_s = 0.0;
-  /// Friction curve: F(x) = Tc + (Ts - Tc) exp(-(x/v_s)^shape) + P(x) when `stribeck`.
-  bool stribeck = false;
-  double v_s = 1.0, shape = 1.0;
-  /// Bridge: source resistance (drop |d| R_s i), two switches' on-resistance, duty deadband.
-  double R_s = 0.0;
-  double R_on2 = 0.0, deadband = 0.0;
-  /// Brush contact drop V_b tanh(i / 0.01 A) in both armature circuits, V.
-  double V_b = 0.0;
-  /// Engaged clutch as a spring k and damper of damping ratio zeta_spring (c_spring derived).
-  bool compliance = false;
-  double k_spring = 0.0, zeta_spring = 0.0;
-  /// Clutch torque capacity T_max (1 - exp(-(t - t_e)/tau_lag)) after an engage command.
-  bool lag = false;
-  double T_max = 0.0, tau_lag = 1.0;
-  /// Winding heating: R = R0 (1 + alpha dT), C_th d(dT)/dt = i^2 R - dT/R_th.
-  bool thermal = false;
-  double R_th = 1.0, tau_th = 1.0, alpha = 0.0, dT0 = 0.0;
+  CircuitTerms circuit;
+  WindingStates winding;
+  CouplingTerms coupling;
+  std::vector<FrictionTerm> friction_terms;
   /// Further torques on the motor shaft (cogging, a direction bias, ...).
   std::vector<TorqueTerm> motor_torque;
 
@@ -67,26 +98,28 @@ struct Compiled {
   Friction rigid;          ///< motor + engaged clutch + generator
   Friction gen;            ///< the generator's own
   double J_total = 0.0;
-  double c_spring = 0.0;  ///< 2 zeta sqrt(k Jm Jg / (Jm + Jg)), N m s/rad
-  double C_th = 1.0;      ///< tau_th / R_th, J/K
+  double c_spring = 0.0;          ///< 2 zeta sqrt(k Jm Jg / (Jm + Jg)), N m s/rad
+  bool friction_load = false;     ///< a friction term's breakaway depends on the transmitted torque
 
   /// Compiles the model's effects in catalog order, then derives the sums.
   explicit Compiled(const Model& model);
 
   /// Kinetic friction magnitude at speed x = dir * w (x may dip slightly below 0 inside an
-  /// RK4 stage; the polynomial continues smoothly there).
-  double kinetic(const Friction& f, double x) const {
+  /// RK4 stage; the polynomial continues smoothly there), load_Nm as for FrictionTerm.
+  double kinetic(const Friction& f, double x, double load_Nm = 0.0) const {
     double F = f.kinetic_Nm(x);
-    if (stribeck && x > 0.0) {
-      F += (f.Ts_Nm - f.Tc_Nm) * std::exp(-std::pow(x / v_s, shape));
-    } else if (stribeck) {
-      F += f.Ts_Nm - f.Tc_Nm;
-    }
+    for (const FrictionTerm& term : friction_terms) F += term.fn(term.k, f, x, load_Nm);
     return F;
   }
   /// Breakaway level: the static level, or the kinetic level at 0+ if that is larger
-  /// (otherwise a released body would be pulled back at once).
-  double breakaway(const Friction& f) const { return f.Ts_Nm > f.Tc_Nm ? f.Ts_Nm : f.Tc_Nm; }
+  /// (otherwise a released body would be pulled back at once), plus the modifiers'.
+  double breakaway(const Friction& f, double load_Nm = 0.0) const {
+    double B = f.Ts_Nm > f.Tc_Nm ? f.Ts_Nm : f.Tc_Nm;
+    for (const FrictionTerm& term : friction_terms) {
+      if (term.breakaway != nullptr) B += term.breakaway(term.k, load_Nm);
+    }
+    return B;
+  }
   /// Sum of the effects' torques on the motor shaft.
   double extra_motor_torque(double theta_rad, double omega_rad_s, double i_A, double t_s) const {
     double T = 0.0;

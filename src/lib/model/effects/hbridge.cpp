@@ -8,8 +8,8 @@ namespace mcg::model::effects {
 namespace {
 
 void compile(const Effect& e, Compiled& c) {
-  c.R_on2 = 2.0 * e.get("R_on_ohm");
-  c.deadband = e.get("deadband");
+  c.circuit.R_series_ohm = 2.0 * e.get("R_on_ohm");
+  c.circuit.deadband = e.get("deadband");
 }
 
 }  // namespace

@@ -8,10 +8,15 @@ namespace mcg::model::effects {
 
 namespace {
 
+/// The excess over the Coulomb level, (Ts - Tc) exp(-(x/v_s)^shape), k = {v_s, shape}; at
+/// x <= 0 (inside a stage) its limit at 0+.
+double excess(const std::array<double, 4>& k, const Friction& f, double x, double /*load_Nm*/) {
+  if (x > 0.0) return (f.Ts_Nm - f.Tc_Nm) * std::exp(-std::pow(x / k[0], k[1]));
+  return f.Ts_Nm - f.Tc_Nm;
+}
+
 void compile(const Effect& e, Compiled& c) {
-  c.stribeck = true;
-  c.v_s = e.get("v_s_rad_s");
-  c.shape = e.get("shape_exp");
+  c.friction_terms.push_back({excess, nullptr, {e.get("v_s_rad_s"), e.get("shape_exp"), 0.0, 0.0}});
 }
 
 }  // namespace

@@ -6,7 +6,7 @@ namespace mcg::model::effects {
 
 namespace {
 
-void compile(const Effect& e, Compiled& c) { c.R_s = e.get("R_s_ohm"); }
+void compile(const Effect& e, Compiled& c) { c.circuit.R_duty_ohm = e.get("R_s_ohm"); }
 
 }  // namespace
 
