@@ -8,6 +8,7 @@
 
 #include "common/error.hpp"
 #include "config/ini.hpp"
+#include "model/effects/compiled.hpp"
 #include "model/model.hpp"
 #include "support/inputs.hpp"
 #include "test_support_error.hpp"
@@ -308,6 +309,31 @@ TEST(ModelEffects, UnknownEffectOrKeyIsAnErrorInEveryBuild) {
   EXPECT_EQ(test::error_of([&] { e.set("tau_d_s", 1.0); }), "effect 'stribeck' has no parameter 'tau_d_s'");
   const Effect unknown{"warp_drive", {}};
   EXPECT_EQ(test::error_of([&] { unknown.get("x"); }), "unknown effect 'warp_drive'");
+}
+
+// What each scale moves is read off param_mismatch's compile: the generator's constants and
+// every friction element too, a level the built-in rig leaves at 0 included.
+TEST(ModelEffects, MismatchScaleOfEachNominalParameterIsWhatCompileMoves) {
+  EXPECT_EQ(mismatch_scale_of("motor.R_ohm"), "R_scale");
+  EXPECT_EQ(mismatch_scale_of("generator.R_ohm"), "R_scale");
+  EXPECT_EQ(mismatch_scale_of("generator.Ke_V_s_rad"), "Kt_scale");
+  EXPECT_EQ(mismatch_scale_of("motor.J_kg_m2"), "J_scale");
+  EXPECT_EQ(mismatch_scale_of("motor.L_H"), "L_scale");
+  EXPECT_EQ(mismatch_scale_of("clutch_engaged.Tc_Nm"), "coulomb_scale");
+  EXPECT_EQ(mismatch_scale_of("generator.Ts_Nm"), "static_scale");
+  EXPECT_EQ(mismatch_scale_of("clutch_disengaged.visc3_Nm_s3_rad3"), "viscous_scale");
+  EXPECT_EQ(mismatch_scale_of("drive.supply_V"), "");
+  EXPECT_EQ(mismatch_scale_of("drive.dead_time_s"), "");
+  for (const ParamInfo& info : parameters(Model{})) {
+    const std::string scale = mismatch_scale_of(info.name);
+    if (scale.empty()) continue;
+    Model m;
+    m.effects = {parse_effect("param_mismatch:" + scale + "=1.5")};
+    set_parameter(m, info.name, 0.25);
+    Model moved;
+    moved.params = Compiled(m).p;
+    EXPECT_DOUBLE_EQ(get_parameter(moved, info.name), 0.375) << info.name;
+  }
 }
 
 }  // namespace

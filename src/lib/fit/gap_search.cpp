@@ -19,6 +19,7 @@
 #include "common/units.hpp"
 #include "fit/friction.hpp"
 #include "fit/gap_parts.hpp"
+#include "model/effects/compiled.hpp"
 
 namespace mcg::fit {
 
@@ -104,17 +105,6 @@ struct Job {
 
 void add_effect(model::Model& m, std::string_view name) {
   if (m.effect(name) == nullptr) m.effects.push_back(model::default_effect(name));
-}
-
-/// The scale of param_mismatch that moves a nominal parameter (empty: none does).
-std::string scale_of(std::string_view name) {
-  if (name == "motor.R_ohm") return "R_scale";
-  if (name == "motor.J_kg_m2") return "J_scale";
-  if (name == "motor.Kt_Nm_A" || name == "motor.Ke_V_s_rad") return "Kt_scale";
-  if (name.ends_with(".Tc_Nm")) return "coulomb_scale";
-  if (name.ends_with(".Ts_Nm")) return "static_scale";
-  if (name.find(".visc") != std::string_view::npos) return "viscous_scale";
-  return {};
 }
 
 /// A run as mcg-fit friction reads it: t, v, clutch, r_load, the motor shaft's speed in rpm
@@ -475,7 +465,8 @@ std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, co
                                     spec->plan.supersedes.end();
     });
     if (superseded) continue;
-    if (std::none_of(fixed.begin(), fixed.end(), [&](const std::string& f) { return scale_of(f) == s; })) {
+    if (std::none_of(fixed.begin(), fixed.end(),
+                     [&](const std::string& f) { return model::mismatch_scale_of(f) == s; })) {
       free.push_back("param_mismatch." + s);
     }
   }

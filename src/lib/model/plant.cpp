@@ -246,7 +246,8 @@ class PlantImpl {
         Tg = 0.0;
         break;
       case Coupling::spring: {
-        const double Ts = m_c.coupling.spring_k_Nm_rad * (y[TH_M] - y[TH_G] - m_phi0) + m_c.c_spring * (y[W_M] - y[W_G]);
+        const double Ts =
+            m_c.coupling.spring_k_Nm_rad * (y[TH_M] - y[TH_G] - m_phi0) + m_c.c_spring * (y[W_M] - y[W_G]);
         Tm -= Ts;
         Tg += Ts;
         break;
@@ -290,8 +291,9 @@ class PlantImpl {
       dy[W_M] = a;
       dy[W_G] = a;
     } else {
-      dy[W_M] = m_stuck_m ? 0.0
-                          : (Tm - m_dir_m * m_c.kinetic(motor_friction(), m_dir_m * y[W_M], load_Nm)) / mm.J_kg_m2;
+      dy[W_M] = m_stuck_m
+                    ? 0.0
+                    : (Tm - m_dir_m * m_c.kinetic(motor_friction(), m_dir_m * y[W_M], load_Nm)) / mm.J_kg_m2;
       dy[W_G] = (m_stuck_g || !gen_present())
                     ? 0.0
                     : (Tg - m_dir_g * m_c.kinetic(m_c.gen, m_dir_g * y[W_G])) / mg.J_kg_m2;
@@ -300,8 +302,8 @@ class PlantImpl {
     dy[TH_G] = y[W_G];
     if (winding_states()) {
       const WindingStates& w = m_c.winding;
-      dy[X_M] = w.rate(w.k, i_m * i_m * (Rm - m_c.circuit.R_series_ohm - std::abs(d) * m_c.circuit.R_duty_ohm),
-                       y[X_M]);
+      dy[X_M] = w.rate(
+          w.k, i_m * i_m * (Rm - m_c.circuit.R_series_ohm - std::abs(d) * m_c.circuit.R_duty_ohm), y[X_M]);
       dy[X_G] = w.rate(w.k, i_g * i_g * gen_resistance(y), y[X_G]);
     } else {
       dy[X_M] = 0.0;
@@ -536,7 +538,7 @@ class PlantImpl {
 
   /// The torque the motor's shaft transmits at y, for the friction modifiers that need it.
   double motor_load(const Vec& y) const {
-    return m_c.friction_load ? std::abs(m_c.p.motor.Kt_Nm_A * motor_current(y)) : 0.0;
+    return m_c.friction_needs_load ? std::abs(m_c.p.motor.Kt_Nm_A * motor_current(y)) : 0.0;
   }
   double motor_breakaway(const Vec& y) const {
     return m_c.breakaway(rigid() ? m_c.rigid : motor_friction(), motor_load(y));

@@ -60,8 +60,8 @@ Compiled::Compiled(const Model& model) : p(model.params), delay_s(model.params.d
   J_total = p.motor.J_kg_m2 + p.generator.J_kg_m2;
   c_spring = 2.0 * coupling.zeta *
              std::sqrt(coupling.spring_k_Nm_rad * p.motor.J_kg_m2 * p.generator.J_kg_m2 / J_total);
-  friction_load = std::any_of(friction_terms.begin(), friction_terms.end(),
-                              [](const FrictionTerm& t) { return t.breakaway != nullptr; });
+  friction_needs_load = std::any_of(friction_terms.begin(), friction_terms.end(),
+                                    [](const FrictionTerm& t) { return t.breakaway != nullptr; });
 }
 
 void write_effect_catalog(std::ostream& out) {

@@ -9,7 +9,9 @@ namespace mcg::model::effects {
 namespace {
 
 /// T_cap = T_max (1 - exp(-age/tau)), k = {T_max, tau}.
-double capacity(const std::array<double, 4>& k, double age_s) { return k[0] * (1.0 - std::exp(-age_s / k[1])); }
+double capacity(const std::array<double, 4>& k, double age_s) {
+  return k[0] * (1.0 - std::exp(-age_s / k[1]));
+}
 
 void compile(const Effect& e, Compiled& c) {
   c.coupling.capacity = capacity;

@@ -58,7 +58,9 @@ struct CircuitTerms {
   double V_sat_V = 0.0;       ///< saturating drop in both circuits (0: none)
   double i_sat_A = 1.0;       ///< its current scale
 
-  double duty(double d) const { return deadband > 0.0 ? std::copysign(std::max(0.0, std::abs(d) - deadband), d) : d; }
+  double duty(double d) const {
+    return deadband > 0.0 ? std::copysign(std::max(0.0, std::abs(d) - deadband), d) : d;
+  }
   double drop(double i_A) const { return V_sat_V * std::tanh(i_A / i_sat_A); }
 };
 
@@ -98,8 +100,8 @@ struct Compiled {
   Friction rigid;          ///< motor + engaged clutch + generator
   Friction gen;            ///< the generator's own
   double J_total = 0.0;
-  double c_spring = 0.0;          ///< 2 zeta sqrt(k Jm Jg / (Jm + Jg)), N m s/rad
-  bool friction_load = false;     ///< a friction term's breakaway depends on the transmitted torque
+  double c_spring = 0.0;             ///< 2 zeta sqrt(k Jm Jg / (Jm + Jg)), N m s/rad
+  bool friction_needs_load = false;  ///< a friction term's breakaway depends on the transmitted torque
 
   /// Compiles the model's effects in catalog order, then derives the sums.
   explicit Compiled(const Model& model);
@@ -127,5 +129,9 @@ struct Compiled {
     return T;
   }
 };
+
+/// The param_mismatch scale that moves nominal parameter `name` ("motor.R_ohm": "R_scale"),
+/// empty when none does; read off param_mismatch's own compile step (param_mismatch.cpp).
+std::string mismatch_scale_of(std::string_view name);
 
 }  // namespace mcg::model

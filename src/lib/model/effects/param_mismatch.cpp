@@ -1,5 +1,7 @@
 // param_mismatch: no new structure, the nominal parameters off by factors. The diagnosis uses
 // it as the refit of the nominal parameters every candidate starts from, not as a candidate.
+#include <map>
+
 #include "model/effects/compiled.hpp"
 
 namespace mcg::model::effects {
@@ -41,3 +43,31 @@ EffectSpec param_mismatch() {
 }
 
 }  // namespace mcg::model::effects
+
+namespace mcg::model {
+
+std::string mismatch_scale_of(std::string_view name) {
+  // Read off compile: the scale whose change moves the parameter, on a probe model whose every
+  // nominal parameter is 1 (a level the built-in rig leaves at 0 must still show its scale).
+  static const std::map<std::string, std::string, std::less<>> moved_by = [] {
+    std::map<std::string, std::string, std::less<>> out;
+    Model probe;
+    const std::vector<ParamInfo> nominal = parameters(probe);
+    for (const ParamInfo& info : nominal) set_parameter(probe, info.name, 1.0);
+    for (const EffectParamSpec& scale : effects::param_mismatch().params) {
+      Model scaled = probe;
+      scaled.effects = {default_effect("param_mismatch")};
+      scaled.effects.front().set(scale.name, 2.0);
+      Model moved = probe;
+      moved.params = Compiled(scaled).p;
+      for (const ParamInfo& info : nominal) {
+        if (get_parameter(moved, info.name) != get_parameter(probe, info.name)) out[info.name] = scale.name;
+      }
+    }
+    return out;
+  }();
+  const auto it = moved_by.find(name);
+  return it == moved_by.end() ? std::string() : it->second;
+}
+
+}  // namespace mcg::model
