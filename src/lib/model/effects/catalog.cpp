@@ -32,6 +32,7 @@ namespace mcg::model {
   X(thermal)                  \
   X(friction_levels)          \
   X(friction_asymmetry)       \
+  X(friction_load)            \
   X(param_mismatch)
 
 namespace effects {

@@ -1,0 +1,33 @@
+// friction_load: friction that grows with the torque the motor's shaft transmits (gear teeth
+// and bearings pressed harder under load; a gearmotor's efficiency below 1). Moving, the
+// kinetic level is F(w) + mu |Kt i|; at rest the shaft holds up to Ts + mu |Kt i|, so it breaks
+// away when |Kt i| (1 - mu) leaves the static level. Default 0.05, a good spur stage's loss;
+// the diagnosis starts from 1 % (ball bearings) to 30 % (a worm or a multi-stage gearbox).
+#include "model/effects/compiled.hpp"
+
+namespace mcg::model::effects {
+
+namespace {
+
+/// mu |Kt i|, k = {mu}: the same on the kinetic and the breakaway level.
+double kinetic(const std::array<double, 4>& k, const Friction& /*f*/, double /*x*/, double load_Nm) {
+  return k[0] * load_Nm;
+}
+double breakaway(const std::array<double, 4>& k, double load_Nm) { return k[0] * load_Nm; }
+
+void compile(const Effect& e, Compiled& c) {
+  c.friction_terms.push_back({kinetic, breakaway, {e.get("mu"), 0.0, 0.0, 0.0}});
+}
+
+}  // namespace
+
+EffectSpec friction_load() {
+  return {"friction_load",
+          "the motor shaft's friction grows with the torque it transmits (gears, loaded bearings)",
+          "moving F = sign(w) (Tc + P(|w|) + mu |Kt i|); at rest held up to Ts + mu |Kt i|",
+          {{"mu", 0.05, 0.0, 0.5, "1", "friction per newton metre of motor torque"}},
+          compile,
+          EffectPlan::fit({"mu"}, {{0.01, 0.03, 0.1, 0.3}})};
+}
+
+}  // namespace mcg::model::effects
