@@ -543,6 +543,7 @@ class PlantImpl {
   double motor_breakaway(const Vec& y) const {
     return m_c.breakaway(rigid() ? m_c.rigid : motor_friction(), motor_load(y));
   }
+  double motor_breakaway() const { return motor_breakaway(m_y); }
   double gen_breakaway() const { return m_c.breakaway(m_c.gen); }
 
   void substep(double t0, double h_total) {
@@ -656,7 +657,7 @@ class PlantImpl {
         m_y[W_M] = 0.0;
         if (rigid()) m_y[W_G] = 0.0;
         drive_torques(m_y, t, Tm, Tg);
-        if (std::abs(Tm) <= motor_breakaway(m_y)) {
+        if (std::abs(Tm) <= motor_breakaway()) {
           m_stuck_m = true;
         } else {
           m_dir_m = sign_of(Tm);
@@ -673,7 +674,7 @@ class PlantImpl {
         break;
       case EventKind::motor_break:
         drive_torques(m_y, t, Tm, Tg);
-        if (std::abs(Tm) > motor_breakaway(m_y)) {
+        if (std::abs(Tm) > motor_breakaway()) {
           m_stuck_m = false;
           m_dir_m = sign_of(Tm);
         }
