@@ -44,6 +44,7 @@ static int32_t MCG_XDATA s_next_u_min, s_next_u_max; /* limits in Q(F+8) */
 static int32_t MCG_XDATA s_next_u_bias;              /* bias in Q(F+8) */
 static int32_t MCG_XDATA s_next_r;                   /* R once the command is settled */
 static uint16_t MCG_XDATA s_next_bp[3];              /* operands of arith_pid_sum */
+static uint8_t MCG_XDATA s_staged; /* a shadow register written since the last commit or discard */
 uint8_t g_ctl_p_hi;
 int32_t MCG_IDATA g_ctl_r[3];
 uint8_t g_ctl_r_k;
@@ -64,6 +65,7 @@ static int32_t scale_next(int16_t x) {
   return (int32_t)((uint32_t)arith_mul16(x, s_next_scale) << MCG_ERR_FRAC_BITS);
 }
 static void next_r(void);
+static void refresh_r(void);
 
 static void rescale(void) {
   g_ctl_shift = (uint8_t)(g_coef_frac + MCG_ERR_FRAC_BITS);
@@ -89,7 +91,7 @@ int16_t control_rpm_to_q8(int16_t rpm) {
     ++q;
   }
   q = (uint16_t)(q + (uint16_t)a * 8u);
-  return rpm < 0 ? (int16_t)-(int16_t)q : (int16_t)q;
+  return rpm < 0 ? (int16_t) - (int16_t)q : (int16_t)q;
 }
 
 int16_t control_rpm(void) {
@@ -128,15 +130,18 @@ void control_init(void) {
   control_discard();
 }
 
-void control_set_rpm_cmd(int16_t rpm) {
+void control_set_rpm_cmd(int16_t rpm) { control_set_q8(control_rpm_to_q8(rpm)); }
+
+void control_set_q8(int16_t r_q8) {
   int16_t hi;
-  s_r_q8 = control_rpm_to_q8(rpm);
+  s_r_q8 = r_q8;
   hi = (int16_t)((s_r_q8 + MCG_ERR_LIMIT) >> 8);
   /* 56 at 720 rpm; never above 85, so that three pulse counts sum to at most 255 */
   g_ctl_p_hi = hi > 85 ? 85u : (uint8_t)hi;
   g_ctl_settle = 2; /* the tick shifts the command history until it holds the new one twice */
-  control_refresh();
-  if (control_pending()) {
+  refresh_r();
+  /* Unstaged, the shadow set is the active one, whose settled R control_refresh just gave. */
+  if (s_staged) {
     next_r();
   } else {
     s_next_r = g_ctl_r[2];
@@ -169,8 +174,17 @@ static void active_bp(void) {
  * Once the history holds the command (g_ctl_settle == 0: s_r1 = s_r2 = r), all three are equal. The
  * products of a zero c2 (P, PI) are skipped: a new command costs three products in PI, not seven. */
 void control_refresh(void) {
-  MCG_SLOW int32_t now;
   active_bp();
+  refresh_r();
+}
+
+/* control_refresh's R alone, for a new command: the coefficients (s_c0..2) from the operands g_pid.bp,
+ * which active_bp or a commit left for the active set. */
+static void refresh_r(void) {
+  MCG_SLOW int32_t now;
+  s_c0 = (int16_t)(g_pid.bp[0] ^ 0x8000u);
+  s_c1 = (int16_t)(g_pid.bp[1] ^ 0x8000u);
+  s_c2 = (int16_t)(g_pid.bp[2] ^ 0x8000u);
   now = arith_mul16(s_c0, s_r_q8);
   if (g_mode == MCG_MODE_P) {
     now += s_u_bias;
@@ -221,6 +235,7 @@ void control_staged(void) {
   s_next_u_max = scale_next(g_ctl_shadow.duty_max);
   s_next_u_bias = scale_next(g_ctl_shadow.duty_bias);
   next_r();
+  s_staged = 1;
 }
 
 /* The gains the mode uses, all zero: a closed-loop mode would hold its output where it is, or at the
@@ -254,6 +269,7 @@ void control_discard(void) {
   s_next_bp[0] = g_pid.bp[0];
   s_next_bp[1] = g_pid.bp[1];
   s_next_bp[2] = g_pid.bp[2];
+  s_staged = 0;
 }
 
 uint8_t control_pending(void) {
@@ -322,6 +338,7 @@ uint8_t control_commit(void) {
   } else {
     control_refresh(); /* the command history is still moving: R for each of the next ticks */
   }
+  s_staged = 0;
   return MCG_ST_OK;
 }
 
