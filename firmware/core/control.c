@@ -44,6 +44,7 @@ static int32_t MCG_XDATA s_next_u_min, s_next_u_max; /* limits in Q(F+8) */
 static int32_t MCG_XDATA s_next_u_bias;              /* bias in Q(F+8) */
 static int32_t MCG_XDATA s_next_r;                   /* R once the command is settled */
 static uint16_t MCG_XDATA s_next_bp[3];              /* operands of arith_pid_sum */
+static uint8_t MCG_XDATA s_staged; /* a shadow register written since the last commit or discard */
 uint8_t g_ctl_p_hi;
 int32_t MCG_IDATA g_ctl_r[3];
 uint8_t g_ctl_r_k;
@@ -64,6 +65,7 @@ static int32_t scale_next(int16_t x) {
   return (int32_t)((uint32_t)arith_mul16(x, s_next_scale) << MCG_ERR_FRAC_BITS);
 }
 static void next_r(void);
+static void refresh_r(void);
 
 static void rescale(void) {
   g_ctl_shift = (uint8_t)(g_coef_frac + MCG_ERR_FRAC_BITS);
@@ -74,13 +76,22 @@ static void rescale(void) {
   g_ctl_u = scale_up(g_duty_out);
 }
 
+/* round(rpm 524288 / 60000), half away from zero: 2048 * 256 = 524288 counts * 2^8 per revolution,
+ * 60000 ms per minute. For a = |rpm|: round(a 2^14 / 1875) = 8 a + floor((1384 a + 937) / 1875), as
+ * 2^14 = 8 * 1875 + 1384 and 1875 is odd. The quotient is estimated as (24187 a) >> 15 (24187 / 2^15
+ * just below 1384 / 1875), which is short by at most 1 for a <= 32767: one remainder test corrects
+ * it. Two 16 x 16 products instead of SDCC's 32-bit division (the level change in closed loop took
+ * 2.8 ms with it). Exact while the result fits an int16 (|rpm| <= 3749). */
 int16_t control_rpm_to_q8(int16_t rpm) {
-  /* 2048 * 256 = 524288 counts * 2^8 per revolution; 60000 ms per minute. */
-  int32_t num = (int32_t)rpm * 524288L;
-  if (num >= 0) {
-    return (int16_t)((num + 30000L) / 60000L);
+  MCG_SLOW int16_t a = rpm < 0 ? (int16_t)-rpm : rpm;
+  MCG_SLOW uint32_t p = (uint32_t)arith_mul16(a, 24187);
+  MCG_SLOW uint16_t q = (uint16_t)(p >> 15);
+  /* 1384 a + 937 - 1875 q lies in 0..3749: exact in 16 bits, mod 2^16. */
+  if ((uint16_t)((uint16_t)a * 1384u + 937u - q * 1875u) >= 1875u) {
+    ++q;
   }
-  return (int16_t) - ((-num + 30000L) / 60000L);
+  q = (uint16_t)(q + (uint16_t)a * 8u);
+  return rpm < 0 ? (int16_t) - (int16_t)q : (int16_t)q;
 }
 
 int16_t control_rpm(void) {
@@ -119,15 +130,18 @@ void control_init(void) {
   control_discard();
 }
 
-void control_set_rpm_cmd(int16_t rpm) {
+void control_set_rpm_cmd(int16_t rpm) { control_set_q8(control_rpm_to_q8(rpm)); }
+
+void control_set_q8(int16_t r_q8) {
   int16_t hi;
-  s_r_q8 = control_rpm_to_q8(rpm);
+  s_r_q8 = r_q8;
   hi = (int16_t)((s_r_q8 + MCG_ERR_LIMIT) >> 8);
   /* 56 at 720 rpm; never above 85, so that three pulse counts sum to at most 255 */
   g_ctl_p_hi = hi > 85 ? 85u : (uint8_t)hi;
   g_ctl_settle = 2; /* the tick shifts the command history until it holds the new one twice */
-  control_refresh();
-  if (control_pending()) {
+  refresh_r();
+  /* Unstaged, the shadow set is the active one, whose settled R control_refresh just gave. */
+  if (s_staged) {
     next_r();
   } else {
     s_next_r = g_ctl_r[2];
@@ -157,22 +171,40 @@ static void active_bp(void) {
 
 /* R for the next three ticks from the active mode's coefficients c_i and the command history:
  *   R[k] = sum_i c_i r[n+k-i],  r[m] = the command for m >= n, s_r1, s_r2 before.
- * Once the history holds the command (g_ctl_settle == 0: s_r1 = s_r2 = r), all three are equal: three
- * products instead of seven. */
+ * Once the history holds the command (g_ctl_settle == 0: s_r1 = s_r2 = r), all three are equal. The
+ * products of a zero c2 (P, PI) are skipped: a new command costs three products in PI, not seven. */
 void control_refresh(void) {
-  MCG_SLOW int32_t now;
   active_bp();
+  refresh_r();
+}
+
+/* control_refresh's R alone, for a new command: the coefficients (s_c0..2) from the operands g_pid.bp,
+ * which active_bp or a commit left for the active set. */
+static void refresh_r(void) {
+  MCG_SLOW int32_t now;
+  s_c0 = (int16_t)(g_pid.bp[0] ^ 0x8000u);
+  s_c1 = (int16_t)(g_pid.bp[1] ^ 0x8000u);
+  s_c2 = (int16_t)(g_pid.bp[2] ^ 0x8000u);
   now = arith_mul16(s_c0, s_r_q8);
   if (g_mode == MCG_MODE_P) {
     now += s_u_bias;
   }
-  g_ctl_r[2] = now + arith_mul16(s_c1, s_r_q8) + arith_mul16(s_c2, s_r_q8);
+  if (g_ctl_settle != 0) {
+    g_ctl_r[0] = now + arith_mul16(s_c1, s_r1);
+  }
+  now += arith_mul16(s_c1, s_r_q8);
+  g_ctl_r[1] = now;
+  g_ctl_r[2] = now;
+  if (s_c2 != 0) {
+    g_ctl_r[2] += arith_mul16(s_c2, s_r_q8);
+    if (g_ctl_settle != 0) {
+      g_ctl_r[1] += arith_mul16(s_c2, s_r1);
+      g_ctl_r[0] += arith_mul16(s_c2, s_r2);
+    }
+  }
   if (g_ctl_settle == 0) {
     g_ctl_r[0] = g_ctl_r[2];
     g_ctl_r[1] = g_ctl_r[2];
-  } else {
-    g_ctl_r[1] = now + arith_mul16(s_c1, s_r_q8) + arith_mul16(s_c2, s_r1);
-    g_ctl_r[0] = now + arith_mul16(s_c1, s_r1) + arith_mul16(s_c2, s_r2);
   }
   g_ctl_r_k = 0;
 }
@@ -203,6 +235,7 @@ void control_staged(void) {
   s_next_u_max = scale_next(g_ctl_shadow.duty_max);
   s_next_u_bias = scale_next(g_ctl_shadow.duty_bias);
   next_r();
+  s_staged = 1;
 }
 
 /* The gains the mode uses, all zero: a closed-loop mode would hold its output where it is, or at the
@@ -236,6 +269,7 @@ void control_discard(void) {
   s_next_bp[0] = g_pid.bp[0];
   s_next_bp[1] = g_pid.bp[1];
   s_next_bp[2] = g_pid.bp[2];
+  s_staged = 0;
 }
 
 uint8_t control_pending(void) {
@@ -304,6 +338,7 @@ uint8_t control_commit(void) {
   } else {
     control_refresh(); /* the command history is still moving: R for each of the next ticks */
   }
+  s_staged = 0;
   return MCG_ST_OK;
 }
 

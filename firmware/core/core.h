@@ -105,6 +105,8 @@ void control_staged(void);
 /* 1 if the shadow set differs from the active one. */
 uint8_t control_pending(void);
 void control_set_rpm_cmd(int16_t rpm);
+/* The same for a command already in Q8 pulses per tick (control_rpm_to_q8): a level precomputed. */
+void control_set_q8(int16_t r_q8);
 /* Recomputes what depends on the command, the coefficients or the mode (after a change of any). */
 void control_refresh(void);
 /* Speed over the last MCG_SPEED_WINDOW_MS: rpm = counts * 1875 / 1024, rounded. */

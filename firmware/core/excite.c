@@ -23,8 +23,10 @@
  * that tick: the first streamed sample then begins with the first excited tick (the capture's t = 0
  * is the excitation's start).
  * The per-tick cost is a down-counter; the LFSR step, the chirp's phase and table step and the
- * target write run once per level. Fixed point only: every level is an int16 computed at the start,
- * by one addition, or by one 16 x 16 multiply. */
+ * target write run once per level. A PRBS on rpm_cmd converts its two levels to the controller's Q8
+ * command at the start, so that a new bit costs the command's refresh without the conversion. Fixed
+ * point only: every level is an int16 computed at the start, by one addition, or by one 16 x 16
+ * multiply. */
 #include "arith.h" /* arith_mul16 */
 #include "core.h"
 
@@ -61,6 +63,9 @@ static uint16_t MCG_XDATA s_period;    /* bits or stairs per period */
 static uint8_t MCG_XDATA s_periods;    /* periods left, 0: endless */
 static int16_t MCG_XDATA s_level;      /* the present level (the staircase: its stair) */
 static int32_t MCG_XDATA s_lo, s_hi;   /* the lowest and highest level, checked at the start */
+static int16_t MCG_XDATA s_q8_up;      /* PRBS on rpm_cmd: offset + amp in Q8 (control_rpm_to_q8) */
+static int16_t MCG_XDATA s_q8_down;    /* the same for offset - amp */
+static int16_t MCG_XDATA s_q8;         /* the present PRBS level's */
 static int16_t MCG_XDATA s_wave[65];   /* chirp: exc_amp k_sine[j] / 2^15, rounded: the table scaled */
 static uint32_t MCG_XDATA s_phase;     /* chirp: phase, 1/2^32 turn */
 static uint32_t MCG_XDATA s_w;         /* chirp: phase step of the present update */
@@ -228,6 +233,8 @@ uint8_t excite_set_run(uint8_t run) {
     s_hi = (int32_t)g_exc_offset + g_exc_amp;
     s_period = (uint16_t)((1uL << g_exc_order) - 1u);
     s_taps = k_taps[g_exc_order - 2u];
+    s_q8_up = control_rpm_to_q8((int16_t)s_hi);
+    s_q8_down = control_rpm_to_q8((int16_t)s_lo);
   } else if (g_exc_kind == MCG_EXC_CHIRP) {
     if (!chirp_setup()) {
       return MCG_ST_RANGE;
@@ -296,9 +303,16 @@ void excite_tick(void) {
     if (s_lfsr & 1u) {
       s_lfsr = (uint16_t)((s_lfsr >> 1) ^ s_taps);
       s_level = (int16_t)(g_exc_offset + g_exc_amp);
+      s_q8 = s_q8_up;
     } else {
       s_lfsr >>= 1;
       s_level = (int16_t)(g_exc_offset - g_exc_amp);
+      s_q8 = s_q8_down;
+    }
+    if (s_on_rpm) {
+      g_rpm_cmd = s_level;
+      control_set_q8(s_q8);
+      return;
     }
   } else if (g_exc_kind == MCG_EXC_CHIRP) {
     chirp_next();

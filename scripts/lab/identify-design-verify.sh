@@ -4,8 +4,8 @@
 # mcg-fit tf identifies a plant from the capture as it is (time domain, its units from the
 # capture's metadata); mcg-design designs a PI on it for the stated phase margin; the PI is loaded
 # and stepped from 420 to 520 rpm on the board; the board's rise time (10-90 %), overshoot and
-# settling time (2 %) are reported against what mcg-design predicts for that PI on that plant,
-# beside the design's margins, with plots.
+# settling time (2 %) are reported against what mcg-design predicts for that PI on that plant, as
+# the board's speed estimator would read it, beside the design's margins, with plots.
 # Usage: identify-design-verify.sh PORT PM_DEG OUT_DIR [prbs|chirp]
 #   e.g. mcg-sim --board ./ttyMCG --speed 4 &
 #        scripts/lab/identify-design-verify.sh ./ttyMCG 50 out
@@ -64,25 +64,44 @@ S send "$out/step.csv" > /dev/null
 S stream --seconds 2 --then play > "$out/board-step.csv"
 S set mode open
 
-# The board's step beside the prediction (420 + 100 y(t - 1), y the design's unit step).
-awk -F, 'FNR == NR { if ($0 !~ /^#/ && $1 != "t") y[sprintf("%.3f", $1)] = $3; next }
+# The board's rpm is its speed estimator's: the counts over a window ending at each row. The
+# prediction is read the same way, so that both are measured alike: the design's step y (1 ms rows)
+# averaged over that window (trapezoids) at the board's rows, 420 + 100 mean y(t - 1 - window, t - 1].
+# Read at once, the design's step rises faster than the board can show (16 ms: about 7 % of a 25 ms
+# rise); mcg-design's own figures are reported beside.
+window=$(sed -n 's/^# rpm_estimator: counts over \([0-9.eE+-]*\) s window.*/\1/p' "$out/board-step.csv")
+[ -n "$window" ] || { echo "identify-design-verify: the capture states no rpm_estimator window" >&2; exit 1; }
+awk -F, -v w="$window" 'FNR == NR { if ($0 !~ /^#/ && $1 != "t") { t[n] = $1; y[n++] = $3 }; next }
+  function yat(j) { return j < 0 ? 0 : y[j] }
+  function ybar(s,  dt, k, i, j, sum) {
+    dt = t[1] - t[0]; k = int(w / dt + 0.5); i = int(s / dt + 0.5)
+    if (i >= n) return "nan"
+    sum = (yat(i - k) + yat(i)) / 2
+    for (j = i - k + 1; j < i; j++) sum += yat(j)
+    return sum / k }
   /^#/ { print; next }
   !h { h = 1; print $0 ",rpm_predicted"; next }
-  { k = sprintf("%.3f", $1 - 1); p = $1 < 1 ? 420 : (k in y ? 420 + 100 * y[k] : "nan"); print $0 "," p }' \
+  { p = 420; if ($1 >= 1) { p = ybar($1 - 1); if (p != "nan") p = 420 + 100 * p }; print $0 "," p }' \
   "$out/predicted.csv" "$out/board-step.csv" > "$out/closed.csv"
 
 # Rise (10-90 %, crossings interpolated between rows), overshoot and settling (last time outside
-# +-2 % of the step) of the board's rpm after the step.
-read -r rise over settle <<< "$(grep -v '^#' "$out/closed.csv" | awk -F, 'NR > 1 && $1 >= 1 && $2 != "nan" {
-  if (!a && $2 >= 430) a = pt + (430 - py) / ($2 - py) * ($1 - pt)
-  if (!b && $2 >= 510) b = pt + (510 - py) / ($2 - py) * ($1 - pt)
-  if ($2 > m) m = $2
-  if ($2 < 518 || $2 > 522) s = $1
-  pt = $1; py = $2 } END { printf "%.6g %.6g %.6g", b - a, m - 520, s - 1 }')"
+# +-2 % of the step) of a column of closed.csv after the step: the board's rpm and the prediction.
+metrics() {
+  grep -v '^#' "$out/closed.csv" | awk -F, -v c="$1" '
+  NR == 1 { for (i = 1; i <= NF; i++) if ($i == c) k = i; next }
+  $1 >= 1 && $k != "nan" {
+    if (!a && $k >= 430) a = pt + (430 - py) / ($k - py) * ($1 - pt)
+    if (!b && $k >= 510) b = pt + (510 - py) / ($k - py) * ($1 - pt)
+    if ($k > m) m = $k
+    if ($k < 518 || $k > 522) s = $1
+    pt = $1; py = $k } END { printf "%.6g %.6g %.6g", b - a, m - 520, s - 1 }'
+}
+read -r rise over settle <<< "$(metrics rpm)"
+read -r p_rise p_over p_settle <<< "$(metrics rpm_predicted)"
 value() { awk -F' *= *' -v k="$1" '$1 == k { split($2, v, " *;"); print v[1] + 0; exit }' "$2"; }
-p_rise=$(value rise_time_s "$out/predicted.ini")
-p_over=$(value overshoot_pct "$out/predicted.ini")
-p_settle=$(value settling_time_s "$out/predicted.ini")
+d_rise=$(value rise_time_s "$out/predicted.ini")
+d_over=$(value overshoot_pct "$out/predicted.ini")
+d_settle=$(value settling_time_s "$out/predicted.ini")
 {
   echo "[report]"
   echo "excitation = $(sed -n 's/^# excitation: //p' "$out/excite.csv")"
@@ -92,6 +111,10 @@ p_settle=$(value settling_time_s "$out/predicted.ini")
   echo "rise_time_s = $rise  ; the board; predicted $p_rise"
   echo "overshoot_pct = $over  ; the board; predicted $p_over"
   echo "settling_time_s = $settle  ; the board (2 %, 4 ms rows); predicted $p_settle"
+  echo "predicted_rise_time_s = $p_rise  ; the design's step through the ${window} s window;" \
+    "mcg-design: $d_rise"
+  echo "predicted_overshoot_pct = $p_over  ; the same; mcg-design: $d_over"
+  echo "predicted_settling_time_s = $p_settle  ; the same; mcg-design: $d_settle"
   awk -v m="$rise" -v p="$p_rise" 'BEGIN { printf "rise_ratio = %.4g  ; board / predicted\n", m / p }'
 } > "$out/report.ini"
 

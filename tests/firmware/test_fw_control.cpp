@@ -106,9 +106,11 @@ std::vector<std::uint16_t> random_pulses(std::size_t n, int lo, int hi, std::uin
 }  // namespace
 
 TEST(FwControl, CommandConversionIsExactlyRounded) {
-  for (int rpm = 120; rpm <= 720; ++rpm) {
+  // Every command whose Q8 value fits an int16, both signs: the division-free estimate and its
+  // correction give the exactly rounded quotient.
+  for (int rpm = -3749; rpm <= 3749; ++rpm) {
     const int q8 = control_rpm_to_q8(static_cast<std::int16_t>(rpm));
-    EXPECT_EQ(q8, std::lround(rpm * 524288.0 / 60000.0));
+    ASSERT_EQ(q8, std::lround(rpm * 524288.0 / 60000.0)) << rpm;
     // Quantisation: at most half a Q8 step, 1/512 count/ms = 0.057 rpm.
     EXPECT_LE(std::abs(q8 / 256.0 - rpm_to_counts_per_ms(rpm)), 1.0 / 512.0 + 1e-12);
   }

@@ -127,6 +127,50 @@ TEST(FwExcite, ClosedLoopPlaysTheCommand) {
   EXPECT_EQ(cmds.back(), 400);
 }
 
+// A PRBS on rpm_cmd hands the controller its levels converted at the start: once the command history
+// holds a level, the R in use is sum_i b_i r for that level's Q8 command, as after a write of rpm_cmd; the
+// amplitude is negative, so the level above the offset is the one the LFSR's zeros select.
+TEST(FwExcite, ClosedLoopPrbsGivesTheControllerTheWrittenCommand) {
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_B0, 300), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_B1, -290), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_COMMIT, 1), MCG_ST_OK);
+  setup_prbs(b, 3, 10, -57, 421, 1);
+  ASSERT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  int checked = 0;
+  for (int i = 0; i < 70; ++i) {
+    b.run(1);
+    int16_t rpm = 0;
+    host_board_reg_read(MCG_REG_RPM_CMD, &rpm);
+    if (g_ctl_settle != 0) continue;
+    const std::int32_t q8 = control_rpm_to_q8(rpm);
+    ASSERT_EQ(g_ctl_r_k, 2);
+    ASSERT_EQ(g_ctl_r[2], (300 - 290) * q8) << "tick " << i << ", " << rpm << " rpm";
+    EXPECT_EQ(g_ctl_p_hi, std::min<int>(85, (q8 + MCG_ERR_LIMIT) >> 8));
+    ++checked;
+  }
+  EXPECT_GE(checked, 50);
+}
+
+// A command written while a controller set is staged is committed with that set: R is the new set's
+// sum_i b_i r, whether the staged set differs from the active one or repeats it.
+TEST(FwExcite, CommandWrittenWhileASetIsStagedIsCommittedWithIt) {
+  for (const int b0 : {500, 300}) {
+    Board b;
+    ASSERT_EQ(b.write(MCG_REG_B0, 300), MCG_ST_OK);
+    ASSERT_EQ(b.write(MCG_REG_B1, -290), MCG_ST_OK);
+    ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
+    ASSERT_EQ(b.write(MCG_REG_COMMIT, 1), MCG_ST_OK);
+    b.run(5);
+    ASSERT_EQ(b.write(MCG_REG_B0, b0), MCG_ST_OK);
+    ASSERT_EQ(b.write(MCG_REG_RPM_CMD, 500), MCG_ST_OK);
+    b.run(5);
+    ASSERT_EQ(b.write(MCG_REG_COMMIT, 1), MCG_ST_OK);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(g_ctl_r[k], (b0 - 290) * control_rpm_to_q8(500)) << b0;
+  }
+}
+
 TEST(FwExcite, RefusesWhatItCannotPlay) {
   Board b;
   EXPECT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_RANGE) << "no kind set";

@@ -1,17 +1,17 @@
 // Transfer-function fit on analytically computed frequency responses.
-#include "fit/tf.hpp"
-
-#include "common/error.hpp"
-#include "model/model.hpp"
-#include "signal/excitation.hpp"
-#include "signal/spectrum.hpp"
-
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 #include <random>
 #include <sstream>
+
+#include "common/error.hpp"
+#include "fit/tf.hpp"
+#include "model/model.hpp"
+#include "signal/excitation.hpp"
+#include "signal/spectrum.hpp"
 
 namespace mcg::fit {
 namespace {
@@ -195,6 +195,44 @@ TEST(FitTf, ReadsFrequencyResponseTables) {
   } catch (const Error& e) {
     EXPECT_STREQ(e.what(), "bode.csv:3: column 'coherence': 1.2 is outside 0..1");
   }
+}
+
+// A board's bode file of an rpm counted over 16 ms is the plant's response times the window's mean
+// W(s) = (1 - e^(-s T)) / (s T): read, W is divided out (the points near its zeros at 62.5 and 125 Hz
+// left out and counted), and the fit gives the plant itself; the same data said to be another output
+// keeps W, and its fit is off.
+TEST(FitTf, RpmWindowIsDividedOutOfABoardResponse) {
+  const auto plant = [](Complex s) { return 3000.0 / ((s / 60.0 + 1.0) * (s / 300.0 + 1.0)); };
+  const double window_s = 0.016;
+  const auto table_of = [&](const std::string& out) {
+    std::ostringstream csv;
+    csv << "# response: duty -> " << out << "\n# rpm_estimator: counts over 0.016 s window, 2048 counts/rev\n"
+        << "f_hz,mag_db,phase_deg\n";
+    for (int k = 1; k <= 128; ++k) {
+      const double f = 0.9765625 * k;
+      const Complex s(0.0, 2.0 * std::numbers::pi * f);
+      const Complex h = plant(s) * (1.0 - std::exp(-s * window_s)) / (s * window_s);
+      csv << fmt::format("{:.17g},{:.17g},{:.17g}\n", f, 20.0 * std::log10(std::abs(h)),
+                         std::arg(h) * 180.0 / std::numbers::pi);
+    }
+    std::istringstream in(csv.str());
+    return table::read(in, "bode.csv");
+  };
+  const FrequencyResponse fr = read_frequency_response(table_of("rpm"));
+  EXPECT_DOUBLE_EQ(fr.output_window_s, 0.016);
+  EXPECT_EQ(fr.window_zeros, 14U);  // |W| < 0.05: 59.6 .. 65.4 Hz and 119.1 .. 125 Hz
+  EXPECT_EQ(fr.f_hz.size(), 114U);
+  const TfFit fit = fit_tf(fr, {});
+  EXPECT_NEAR(fit.gain, 3000.0, 1e-6 * 3000.0);
+  ASSERT_EQ(fit.poles.size(), 2U);
+  EXPECT_NEAR(fit.poles[0].corner_rad_s, 60.0, 1e-6 * 60.0);
+  EXPECT_NEAR(fit.poles[1].corner_rad_s, 300.0, 1e-6 * 300.0);
+
+  const FrequencyResponse kept = read_frequency_response(table_of("rpm_true"));
+  EXPECT_EQ(kept.output_window_s, 0.0);
+  EXPECT_EQ(kept.f_hz.size(), 128U);
+  const TfFit off = fit_tf(kept, {});
+  EXPECT_GT(std::abs(off.poles[1].corner_rad_s - 300.0), 0.05 * 300.0);
 }
 
 TEST(FitTf, PolynomialRoots) {

@@ -4,18 +4,19 @@
 // band, so that the powers of x stay near 1 and the linear systems are well conditioned:
 //   G = B(x) / A(x),  B = sum_{i<=m} b_i x^i,  A = x^n + sum_{i<n} a_i x^i  (monic).
 #include "fit/tf.hpp"
-#include "fit/tf_core.hpp"
 
-#include "common/error.hpp"
+#include <fmt/format.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
+
+#include "common/error.hpp"
+#include "fit/tf_core.hpp"
+#include "measurement/measurement.hpp"
 
 namespace mcg::fit {
 
@@ -249,6 +250,11 @@ FrequencyResponse read_frequency_response(const table::Table& table) {
   for (std::size_t k = 0; k < fr.f_hz.size(); ++k) {
     if (!(fr.f_hz[k] > 0.0)) fail("{}:{}: column 'f_hz': frequency must be positive", table.source, table.line_of(k));
   }
+  const std::size_t arrow = fr.units.rfind("-> ");
+  const bool rpm_out = arrow != std::string::npos && fr.units.substr(arrow) == "-> rpm";
+  if (const auto text = table.meta.get("rpm_estimator"); text && rpm_out) {
+    fr.output_window_s = measurement::parse_rpm_estimator(*text, table.source + ": rpm_estimator").window_s;
+  }
   if (table.has("coherence")) {
     fr.coherence = table.col("coherence");
     for (std::size_t k = 0; k < fr.coherence.size(); ++k) {
@@ -257,6 +263,28 @@ FrequencyResponse read_frequency_response(const table::Table& table) {
         fail("{}:{}: column 'coherence': {} is outside 0..1", table.source, table.line_of(k), c);
       }
     }
+  }
+  if (fr.output_window_s > 0.0) {
+    // Near a zero of W (f = k / T_w) the data holds no response: such points are left out, counted.
+    constexpr double k_min_window_gain = 0.05;
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < fr.f_hz.size(); ++k) {
+      const Complex sw(0.0, 2.0 * std::numbers::pi * fr.f_hz[k] * fr.output_window_s);
+      const Complex w = (1.0 - std::exp(-sw)) / sw;
+      if (std::abs(w) < k_min_window_gain) {
+        ++fr.window_zeros;
+        continue;
+      }
+      fr.f_hz[kept] = fr.f_hz[k];
+      fr.mag_db[kept] = fr.mag_db[k] - 20.0 * std::log10(std::abs(w));
+      fr.phase_deg[kept] = fr.phase_deg[k] - std::arg(w) * 180.0 / std::numbers::pi;
+      if (!fr.coherence.empty()) fr.coherence[kept] = fr.coherence[k];
+      ++kept;
+    }
+    fr.f_hz.resize(kept);
+    fr.mag_db.resize(kept);
+    fr.phase_deg.resize(kept);
+    if (!fr.coherence.empty()) fr.coherence.resize(kept);
   }
   return fr;
 }

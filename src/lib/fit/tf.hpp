@@ -22,9 +22,16 @@ struct FrequencyResponse {
   /// What the response maps, from its `# response: IN -> OUT` metadata (mcg-sweep bode's);
   /// empty when the table does not say.
   std::string units;
+  /// An rpm counted over this window (`# rpm_estimator:`), divided out of the columns above; 0: none.
+  double output_window_s = 0.0;
+  /// Frequencies left out where that window's response is below 0.05 (near f = k / window).
+  std::size_t window_zeros = 0;
 };
 
-/// Reads and checks the columns; throws naming the file and line of a bad value.
+/// Reads and checks the columns; throws naming the file and line of a bad value. A response to an
+/// rpm counted over a window (`# rpm_estimator:`, mcg-csv(5)) is the plant's times the window's
+/// mean, W(s) = (1 - e^(-s T_w)) / (s T_w): W is divided out, so that a fit is the plant's, as the
+/// time-domain fit models the window; near W's zeros (|W| < 0.05) points are left out and counted.
 FrequencyResponse read_frequency_response(const table::Table& table);
 
 /// G(s) = num(s) / den(s), coefficients in descending powers of s. After a fit, den's

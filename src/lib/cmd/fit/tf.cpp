@@ -231,11 +231,21 @@ int FitTf::run(Io& io) {
          table.source);
   }
   const FrequencyResponse fr = read_frequency_response(table);
+  if (fr.window_zeros > 0) {
+    io.diag.note(
+        fmt::format("{}: left out {} frequencies near the zeros of the rpm estimator's {} s window, "
+                    "which hide the response there",
+                    fr.source, fr.window_zeros, num6(fr.output_window_s)));
+  }
   const TfFit fit = fit_tf(fr, options.fit);
   const auto [maps, words] = fitted_units(fr, options.units);
   check_phase_residual(fr, options, fit, io);
   config::Ini ini = plant_ini(fit, options.fit, maps, words, io.tool);
   const std::string sec = "fit.tf";
+  if (fr.output_window_s > 0.0) {
+    ini.set(sec, "output_window_s", num6(fr.output_window_s),
+            "the rpm_estimator's window, divided out of the response: the fit is the plant's");
+  }
   ini.set(sec, "points", static_cast<double>(fit.points));
   ini.set(sec, "rms_mag_db", num6(fit.rms_mag_db));
   ini.set(sec, "rms_phase_deg", num6(fit.rms_phase_deg));
