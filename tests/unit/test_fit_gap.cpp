@@ -201,6 +201,29 @@ TEST(GapNoiseFloor, EncoderChainIsResolutionOverRootSixWhileMoving) {
   EXPECT_EQ(i.data, 0.0);
 }
 
+// A speed in a small unit with no stated estimator (a slow output shaft, 0.4 rpm at most, with
+// 1e-3 rpm of white noise): the floor is the data's own, in its unit, and only the rests are
+// stuck; the board's encoder resolution (2.9 rpm) would class every sample at rest.
+TEST(GapNoiseFloor, UnstatedSpeedIsJudgedInItsOwnUnit) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> noise(0.0, 1e-3);
+  std::string csv = "t,v,rpm\n";
+  for (std::size_t n = 0; n < 4000; ++n) {
+    const double t = 0.01 * static_cast<double>(n);
+    const double v = n < 400 ? 0.0 : n < 2000 ? 6.0 : n < 2400 ? 0.0 : -4.0;
+    const double speed = v == 0.0 ? 0.0 : 0.4 * v / 6.0 + noise(rng);
+    csv += fmt::format("{:.2f},{},{:.6f}\n", t, v, speed);
+  }
+  std::istringstream in(csv);
+  const table::Table t = table::read(in, "slow.csv");
+  const GapData data = prepare_gap_data({t}, {t}, model::builtin_rig(), 0.6);
+  const auto floors = gap_detail::noise_floors(data);
+  ASSERT_EQ(floors.size(), 1U);
+  EXPECT_EQ(floors[0].noise.chain, 0.0);
+  EXPECT_NEAR(floors[0].floor, 1e-3, 1.5e-4);
+  EXPECT_NEAR(gap_detail::speed_resolution(data.validate[0].run), 0.02 * 0.4, 2e-4);
+}
+
 // ---------------------------------------------------------------------------------------
 // Generated runs: inputs, then sim::run (mcg-sim) with the effect, the encoder and the
 // current measurement chain of the rig.

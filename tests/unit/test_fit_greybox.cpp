@@ -252,19 +252,49 @@ TEST(FitGreybox, BoundsAreRelativeToTheGivenModel) {
             "b.ini:2: [bounds] motor.J_kg_m2: lower bound must be below the upper");
 }
 
-// Speed measured behind a 5:1 gearbox: fitted back with the gear ratio.
+// Speed measured behind a 5:1 gearbox, as the capture's `# gear_ratio:` states: fitted back.
 TEST(FitGreybox, GearRatioDividesTheMeasuredSpeed) {
   const model::Model truth = speed_only_truth();
   auto table = measure(truth, speed_only_run(), 35, false);
   for (double& x : table.col("rpm")) x /= 5.0;
+  table.meta.set("gear_ratio", "5");
   FitProblem problem;
   problem.runs.push_back(make_run(table, {}, problem.model.params));
-  problem.runs[0].gear_ratio = 5.0;
+  apply_speed_path(problem.runs[0], {});
+  EXPECT_EQ(problem.runs[0].gear_ratio, 5.0);
   problem.free = default_free(problem.runs, {}, problem.ties);
   const FitResult r = fit_model(problem);
   EXPECT_TRUE(r.trustworthy());
   EXPECT_NEAR(r.model.params.motor.Kt_Nm_A, truth.params.motor.Kt_Nm_A, 0.02 * truth.params.motor.Kt_Nm_A);
   EXPECT_GT(r.runs[0].fit_percent[0], 95.0);
+}
+
+// A speed the drive low-passed before logging (tau 40 ms, stated as `# speed_filter:`): the
+// model is filtered the same way, so the true model fits it and the fit recovers Kt; the same
+// data read without the statement leave the true model far off.
+TEST(FitGreybox, AStatedSpeedFilterIsModelled) {
+  const model::Model truth = speed_only_truth();
+  auto table = measure(truth, speed_only_run(), 37, false);
+  const auto filter = measurement::parse_speed_filter("first-order low-pass, time constant 0.04 s");
+  table.set("rpm", filter.apply(table.col("t"), table.col("rpm")));
+  const Run unstated = make_run(table, {}, truth.params);
+  table.meta.set("speed_filter", measurement::format_speed_filter(filter));
+  Run run = make_run(table, {}, truth.params);
+  apply_speed_path(run, {});
+  EXPECT_GT(evaluate_model(truth, {run})[0].fit_percent[0], 97.0);
+  EXPECT_LT(evaluate_model(truth, {unstated})[0].fit_percent[0], 90.0);
+  FitProblem problem;
+  problem.runs.push_back(run);
+  problem.free = default_free(problem.runs, {}, problem.ties);
+  const FitResult r = fit_model(problem);
+  EXPECT_TRUE(r.trustworthy());
+  EXPECT_NEAR(r.model.params.motor.Kt_Nm_A, truth.params.motor.Kt_Nm_A, 0.02 * truth.params.motor.Kt_Nm_A);
+
+  measurement::SpeedPath ini;
+  ini.filter = measurement::parse_speed_filter("moving average over 0.01 s");
+  EXPECT_EQ(error_of([&] { apply_speed_path(run, ini); }),
+            "sim.csv: speed_filter 'first-order low-pass, time constant 0.04 s' differs from the model's "
+            "[measurement] speed_filter 'moving average over 0.01 s'");
 }
 
 TEST(FitGreybox, TimeRangeOmegaAndFixedValues) {

@@ -11,6 +11,7 @@
 #include "common/error.hpp"
 #include "common/units.hpp"
 #include "fit/nls.hpp"
+#include "measurement/measurement.hpp"
 
 namespace mcg::fit {
 
@@ -89,6 +90,10 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
   } else {
     omega = table.col("omega");
   }
+  const auto stated = measurement::speed_path_stated(table.meta.get("gear_ratio"), std::nullopt, table.source);
+  const double gear = measurement::settle_gear_ratio(stated.gear_ratio, options.gear_ratio_ini,
+                                                     options.gear_ratio_override, table.source);
+  for (double& w : omega) w *= gear;
   const std::vector<double>* current = options.use_current && table.has("i") ? &table.col("i") : nullptr;
   const std::vector<double>* current_gen = options.use_current && table.has("i_gen") ? &table.col("i_gen") : nullptr;
   const std::vector<double>* torque = direct ? &table.col(options.torque_column) : nullptr;

@@ -44,6 +44,12 @@ struct FrictionOptions {
   /// Estimate a constant drive bias (N m; N) with the friction: a load that does not change
   /// sign with the direction (gravity on an inclined axis, an amplifier offset).
   bool offset = false;
+  /// Motor turns per turn of the shaft whose speed (or position) was measured: the model's
+  /// `[measurement] gear_ratio` (`gear_ratio` of the INI) and a command's override; a run's
+  /// `# gear_ratio:` metadata states its own (measurement::settle_gear_ratio). The friction is
+  /// that of the motor shaft: its speed is the measured one times the ratio.
+  std::optional<double> gear_ratio_ini;
+  std::optional<double> gear_ratio_override;
 };
 
 /// A friction element and the standard errors of its values (same layout).

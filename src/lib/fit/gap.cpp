@@ -219,10 +219,12 @@ int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
   const auto started = std::chrono::steady_clock::now();
   model::Model model;
   GapSettings settings;
+  measurement::SpeedPath speed;  // the model's [measurement]: gear ratio and speed filter
   if (!options.config.empty()) {
     const config::Ini ini = config::Ini::load_all(options.config);
     model = model::model_from_ini(ini);
     settings.bounds = read_bounds(ini, model);
+    speed = measurement::speed_path_from_ini(ini);
   }
   settings.fixed = fix_parameters(model, options.fix);
   check_excluded(options.exclude);
@@ -239,8 +241,8 @@ int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
   const std::vector<table::Table> train = load(options.train);
   const std::vector<table::Table> validate = load(options.validate);
   GapData data = prepare_gap_data(train, validate, model.params, options.split_fraction, options.split_given);
-  for (auto& run : data.train) run.gear_ratio = options.gear_ratio;
-  for (auto& sr : data.validate) sr.run.gear_ratio = options.gear_ratio;
+  for (auto& run : data.train) apply_speed_path(run, speed, options.gear_ratio);
+  for (auto& sr : data.validate) apply_speed_path(sr.run, speed, options.gear_ratio);
   settings.threads = options.threads;
   settings.discrepancy = options.discrepancy;
   settings.deadline = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(

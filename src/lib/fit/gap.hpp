@@ -271,7 +271,9 @@ struct GapOptions {
   std::vector<std::string> exclude;  ///< catalog effects not tried
   double from_s = -std::numeric_limits<double>::infinity();  ///< time range of each run
   double to_s = std::numeric_limits<double>::infinity();
-  double gear_ratio = 1.0;       ///< motor turns per turn of the measured shaft
+  /// Motor turns per turn of the measured shaft, over the captures' `# gear_ratio:` and the
+  /// INI's `[measurement] gear_ratio` (unset: theirs, else 1).
+  std::optional<double> gear_ratio;
   double budget_s = 120.0;       ///< wall-clock budget of the diagnosis (partial results after it)
   bool progress = false;         ///< progress report lines on the diagnostics
   bool discrepancy = false;      ///< the catalog-free discrepancy fit whatever the verdict

@@ -188,6 +188,18 @@ double residual_noise(const GapData& data, const Evaluation& ev, const std::stri
   return count > 0 ? std::sqrt(sum_sq / static_cast<double>(count) / 6.0) : 0.0;
 }
 
+double speed_resolution(const Run& run) {
+  if (run.rpm_estimator) return run.rpm_estimator->rpm_per_count();
+  double top = 0.0;
+  for (std::size_t o = 0; o < run.outputs.size(); ++o) {
+    if (run.outputs[o] != "rpm" && run.outputs[o] != "omega") continue;
+    for (double y : run.measured[o]) {
+      if (std::isfinite(y)) top = std::max(top, std::abs(y));
+    }
+  }
+  return 2.0 * k_unstated_moving_share * top;
+}
+
 std::vector<OutputFloor> noise_floors(const GapData& data) {
   std::vector<OutputFloor> floors;
   for (const char* name : {"rpm", "i"}) {
@@ -204,10 +216,18 @@ std::vector<OutputFloor> noise_floors(const GapData& data) {
       std::vector<bool> transient = transient_mask(sr.run.inputs);
       transient.erase(transient.begin(), transient.begin() + static_cast<std::ptrdiff_t>(sr.first_scored));
       NoiseFloor nf;
-      if (std::string_view(name) == "rpm") {
-        const RpmEstimator est = sr.run.rpm_estimator.value_or(RpmEstimator{});
-        nf = rpm_noise_floor(part, transient, est.window_s, est.counts_per_rev);
-        stated = stated && sr.run.rpm_estimator.has_value();
+      if (std::string_view(name) == "rpm" && sr.run.rpm_estimator) {
+        nf = rpm_noise_floor(part, transient, sr.run.rpm_estimator->window_s, sr.run.rpm_estimator->counts_per_rev);
+      } else if (std::string_view(name) == "rpm") {
+        // No stated chain: the data's own estimate over the moving samples, in the data's unit
+        // (the board's encoder resolution would class a small unit's every sample at rest).
+        const double moving = 0.5 * speed_resolution(sr.run);
+        std::vector<double> kept(part.begin(), part.end());
+        for (double& sample : kept) {
+          if (!(std::abs(sample) >= moving)) sample = k_nan;
+        }
+        nf = current_noise_floor(kept, transient, 0.0, 0.0);
+        stated = false;
       } else {
         const double step = std::isfinite(sr.i_step_A) ? sr.i_step_A : 0.0;
         const double sigma = std::isfinite(sr.i_sigma_A) ? sr.i_sigma_A : 0.0;

@@ -26,6 +26,15 @@ inline constexpr std::string_view k_out_of_time = "time budget spent";
 /// Noise floors of the compared outputs (rpm, i), pooled over the scored validation rows.
 /// Throws when neither output has a floor.
 std::vector<OutputFloor> noise_floors(const GapData& data);
+
+/// Without a stated `# rpm_estimator:` the speed's resolution is unknown (a tachometer, a
+/// drive's own estimate, a linear axis in its own unit): a sample moves when its magnitude
+/// exceeds this share of the run's largest, whatever the unit.
+inline constexpr double k_unstated_moving_share = 0.01;
+/// The speed resolution of a run in its measured unit: one count of its stated estimator
+/// (RpmEstimator::rpm_per_count), else twice k_unstated_moving_share of its largest |speed|.
+/// A speed below half of it is at rest ("stuck").
+double speed_resolution(const Run& run);
 /// Scored validation rows.
 std::size_t validation_count(const GapData& data);
 /// Index of output `name` in `floors`, or npos.

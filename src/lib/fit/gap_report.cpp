@@ -69,11 +69,6 @@ std::vector<std::vector<double>> residual_series(
   return out;
 }
 
-double rpm_resolution(const Run& run) {
-  const RpmEstimator est = run.rpm_estimator.value_or(RpmEstimator{});
-  return 60.0 / (est.window_s * est.counts_per_rev);
-}
-
 std::vector<double> measured_rpm(const Run& run) {
   const auto it = std::find(run.outputs.begin(), run.outputs.end(), "rpm");
   if (it == run.outputs.end()) return std::vector<double>(run.inputs.t_s.size(), k_nan);
@@ -95,7 +90,7 @@ void gap_detail::analyse(const GapData& data, const std::vector<std::vector<std:
   for (std::size_t r = 0; r < data.validate.size(); ++r) {
     const Run& run = data.validate[r].run;
     const std::vector<double> rpm = measured_rpm(run);
-    const RegimeContext ctx{&run.inputs, rpm, rpm_resolution(run)};
+    const RegimeContext ctx{&run.inputs, rpm, speed_resolution(run)};
     reg.push_back(regime_breakdown(ctx, rpm_res[r]));
     cur.push_back(regime_breakdown(ctx, i_res[r]));
     std::vector<double> dt;

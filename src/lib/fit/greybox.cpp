@@ -134,7 +134,17 @@ Run make_run(const table::Table& table, const std::vector<std::string>& outputs,
   if (const auto text = table.meta.get("rpm_estimator")) {
     run.rpm_estimator = measurement::parse_rpm_estimator(*text, table.source);
   }
+  run.stated = measurement::speed_path_stated(table.meta.get("gear_ratio"), table.meta.get("speed_filter"),
+                                              table.source);
+  run.gear_ratio = run.stated.gear_ratio.value_or(1.0);
+  run.speed_filter = run.stated.filter.value_or(measurement::SpeedFilter{});
   return run;
+}
+
+void apply_speed_path(Run& run, const measurement::SpeedPath& ini, std::optional<double> gear_override) {
+  const measurement::SpeedPath settled = measurement::settle_speed_path(run.stated, ini, gear_override, run.source);
+  run.gear_ratio = *settled.gear_ratio;
+  run.speed_filter = *settled.filter;
 }
 
 table::Table select_time(const table::Table& table, double from_s, double to_s) {
@@ -203,6 +213,7 @@ std::vector<std::vector<double>> simulate_as_measured(const model::Model& model,
         for (double& x : series.back()) x /= g;
       }
     }
+    if (speed) series.back() = run.speed_filter.apply(run.inputs.t_s, series.back());
   }
   return series;
 }

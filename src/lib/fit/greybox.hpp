@@ -46,13 +46,25 @@ struct Run {
   /// Motor shaft turns per turn of the shaft whose speed was measured (a gearbox between
   /// them): the measured rpm/omega = motor speed / gear_ratio.
   double gear_ratio = 1.0;
+  /// The filter the measured speed passed (`# speed_filter:`), applied to the simulated speed.
+  measurement::SpeedFilter speed_filter;
+  /// What the capture's own metadata states (`# gear_ratio:`, `# speed_filter:`), so that
+  /// apply_speed_path() can tell a capture's statement from the default.
+  measurement::SpeedPath stated;
 };
+
+/// Settles how the run's speed was measured: `gear_override` (a command's --gear-ratio) wins;
+/// else the capture's metadata; else the model INI's `[measurement]` (`ini`); else a ratio of 1
+/// and no filter. A capture and an INI that state different values throw mcg::Error naming the
+/// file and both values.
+void apply_speed_path(Run& run, const measurement::SpeedPath& ini, std::optional<double> gear_override = {});
 
 /// Builds a run from a table with columns t, v (or duty, then v = duty * supply_V), clutch,
 /// r_load (both optional: without them the run is the motor alone, clutch 0 and relay open)
 /// and the measured `outputs` (empty: rpm, or omega when there is no rpm, and each of
 /// i, i_gen, v_gen that is present and not constant, the generator's two only when the
-/// clutch is not 0 throughout). When the
+/// clutch is not 0 throughout). `# gear_ratio:` and `# speed_filter:` (mcg-csv(5)) set the
+/// run's gear ratio and speed filter. When the
 /// `# i_measurement:` metadata (mcg-csv(5)) names the ADC range, current samples
 /// at its rails (CurrentChain::at_rail) are saturated and count as not measured. Throws mcg::Error naming the file (and line) for a missing column, a bad
 /// input value, or fewer than `min_rows` rows ("too short").

@@ -1,10 +1,14 @@
 // The measurement metadata grammar (see measurement.hpp).
 #include "measurement/measurement.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
+#include "common/demand.hpp"
 #include "common/error.hpp"
 #include "common/text.hpp"
 #include "config/ini.hpp"
@@ -201,6 +205,132 @@ std::string format_i_measurement(const CurrentChain& c) {
   std::string out;
   for (const auto& p : parts) out += (out.empty() ? "" : ", ") + p;
   return out;
+}
+
+double parse_gear_ratio(std::string_view text, std::string_view where) {
+  double ratio = 0.0;
+  if (!table::parse_number(trim(text), ratio) || !std::isfinite(ratio) || !(ratio > 0.0)) {
+    fail("{}: expected a gear ratio > 0 (motor turns per turn of the measured shaft), got {}", where,
+         quote(text));
+  }
+  return ratio;
+}
+
+std::string format_gear_ratio(double ratio) { return num(ratio); }
+
+SpeedFilter parse_speed_filter(std::string_view text, std::string_view where) {
+  std::string_view s = trim(text);
+  SpeedFilter f;
+  const auto positive = [&](double v) { return std::isfinite(v) && v > 0.0; };
+  if (s == "none") return f;
+  if (eat(s, "first-order low-pass, time constant ")) {
+    f.kind = SpeedFilter::Kind::low_pass;
+    if (number_until(s, " s", f.time_constant_s) && s.empty() && positive(f.time_constant_s)) return f;
+  } else if (eat(s, "moving average over ")) {
+    f.kind = SpeedFilter::Kind::moving_average;
+    if (number_until(s, " s", f.window_s) && s.empty() && positive(f.window_s)) return f;
+  }
+  fail("{}: expected 'first-order low-pass, time constant <tau> s', 'moving average over <W> s' or "
+       "'none' (tau, W > 0), got {}",
+       where, quote(text));
+}
+
+std::string format_speed_filter(const SpeedFilter& f) {
+  switch (f.kind) {
+    case SpeedFilter::Kind::low_pass:
+      return "first-order low-pass, time constant " + num(f.time_constant_s) + " s";
+    case SpeedFilter::Kind::moving_average:
+      return "moving average over " + num(f.window_s) + " s";
+    case SpeedFilter::Kind::none:
+      break;
+  }
+  return "none";
+}
+
+double SpeedFilterStream::push(double t_s, double x) {
+  if (!std::isfinite(x) || m_filter.kind == SpeedFilter::Kind::none) return x;
+  if (m_filter.kind == SpeedFilter::Kind::low_pass) {
+    if (!std::isfinite(m_state)) {
+      m_state = x;
+    } else {
+      const double a = std::exp(-(t_s - m_t_prev) / m_filter.time_constant_s);
+      m_state = a * m_state + (1.0 - a) * x;
+    }
+    m_t_prev = t_s;
+    return m_state;
+  }
+  // Moving average: the mean of the samples with t in (t_s - W, t_s].
+  m_window.emplace_back(t_s, x);
+  m_sum += x;
+  for (; m_window[m_first].first <= t_s - m_filter.window_s; ++m_first) m_sum -= m_window[m_first].second;
+  if (m_first > 4096 && 2 * m_first > m_window.size()) {  // drop what left the window
+    m_window.erase(m_window.begin(), m_window.begin() + static_cast<std::ptrdiff_t>(m_first));
+    m_first = 0;
+  }
+  return m_sum / static_cast<double>(m_window.size() - m_first);
+}
+
+std::vector<double> SpeedFilter::apply(const std::vector<double>& t_s, const std::vector<double>& x) const {
+  MCG_DEMAND(t_s.size() == x.size());
+  SpeedFilterStream stream(*this);
+  std::vector<double> y(x.size());
+  for (std::size_t n = 0; n < x.size(); ++n) y[n] = stream.push(t_s[n], x[n]);
+  return y;
+}
+
+double settle_gear_ratio(std::optional<double> stated, std::optional<double> ini, std::optional<double> override,
+                         std::string_view source) {
+  if (override) return *override;
+  if (stated && ini && *stated != *ini) {
+    fail("{}: gear_ratio {} differs from the model's [measurement] gear_ratio {} (give --gear-ratio to choose)",
+         source, format_gear_ratio(*stated), format_gear_ratio(*ini));
+  }
+  return stated.value_or(ini.value_or(1.0));
+}
+
+SpeedPath settle_speed_path(const SpeedPath& stated, const SpeedPath& ini, std::optional<double> gear_override,
+                            std::string_view source) {
+  if (stated.filter && ini.filter && format_speed_filter(*stated.filter) != format_speed_filter(*ini.filter)) {
+    fail("{}: speed_filter {} differs from the model's [measurement] speed_filter {}", source,
+         quote(format_speed_filter(*stated.filter)), quote(format_speed_filter(*ini.filter)));
+  }
+  SpeedPath settled;
+  settled.gear_ratio = settle_gear_ratio(stated.gear_ratio, ini.gear_ratio, gear_override, source);
+  settled.filter = stated.filter.value_or(ini.filter.value_or(SpeedFilter{}));
+  return settled;
+}
+
+SpeedPath speed_path_stated(std::optional<std::string> gear_ratio, std::optional<std::string> speed_filter,
+                            std::string_view source) {
+  SpeedPath stated;
+  if (gear_ratio) stated.gear_ratio = parse_gear_ratio(*gear_ratio, fmt::format("{}: gear_ratio", source));
+  if (speed_filter) stated.filter = parse_speed_filter(*speed_filter, fmt::format("{}: speed_filter", source));
+  return stated;
+}
+
+SpeedPath speed_path_from_ini(const config::Ini& ini) {
+  SpeedPath path;
+  constexpr std::string_view sec = "measurement";
+  for (const auto* entry : ini.entries(sec)) {
+    const std::string where = fmt::format("{}: [{}] {}", entry->origin.empty() ? "config" : entry->origin, sec,
+                                          entry->key);
+    if (entry->key == "gear_ratio") {
+      path.gear_ratio = parse_gear_ratio(entry->value, where);
+    } else if (entry->key == "speed_filter") {
+      path.filter = parse_speed_filter(entry->value, where);
+    } else {
+      ini.reject(sec, entry->key, "unknown key (gear_ratio, speed_filter)");
+    }
+  }
+  return path;
+}
+
+void speed_path_to_ini(const SpeedPath& path, config::Ini& ini) {
+  if (path.gear_ratio) {
+    ini.set("measurement", "gear_ratio", format_gear_ratio(*path.gear_ratio),
+            "motor turns per turn of the shaft whose speed is measured");
+  }
+  if (path.filter) ini.set("measurement", "speed_filter", format_speed_filter(*path.filter));
 }
 
 }  // namespace mcg::measurement

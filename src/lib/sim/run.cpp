@@ -369,8 +369,11 @@ void check_row(const table::Reader& reader, const Columns& c, const RunOptions& 
 class Simulation {
  public:
   Simulation(const RunOptions& opt, const model::Model& model, const LoopSetup& l, const Columns& c,
-             const Estimation& est, table::Writer& writer)
-      : m_opt(opt),
+             const Estimation& est, const measurement::SpeedPath& speed, table::Writer& writer)
+      : m_gear_ratio(*speed.gear_ratio),
+        m_rpm_filter(*speed.filter),
+        m_omega_filter(*speed.filter),
+        m_opt(opt),
         m_model(model),
         m_loop_setup(l),
         m_c(c),
@@ -397,8 +400,11 @@ class Simulation {
     const int clutch_state = static_cast<int>(clutch);
     double duty = 0.0;
     const model::State s = advance(t, drive_value, clutch_state, r_load, duty);
-    const double rpm_true = rpm_from_rad_s(s.omega_rad_s);
-    const double rpm = m_encoder ? m_estimator.push(t, s.theta_rad) : rpm_true;
+    // The measured shaft (behind the gear ratio), its speed through the stated filter.
+    const double omega_out = m_omega_filter.push(t, s.omega_rad_s / m_gear_ratio);
+    const double theta_out = s.theta_rad / m_gear_ratio;
+    const double rpm_true = rpm_from_rad_s(s.omega_rad_s / m_gear_ratio);
+    const double rpm = m_rpm_filter.push(t, m_encoder ? m_estimator.push(t, theta_out) : rpm_true);
     double i_meas = s.i_A;
     double v_gen = s.v_gen_V;
     if (m_opt.noise_i_A > 0.0) i_meas += m_opt.noise_i_A * m_unit(m_rng);
@@ -439,7 +445,7 @@ class Simulation {
           x = duty * supply;
           break;
         case Out::Omega:
-          x = s.omega_rad_s;
+          x = omega_out;
           break;
         case Out::Rpm:
           x = rpm;
@@ -457,7 +463,7 @@ class Simulation {
           x = v_gen;
           break;
         case Out::Theta:
-          x = s.theta_rad;
+          x = theta_out;
           break;
         case Out::RpmResidual:
           x = rpm_residual;
@@ -513,6 +519,9 @@ class Simulation {
     return s;
   }
 
+  double m_gear_ratio;
+  measurement::SpeedFilterStream m_rpm_filter;
+  measurement::SpeedFilterStream m_omega_filter;
   const RunOptions& m_opt;
   const model::Model& m_model;
   const LoopSetup& m_loop_setup;
@@ -554,7 +563,24 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   const double t_first = reader[c.t];
   const Estimation est = estimation(reader.metadata(), opt, source);
   table::Metadata meta = output_metadata(reader.metadata(), opt, model, l, c, est, t_first);
-  Simulation sim(opt, model, l, c, est, writer);
+  // The shaft the speed columns measure and their filter: the input capture's statement, else
+  // the INI's [measurement] (mcg-csv(5)); the output states them when they are not the identity.
+  const measurement::SpeedPath speed = measurement::settle_speed_path(
+      measurement::speed_path_stated(reader.metadata().get("gear_ratio"), reader.metadata().get("speed_filter"),
+                                     source),
+      measurement::speed_path_from_ini(ini), std::nullopt, source);
+  const bool geared = *speed.gear_ratio != 1.0;
+  const bool filtered = speed.filter->kind != measurement::SpeedFilter::Kind::none;
+  if (c.closed && (geared || filtered)) {
+    fail("{}: a closed loop reads the motor's own encoder: a gear ratio or speed filter between the motor "
+         "and the measured speed ([measurement], # gear_ratio, # speed_filter) is for open-loop runs",
+         source);
+  }
+  meta.erase("gear_ratio");
+  meta.erase("speed_filter");
+  if (geared) meta.set("gear_ratio", measurement::format_gear_ratio(*speed.gear_ratio));
+  if (filtered) meta.set("speed_filter", measurement::format_speed_filter(*speed.filter));
+  Simulation sim(opt, model, l, c, est, speed, writer);
 
   // Replaying a capture, the model starts as the capture found the rig: at its first measured
   // speed (the estimator's first window, a few rows in), and in a closed loop with the
@@ -566,7 +592,7 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   double duty0 = 0.0;
   const auto begin_output = [&](double rpm0, double t_rpm0) {
     if (rpm0 != 0.0) {
-      sim.start_at(rad_s_from_rpm(rpm0), duty0);
+      sim.start_at(rad_s_from_rpm(rpm0) * *speed.gear_ratio, duty0);
       meta.set(
           "initial_state",
           fmt::format("the motor at {} rpm (rpm_measured at t = {}){}, t = {}", config::format_number(rpm0),

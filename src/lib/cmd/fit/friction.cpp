@@ -9,6 +9,7 @@
 #include "common/error.hpp"
 #include "common/range.hpp"
 #include "config/ini.hpp"
+#include "measurement/measurement.hpp"
 #include "mcg/version.hpp"
 #include "model/model.hpp"
 #include "table/table.hpp"
@@ -78,6 +79,10 @@ void FitFriction::define(CLI::App& app) {
                  "column holding the position (rad; m with --linear): speed by differences");
   fr->add_flag("--fit-inertia", friction.fit.fit_inertia, "estimate the inertia (mass) with the friction");
   fr->add_flag("--offset", friction.fit.offset, "estimate a constant drive bias with the friction");
+  fr->add_option("--gear-ratio", friction.fit.gear_ratio_override,
+                 "motor turns per turn of the shaft whose speed was measured (default: the runs' "
+                 "gear_ratio, else the INI's [measurement], else 1)")
+      ->check(CLI::PositiveNumber);
   fr->add_flag("--linear", friction.linear, "linear axis: m, N, N s/m, kg; results in [fit.friction] only");
   fr->add_option("files", friction.files, "runs with t, v, clutch, r_load, rpm [, i] ('-' = stdin)")
       ->required();
@@ -85,7 +90,9 @@ void FitFriction::define(CLI::App& app) {
 
 int FitFriction::run(Io& io) {
   if (options.files.empty()) fail("friction: no input files");
-  const model::Params base = model::from_ini(config::Ini::load_all(options.config));
+  const config::Ini config = config::Ini::load_all(options.config);
+  const model::Params base = model::from_ini(config);
+  options.fit.gear_ratio_ini = measurement::speed_path_from_ini(config).gear_ratio;
   if (options.linear && (options.fit.torque_column.empty() || options.fit.position_column.empty())) {
     fail("--linear: needs --torque (a force column, N) and --position (m)");
   }

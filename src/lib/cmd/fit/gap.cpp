@@ -28,9 +28,10 @@ void FitGap::define(CLI::App& app) {
       ->delimiter(',');
   gp->add_option("--from", gap.from_s, "use the rows of each run from this time on, s");
   gp->add_option("--to", gap.to_s, "use the rows of each run up to this time, s");
-  gp->add_option("--gear-ratio", gap.gear_ratio, "motor turns per turn of the shaft whose speed was measured")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
+  gp->add_option("--gear-ratio", gap.gear_ratio,
+                 "motor turns per turn of the shaft whose speed was measured (default: the captures' "
+                 "gear_ratio, else the INI's [measurement], else 1)")
+      ->check(CLI::PositiveNumber);
   gp->add_flag("--discrepancy", gap.discrepancy,
                "fit the catalog-free discrepancy terms whatever the verdict (always for an unexplained gap)");
   gp->add_option("--budget", gap.budget_s,

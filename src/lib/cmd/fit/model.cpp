@@ -47,9 +47,11 @@ std::string unit_of(const std::vector<model::ParamInfo>& infos, const std::strin
   return {};
 }
 
-void write_model_ini(const FitResult& r, const FitProblem& problem, Io& io) {
+void write_model_ini(const FitResult& r, const FitProblem& problem, const measurement::SpeedPath& speed,
+                     Io& io) {
   config::Ini ini;
   model::model_to_ini(r.model, ini);
+  measurement::speed_path_to_ini(speed, ini);
   const auto infos = model::parameters(r.model);
   const auto& n = r.nls;
   for (std::size_t i = 0; i < n.names.size(); ++i) {
@@ -108,11 +110,12 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, Io& io) {
   ini.write(io.out);
 }
 
-/// One measured run of `mcg-fit model` as the options shape it.
-Run load_model_run(const std::string& path, const FitModelOptions& options, const model::Params& params) {
+/// One measured run of `mcg-fit model` as the options shape it; `speed` is the INI's [measurement].
+Run load_model_run(const std::string& path, const FitModelOptions& options, const model::Params& params,
+                   const measurement::SpeedPath& speed) {
   Run run =
       make_run(select_time(table::read_path(path), options.from_s, options.to_s), options.outputs, params);
-  run.gear_ratio = options.gear_ratio;
+  apply_speed_path(run, speed, options.gear_ratio);
   return run;
 }
 
@@ -142,9 +145,10 @@ void list_parameters(const model::Model& base, const FitProblem& problem, std::o
 }
 
 /// --evaluate: fit % and RMS of the model as given on each run, as [fit.evaluate].
-void evaluate(const model::Model& base, const FitProblem& problem, const FitModelOptions& options, Io& io) {
+void evaluate(const model::Model& base, const FitProblem& problem, const measurement::SpeedPath& speed,
+              const FitModelOptions& options, Io& io) {
   std::vector<Run> runs;
-  for (const auto& f : options.files) runs.push_back(load_model_run(f, options, base.params));
+  for (const auto& f : options.files) runs.push_back(load_model_run(f, options, base.params, speed));
   model::Model m = base;
   for (const auto& [follower, leader] : problem.ties)
     model::set_parameter(m, follower, model::get_parameter(m, leader));
@@ -165,8 +169,8 @@ void evaluate(const model::Model& base, const FitProblem& problem, const FitMode
 
 /// One joint fit of every run, as INI.
 void fit_joint(const model::Model& base, FitProblem problem, const std::vector<std::string>& fixed,
-               const FitModelOptions& options, Io& io) {
-  for (const auto& f : options.files) problem.runs.push_back(load_model_run(f, options, base.params));
+               const measurement::SpeedPath& speed, const FitModelOptions& options, Io& io) {
+  for (const auto& f : options.files) problem.runs.push_back(load_model_run(f, options, base.params, speed));
   if (options.free.empty()) {
     problem.free = default_free(problem.runs, fixed, problem.ties);
   } else {
@@ -174,7 +178,7 @@ void fit_joint(const model::Model& base, FitProblem problem, const std::vector<s
   }
   problem.nls.threads = parallel::worker_count(options.threads, problem.free.size());
   const FitResult result = fit_model(problem);
-  write_model_ini(result, problem, io);
+  write_model_ini(result, problem, speed, io);
   report_untrustworthy(result, "", io.diag);
   if (!result.nls.converged) {
     io.diag.error(fmt::format("the fit did not converge: {} (after {} iterations)", result.nls.reason,
@@ -246,7 +250,7 @@ void write_batch(const std::vector<Outcome>& outcomes, const FitProblem& problem
 
 /// --batch: one independent fit per file, in parallel; the CSV, then what failed.
 void fit_batch(const model::Model& base, FitProblem problem, const std::vector<std::string>& fixed,
-               const FitModelOptions& options, Io& io) {
+               const measurement::SpeedPath& speed, const FitModelOptions& options, Io& io) {
   const std::size_t count = options.files.size();
   std::vector<Outcome> outcomes(count);
   std::atomic<std::size_t> done{0};
@@ -257,7 +261,7 @@ void fit_batch(const model::Model& base, FitProblem problem, const std::vector<s
   std::vector<Run> loaded;
   for (std::size_t k = 0; k < count; ++k) {
     try {
-      runs[k] = load_model_run(options.files[k], options, base.params);
+      runs[k] = load_model_run(options.files[k], options, base.params, speed);
       loaded.push_back(*runs[k]);
     } catch (const Error& e) {
       outcomes[k].error = e.what();
@@ -322,9 +326,9 @@ void FitModel::define(CLI::App& app) {
   md->add_option("--from", model.from_s, "use the rows of each run from this time on, s");
   md->add_option("--to", model.to_s, "use the rows of each run up to this time, s");
   md->add_option("--gear-ratio", model.gear_ratio,
-                 "motor turns per turn of the shaft whose speed was measured")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
+                 "motor turns per turn of the shaft whose speed was measured (default: the captures' "
+                 "gear_ratio, else the INI's [measurement], else 1)")
+      ->check(CLI::PositiveNumber);
   md->add_option("--outputs", model.outputs,
                  "measured columns compared (default: rpm and each varying i, i_gen, v_gen)")
       ->allow_extra_args(false)
@@ -347,6 +351,9 @@ int FitModel::run(Io& io) {
   const config::Ini ini = config::Ini::load_all(options.config);
   model::Model base = model::model_from_ini(ini);
   const std::vector<std::string> fixed = fix_parameters(base, options.fix);
+  // The model's own gear ratio and speed filter; --gear-ratio overrides the ratio for these runs.
+  measurement::SpeedPath speed = measurement::speed_path_from_ini(ini);
+  if (options.gear_ratio) speed.gear_ratio = options.gear_ratio;
   FitProblem problem;
   problem.bounds = read_bounds(ini, base);
   if (options.list) {
@@ -369,11 +376,11 @@ int FitModel::run(Io& io) {
       fail("parameter {} is fixed (--fix) and free", quote(name));
   }
   if (options.evaluate) {
-    evaluate(base, problem, options, io);
+    evaluate(base, problem, speed, options, io);
   } else if (options.batch) {
-    fit_batch(base, problem, fixed, options, io);
+    fit_batch(base, problem, fixed, speed, options, io);
   } else {
-    fit_joint(base, problem, fixed, options, io);
+    fit_joint(base, problem, fixed, speed, options, io);
   }
   return 0;
 }

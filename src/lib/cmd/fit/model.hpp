@@ -2,6 +2,7 @@
 #pragma once
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,7 +23,9 @@ struct FitModelOptions {
   bool evaluate = false;             ///< score the given model on the runs, no fit
   double from_s = -std::numeric_limits<double>::infinity();  ///< rows with t >= from_s ...
   double to_s = std::numeric_limits<double>::infinity();     ///< ... and t <= to_s of each run
-  double gear_ratio = 1.0;                                   ///< motor turns per turn of the measured shaft
+  /// Motor turns per turn of the measured shaft, over the captures' `# gear_ratio:` and the
+  /// INI's `[measurement] gear_ratio` (unset: theirs, else 1).
+  std::optional<double> gear_ratio;
   unsigned threads = 0;                                      ///< 0: every core
   double max_step_s = 2.5e-4;                                ///< integrator step bound during the fit
   int max_evaluations = 4000;
