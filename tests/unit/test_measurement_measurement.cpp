@@ -91,14 +91,17 @@ TEST(Measurement, RejectsTextOutsideTheGrammar) {
 TEST(Measurement, GearRatioAndSpeedFilterRoundTrip) {
   EXPECT_EQ(parse_gear_ratio(" 60 "), 60.0);
   EXPECT_EQ(format_gear_ratio(parse_gear_ratio("14.5")), "14.5");
-  EXPECT_EQ(error_of([] { parse_gear_ratio("-2", "g.csv: gear_ratio"); }),
-            "g.csv: gear_ratio: expected a gear ratio > 0 (motor turns per turn of the measured shaft), got '-2'");
-  for (const char* text : {"first-order low-pass, time constant 0.02 s", "moving average over 0.01 s", "none"}) {
+  EXPECT_EQ(
+      error_of([] { parse_gear_ratio("-2", "g.csv: gear_ratio"); }),
+      "g.csv: gear_ratio: expected a gear ratio > 0 (motor turns per turn of the measured shaft), got '-2'");
+  for (const char* text :
+       {"first-order low-pass, time constant 0.02 s", "moving average over 0.01 s", "none"}) {
     EXPECT_EQ(format_speed_filter(parse_speed_filter(text)), text);
   }
-  EXPECT_EQ(error_of([] { parse_speed_filter("first-order low-pass, time constant 0 s", "f.csv: speed_filter"); }),
-            "f.csv: speed_filter: expected 'first-order low-pass, time constant <tau> s', 'moving average over "
-            "<W> s' or 'none' (tau, W > 0), got 'first-order low-pass, time constant 0 s'");
+  EXPECT_EQ(
+      error_of([] { parse_speed_filter("first-order low-pass, time constant 0 s", "f.csv: speed_filter"); }),
+      "f.csv: speed_filter: expected 'first-order low-pass, time constant <tau> s', 'moving average over "
+      "<W> s' or 'none' (tau, W > 0), got 'first-order low-pass, time constant 0 s'");
   EXPECT_THROW(parse_speed_filter("low-pass 5 Hz"), Error);
 }
 
@@ -157,9 +160,10 @@ TEST(Measurement, SpeedPathIniRoundTrip) {
   EXPECT_EQ(format_speed_filter(*back.filter), "first-order low-pass, time constant 0.005 s");
   EXPECT_FALSE(speed_path_from_ini(config::Ini{}).gear_ratio);
   std::istringstream bad("[measurement]\ngear_ratio = 0\n");
-  EXPECT_EQ(error_of([&] { speed_path_from_ini(config::Ini::parse(bad, "m.ini")); }),
-            "m.ini:2: [measurement] gear_ratio: expected a gear ratio > 0 (motor turns per turn of the measured "
-            "shaft), got '0'");
+  EXPECT_EQ(
+      error_of([&] { speed_path_from_ini(config::Ini::parse(bad, "m.ini")); }),
+      "m.ini:2: [measurement] gear_ratio: expected a gear ratio > 0 (motor turns per turn of the measured "
+      "shaft), got '0'");
   std::istringstream unknown("[measurement]\ngear = 3\n");
   EXPECT_EQ(error_of([&] { speed_path_from_ini(config::Ini::parse(unknown, "m.ini")); }),
             "m.ini:2: [measurement] gear: unknown key (gear_ratio, speed_filter)");

@@ -90,7 +90,8 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
   } else {
     omega = table.col("omega");
   }
-  const auto stated = measurement::speed_path_stated(table.meta.get("gear_ratio"), std::nullopt, table.source);
+  const auto stated =
+      measurement::speed_path_stated(table.meta.get("gear_ratio"), std::nullopt, table.source);
   const double gear = measurement::settle_gear_ratio(stated.gear_ratio, options.gear_ratio_ini,
                                                      options.gear_ratio_override, table.source);
   for (double& w : omega) w *= gear;

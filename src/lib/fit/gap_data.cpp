@@ -217,7 +217,8 @@ std::vector<OutputFloor> noise_floors(const GapData& data) {
       transient.erase(transient.begin(), transient.begin() + static_cast<std::ptrdiff_t>(sr.first_scored));
       NoiseFloor nf;
       if (std::string_view(name) == "rpm" && sr.run.rpm_estimator) {
-        nf = rpm_noise_floor(part, transient, sr.run.rpm_estimator->window_s, sr.run.rpm_estimator->counts_per_rev);
+        nf = rpm_noise_floor(part, transient, sr.run.rpm_estimator->window_s,
+                             sr.run.rpm_estimator->counts_per_rev);
       } else if (std::string_view(name) == "rpm") {
         // No stated chain: the data's own estimate over the moving samples, in the data's unit
         // (the board's encoder resolution would class a small unit's every sample at rest).

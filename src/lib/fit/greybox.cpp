@@ -142,7 +142,8 @@ Run make_run(const table::Table& table, const std::vector<std::string>& outputs,
 }
 
 void apply_speed_path(Run& run, const measurement::SpeedPath& ini, std::optional<double> gear_override) {
-  const measurement::SpeedPath settled = measurement::settle_speed_path(run.stated, ini, gear_override, run.source);
+  const measurement::SpeedPath settled =
+      measurement::settle_speed_path(run.stated, ini, gear_override, run.source);
   run.gear_ratio = *settled.gear_ratio;
   run.speed_filter = *settled.filter;
 }

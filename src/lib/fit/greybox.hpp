@@ -66,8 +66,8 @@ void apply_speed_path(Run& run, const measurement::SpeedPath& ini, std::optional
 /// clutch is not 0 throughout). `# gear_ratio:` and `# speed_filter:` (mcg-csv(5)) set the
 /// run's gear ratio and speed filter. When the
 /// `# i_measurement:` metadata (mcg-csv(5)) names the ADC range, current samples
-/// at its rails (CurrentChain::at_rail) are saturated and count as not measured. Throws mcg::Error naming the file (and line) for a missing column, a bad
-/// input value, or fewer than `min_rows` rows ("too short").
+/// at its rails (CurrentChain::at_rail) are saturated and count as not measured. Throws mcg::Error naming the
+/// file (and line) for a missing column, a bad input value, or fewer than `min_rows` rows ("too short").
 Run make_run(const table::Table& table, const std::vector<std::string>& outputs, const model::Params& params,
              std::size_t min_rows = 50);
 

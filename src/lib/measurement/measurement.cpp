@@ -230,9 +230,10 @@ SpeedFilter parse_speed_filter(std::string_view text, std::string_view where) {
     f.kind = SpeedFilter::Kind::moving_average;
     if (number_until(s, " s", f.window_s) && s.empty() && positive(f.window_s)) return f;
   }
-  fail("{}: expected 'first-order low-pass, time constant <tau> s', 'moving average over <W> s' or "
-       "'none' (tau, W > 0), got {}",
-       where, quote(text));
+  fail(
+      "{}: expected 'first-order low-pass, time constant <tau> s', 'moving average over <W> s' or "
+      "'none' (tau, W > 0), got {}",
+      where, quote(text));
 }
 
 std::string format_speed_filter(const SpeedFilter& f) {
@@ -278,19 +279,22 @@ std::vector<double> SpeedFilter::apply(const std::vector<double>& t_s, const std
   return y;
 }
 
-double settle_gear_ratio(std::optional<double> stated, std::optional<double> ini, std::optional<double> override,
-                         std::string_view source) {
+double settle_gear_ratio(std::optional<double> stated, std::optional<double> ini,
+                         std::optional<double> override, std::string_view source) {
   if (override) return *override;
   if (stated && ini && *stated != *ini) {
-    fail("{}: gear_ratio {} differs from the model's [measurement] gear_ratio {} (give --gear-ratio to choose)",
-         source, format_gear_ratio(*stated), format_gear_ratio(*ini));
+    fail(
+        "{}: gear_ratio {} differs from the model's [measurement] gear_ratio {} (give --gear-ratio to "
+        "choose)",
+        source, format_gear_ratio(*stated), format_gear_ratio(*ini));
   }
   return stated.value_or(ini.value_or(1.0));
 }
 
-SpeedPath settle_speed_path(const SpeedPath& stated, const SpeedPath& ini, std::optional<double> gear_override,
-                            std::string_view source) {
-  if (stated.filter && ini.filter && format_speed_filter(*stated.filter) != format_speed_filter(*ini.filter)) {
+SpeedPath settle_speed_path(const SpeedPath& stated, const SpeedPath& ini,
+                            std::optional<double> gear_override, std::string_view source) {
+  if (stated.filter && ini.filter &&
+      format_speed_filter(*stated.filter) != format_speed_filter(*ini.filter)) {
     fail("{}: speed_filter {} differs from the model's [measurement] speed_filter {}", source,
          quote(format_speed_filter(*stated.filter)), quote(format_speed_filter(*ini.filter)));
   }
@@ -304,7 +308,8 @@ SpeedPath speed_path_stated(std::optional<std::string> gear_ratio, std::optional
                             std::string_view source) {
   SpeedPath stated;
   if (gear_ratio) stated.gear_ratio = parse_gear_ratio(*gear_ratio, fmt::format("{}: gear_ratio", source));
-  if (speed_filter) stated.filter = parse_speed_filter(*speed_filter, fmt::format("{}: speed_filter", source));
+  if (speed_filter)
+    stated.filter = parse_speed_filter(*speed_filter, fmt::format("{}: speed_filter", source));
   return stated;
 }
 
@@ -312,8 +317,8 @@ SpeedPath speed_path_from_ini(const config::Ini& ini) {
   SpeedPath path;
   constexpr std::string_view sec = "measurement";
   for (const auto* entry : ini.entries(sec)) {
-    const std::string where = fmt::format("{}: [{}] {}", entry->origin.empty() ? "config" : entry->origin, sec,
-                                          entry->key);
+    const std::string where =
+        fmt::format("{}: [{}] {}", entry->origin.empty() ? "config" : entry->origin, sec, entry->key);
     if (entry->key == "gear_ratio") {
       path.gear_ratio = parse_gear_ratio(entry->value, where);
     } else if (entry->key == "speed_filter") {

@@ -113,7 +113,7 @@ class SpeedFilterStream {
   double m_state = std::numeric_limits<double>::quiet_NaN();  ///< low-pass output
   double m_t_prev = 0.0;
   std::vector<std::pair<double, double>> m_window;  ///< moving average: (t, x) in the window
-  std::size_t m_first = 0;                           ///< the window's oldest entry
+  std::size_t m_first = 0;                          ///< the window's oldest entry
   double m_sum = 0.0;
 };
 
@@ -134,14 +134,14 @@ struct SpeedPath {
 /// A capture's gear ratio: `override` (a command's --gear-ratio), else what the capture states,
 /// else the INI's, else 1. A capture and an INI that state different ratios throw mcg::Error
 /// "<source>: gear_ratio ... differs ..." unless an override settles it.
-double settle_gear_ratio(std::optional<double> stated, std::optional<double> ini, std::optional<double> override,
-                         std::string_view source);
+double settle_gear_ratio(std::optional<double> stated, std::optional<double> ini,
+                         std::optional<double> override, std::string_view source);
 
 /// The speed path of a capture, settled: the gear ratio as settle_gear_ratio() gives it, the
 /// filter the capture states, else the INI's, else none. A capture and an INI that state
 /// different filters throw mcg::Error naming `source`. Both fields are set in the result.
-SpeedPath settle_speed_path(const SpeedPath& stated, const SpeedPath& ini, std::optional<double> gear_override,
-                            std::string_view source);
+SpeedPath settle_speed_path(const SpeedPath& stated, const SpeedPath& ini,
+                            std::optional<double> gear_override, std::string_view source);
 /// What a capture's metadata states (`# gear_ratio:`, `# speed_filter:`), for `source`.
 SpeedPath speed_path_stated(std::optional<std::string> gear_ratio, std::optional<std::string> speed_filter,
                             std::string_view source);

@@ -566,15 +566,16 @@ void run(const RunOptions& opt, std::istream& in, const std::string& source, std
   // The shaft the speed columns measure and their filter: the input capture's statement, else
   // the INI's [measurement] (mcg-csv(5)); the output states them when they are not the identity.
   const measurement::SpeedPath speed = measurement::settle_speed_path(
-      measurement::speed_path_stated(reader.metadata().get("gear_ratio"), reader.metadata().get("speed_filter"),
-                                     source),
+      measurement::speed_path_stated(reader.metadata().get("gear_ratio"),
+                                     reader.metadata().get("speed_filter"), source),
       measurement::speed_path_from_ini(ini), std::nullopt, source);
   const bool geared = *speed.gear_ratio != 1.0;
   const bool filtered = speed.filter->kind != measurement::SpeedFilter::Kind::none;
   if (c.closed && (geared || filtered)) {
-    fail("{}: a closed loop reads the motor's own encoder: a gear ratio or speed filter between the motor "
-         "and the measured speed ([measurement], # gear_ratio, # speed_filter) is for open-loop runs",
-         source);
+    fail(
+        "{}: a closed loop reads the motor's own encoder: a gear ratio or speed filter between the motor "
+        "and the measured speed ([measurement], # gear_ratio, # speed_filter) is for open-loop runs",
+        source);
   }
   meta.erase("gear_ratio");
   meta.erase("speed_filter");

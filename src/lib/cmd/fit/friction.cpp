@@ -9,8 +9,8 @@
 #include "common/error.hpp"
 #include "common/range.hpp"
 #include "config/ini.hpp"
-#include "measurement/measurement.hpp"
 #include "mcg/version.hpp"
+#include "measurement/measurement.hpp"
 #include "model/model.hpp"
 #include "table/table.hpp"
 
