@@ -277,12 +277,12 @@ TEST(FitGreybox, AStatedSpeedFilterIsModelled) {
   auto table = measure(truth, speed_only_run(), 37, false);
   const auto filter = measurement::parse_speed_filter("first-order low-pass, time constant 0.04 s");
   table.set("rpm", filter.apply(table.col("t"), table.col("rpm")));
-  const Run unstated = make_run(table, {}, truth.params);
+  const fit::Run unstated = make_run(table, {}, truth.params);
   table.meta.set("speed_filter", measurement::format_speed_filter(filter));
-  Run run = make_run(table, {}, truth.params);
+  fit::Run run = make_run(table, {}, truth.params);
   apply_speed_path(run, {});
-  EXPECT_GT(evaluate_model(truth, {run})[0].fit_percent[0], 97.0);
-  EXPECT_LT(evaluate_model(truth, {unstated})[0].fit_percent[0], 90.0);
+  EXPECT_GT(evaluate_model(truth, std::vector<fit::Run>{run})[0].fit_percent[0], 97.0);
+  EXPECT_LT(evaluate_model(truth, std::vector<fit::Run>{unstated})[0].fit_percent[0], 90.0);
   FitProblem problem;
   problem.runs.push_back(run);
   problem.free = default_free(problem.runs, {}, problem.ties);
