@@ -82,7 +82,7 @@ void FitFriction::define(CLI::App& app) {
   fr->add_option("--gear-ratio", friction.fit.gear_ratio_override,
                  "motor turns per turn of the shaft whose speed was measured (default: the runs' "
                  "gear_ratio, else the INI's [measurement], else 1)")
-      ->check(CLI::PositiveNumber);
+      ->check(mcg::Range(1e-6, 1e6));
   fr->add_flag("--linear", friction.linear, "linear axis: m, N, N s/m, kg; results in [fit.friction] only");
   fr->add_option("files", friction.files, "runs with t, v, clutch, r_load, rpm [, i] ('-' = stdin)")
       ->required();

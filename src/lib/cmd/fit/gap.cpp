@@ -31,7 +31,7 @@ void FitGap::define(CLI::App& app) {
   gp->add_option("--gear-ratio", gap.gear_ratio,
                  "motor turns per turn of the shaft whose speed was measured (default: the captures' "
                  "gear_ratio, else the INI's [measurement], else 1)")
-      ->check(CLI::PositiveNumber);
+      ->check(mcg::Range(1e-6, 1e6));
   gp->add_flag("--discrepancy", gap.discrepancy,
                "fit the catalog-free discrepancy terms whatever the verdict (always for an unexplained gap)");
   gp->add_option("--budget", gap.budget_s,

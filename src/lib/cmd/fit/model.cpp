@@ -328,7 +328,7 @@ void FitModel::define(CLI::App& app) {
   md->add_option("--gear-ratio", model.gear_ratio,
                  "motor turns per turn of the shaft whose speed was measured (default: the captures' "
                  "gear_ratio, else the INI's [measurement], else 1)")
-      ->check(CLI::PositiveNumber);
+      ->check(mcg::Range(1e-6, 1e6));
   md->add_option("--outputs", model.outputs,
                  "measured columns compared (default: rpm and each varying i, i_gen, v_gen)")
       ->allow_extra_args(false)
