@@ -140,6 +140,8 @@ TEST(FitDiscrepancy, OncePerRevolutionTorque) {
   const DiscrepancyResult d = fit_discrepancy(model::Model{}, data_of(truth, 1.6), {}, rpm_floor());
   expect_term(d, "sin(1 theta + phase)", 0.002, 0.5);
   EXPECT_NE(term(d, "sin(1 theta + phase)")->reading.find("once per revolution"), std::string::npos);
+  // An imbalance is no cogging: it seeds no catalog effect.
+  EXPECT_TRUE(catalog_seeds(d, model::Model{}).empty());
 }
 
 TEST(FitDiscrepancy, CurrentProportionalRipple) {

@@ -666,7 +666,9 @@ std::vector<model::Effect> catalog_seeds(const DiscrepancyResult& result, const 
            std::any_of(seeds.begin(), seeds.end(), [&](const model::Effect& e) { return e.name == name; });
   };
   for (const DiscrepancyTerm& t : result.terms) {
-    const bool torque_harmonic = t.place == "shaft" && t.order != 0.0 && t.basis.rfind("sin(", 0) == 0;
+    // Cogging repeats with the slots and poles, at least twice a revolution; once per
+    // revolution is an imbalance or an eccentric load, which cogging would only imitate.
+    const bool torque_harmonic = t.place == "shaft" && t.order >= 2.0 && t.basis.rfind("sin(", 0) == 0;
     const bool drop = t.basis == "-(Kt/R) tanh(i/0.01)" || t.basis == "tanh(i/0.01)";
     const bool dead = t.basis == "-(Kt/R) tanh(v/0.01 supply)" || t.basis == "tanh(v/0.01 supply)";
     if (torque_harmonic && !seeded("cogging")) {

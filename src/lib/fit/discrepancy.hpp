@@ -67,7 +67,8 @@ std::string explained_text(const DiscrepancyResult& d, bool summary);
 std::string closing_text(const DiscrepancyResult& d);
 
 /// Catalog effects whose shape a surviving term has, started from the term's values: an
-/// angle harmonic of the torque -> cogging with its order, amplitude and phase; a drop
+/// angle harmonic of the torque at two or more cycles a revolution -> cogging with its order,
+/// amplitude and phase (once per revolution is an imbalance, not cogging); a drop
 /// against the current -> brush_drop; a voltage lost in the drive's direction -> hbridge with
 /// that deadband. Effects `reference` already has are left out.
 std::vector<model::Effect> catalog_seeds(const DiscrepancyResult& result, const model::Model& reference);
