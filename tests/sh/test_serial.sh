@@ -131,7 +131,7 @@ check "the vanish message counts the samples kept on stdout" \
 check "the samples kept are many" [ "$n" -gt 300 ]
 check "the board removed its link" eval '! [ -e "$tty" ]'
 check "no such port (board gone)" eval '! S get rpm 2> "$work/err" &&
-  same "$work/err" "mcg-serial: error: $tty: no such port (mcg-serial list shows the serial ports)"'
+  same "$work/err" "mcg-serial: error: $tty: no such port (the list command shows the serial ports)"'
 
 # nothing answers: a pseudo-terminal pair with nobody on the far end
 if command -v socat > /dev/null; then

@@ -1,6 +1,7 @@
 // The catalog-free discrepancy fit on effects the catalog does not have, written here as
 // test-only shaft terms: the term's shape and coefficient come back, and a model without
 // them gets none.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -139,6 +140,8 @@ TEST(FitDiscrepancy, OncePerRevolutionTorque) {
   const DiscrepancyResult d = fit_discrepancy(model::Model{}, data_of(truth, 1.6), {}, rpm_floor());
   expect_term(d, "sin(1 theta + phase)", 0.002, 0.5);
   EXPECT_NE(term(d, "sin(1 theta + phase)")->reading.find("once per revolution"), std::string::npos);
+  // An imbalance is no cogging: it seeds no catalog effect.
+  EXPECT_TRUE(catalog_seeds(d, model::Model{}).empty());
 }
 
 TEST(FitDiscrepancy, CurrentProportionalRipple) {
@@ -243,6 +246,59 @@ TEST(FitDiscrepancy, CurrentSensorGainAndOffsetAreReadingsNotTorques) {
   EXPECT_EQ(placed(d, "circuit"), nullptr);
 }
 
+TEST(FitDiscrepancy, CurrentGainAbsorbedIntoTheResistanceScaleIsNamed) {
+  // As the gap's best candidate leaves it: param_mismatch's R_scale took the reading's 6 % gain
+  // as a resistance 1/1.06 of the given one. The gain is one fact with that scale: it is named
+  // as the reading's, with the scale it stands in for.
+  const double s = 1.0 / 1.06;
+  model::Model reference;
+  reference.effects.push_back(model::parse_effect(fmt::format("param_mismatch:R_scale={}", s)));
+  const DiscrepancyResult d =
+      fit_discrepancy(reference, reversing_data(model::Model{}, 6.0, 1.06, 0.04), {}, rpm_floor());
+  SCOPED_TRACE(listing(d));
+  const DiscrepancyTerm* gain = term(d, "current gain");
+  const DiscrepancyTerm* offset = term(d, "current offset");
+  ASSERT_NE(gain, nullptr);
+  ASSERT_NE(offset, nullptr);
+  EXPECT_EQ(gain->place, "current reading");
+  EXPECT_LT(std::abs(gain->coefficient - 1.06), 2.0 * gain->std_error + 0.003);
+  EXPECT_NE(gain->reading.find(fmt::format("R_scale {:.4g}", s)), std::string::npos) << gain->reading;
+  EXPECT_LT(std::abs(offset->coefficient - 0.04), 2.0 * offset->std_error + 0.002);
+  EXPECT_EQ(placed(d, "circuit"), nullptr);
+}
+
+TEST(FitDiscrepancy, ResistanceScaleThatIsTheResistanceStays) {
+  // The same scale where the resistance is what differs: no reading's gain is made of it.
+  model::Model truth;
+  truth.params.motor.R_ohm *= 1.15;
+  truth.params.generator.R_ohm *= 1.15;
+  model::Model reference;
+  reference.effects.push_back(model::parse_effect("param_mismatch:R_scale=1.15"));
+  const DiscrepancyResult d = fit_discrepancy(reference, reversing_data(truth, 6.0), {}, rpm_floor());
+  SCOPED_TRACE(listing(d));
+  EXPECT_EQ(placed(d, "current reading"), nullptr);
+}
+
+TEST(FitDiscrepancy, TermsBesideTheShaftReportWhatTheyCloseThere) {
+  // Only the current reading errs: the report states the circuit's share, not "0 % of the
+  // torque residual", and the verdict's phrase is the circuit's, not "closing 0 %".
+  const DiscrepancyResult d =
+      fit_discrepancy(model::Model{}, reversing_data(model::Model{}, 6.0, 1.06, 0.04), {}, rpm_floor());
+  SCOPED_TRACE(listing(d));
+  ASSERT_EQ(placed(d, "shaft"), nullptr);
+  ASSERT_NE(placed(d, "current reading"), nullptr);
+  EXPECT_GT(d.circuit_validation_pct, 90.0);
+  EXPECT_GT(d.reading_torque_pct, 50.0);
+  const std::string text = explained_text(d, false);
+  EXPECT_EQ(text.find("of the torque residual in training"), std::string::npos) << text;
+  EXPECT_NE(text.find("% of the motor circuit's voltage residual in validation"), std::string::npos) << text;
+  EXPECT_NE(text.find("not theirs to move"), std::string::npos) << text;
+  const std::string closing = closing_text(d);
+  EXPECT_EQ(closing.find("closing 0 %"), std::string::npos) << closing;
+  EXPECT_NE(closing.find("the current reading's terms closing"), std::string::npos) << closing;
+  EXPECT_EQ(explained_text(d, true).find("torque residual in validation"), std::string::npos);
+}
+
 TEST(FitDiscrepancy, ResistanceErrorIsTheCircuitsNotAReading) {
   // The same shape in the circuit equation, but the current is read right: the torque
   // equation does not confirm a reading, so it is a resistance the model lacks.
@@ -344,6 +400,34 @@ TEST(FitDiscrepancy, SeededCoggingPhaseIsRecoveredByTheCatalogFit) {
   EXPECT_EQ(cogging->get("N_per_rev"), 6.0);
   EXPECT_NEAR(cogging->get("phase_rad"), 1.3, 0.02);
   EXPECT_NEAR(cogging->get("T_c_Nm"), 0.0015, 0.00005);
+}
+
+TEST(FitDiscrepancy, ImbalanceTogetherWithCogging) {
+  // Two angle harmonics at once, once and six times per revolution: each survives with its
+  // amplitude and phase, and the cogging seeds the catalog's effect.
+  model::Model truth;
+  truth.effects.push_back(model::parse_effect("cogging:T_c_Nm=0.0015,N_per_rev=6,phase_rad=1.3"));
+  truth.shaft_terms.push_back({"imbalance", nullptr, {1.0, 0.5, 0.0, 0.002}, once_per_rev});
+  const DiscrepancyResult d = fit_discrepancy(model::Model{}, data_of(truth, 1.6), {6.0}, rpm_floor());
+  expect_term(d, "sin(1 theta + phase)", 0.002, 0.5);
+  expect_term(d, "sin(6 theta + phase)", 0.0015, 1.3);
+  const std::vector<model::Effect> seeds = catalog_seeds(d, model::Model{});
+  ASSERT_FALSE(seeds.empty());
+  EXPECT_EQ(seeds[0].name, "cogging");
+  EXPECT_EQ(seeds[0].get("N_per_rev"), 6.0);
+}
+
+TEST(FitDiscrepancy, FrictionFadingOffTheGridOfTimeConstants) {
+  // Warm-up over 0.5 s, between the library's time constants (0.3, 0.99 and 3 s): a fading
+  // level is still what survives first, and the held-out run gains.
+  model::Model truth;
+  truth.shaft_terms.push_back({"warm-up", nullptr, {0.0, 0.5, 0.0, 0.004}, fading_friction});
+  const DiscrepancyResult d = fit_discrepancy(model::Model{}, data_of(truth, 4.0), {}, rpm_floor());
+  SCOPED_TRACE(listing(d));
+  ASSERT_FALSE(d.terms.empty());
+  EXPECT_NE(d.terms[0].basis.find("exp(-t/"), std::string::npos);
+  EXPECT_NE(d.terms[0].reading.find("warm-up"), std::string::npos);
+  EXPECT_LT(d.rms_after_rpm, 0.5 * d.rms_before_rpm);
 }
 
 TEST(FitDiscrepancy, NothingToFindInAModelThatIsRight) {

@@ -90,6 +90,10 @@ TEST(LinkConsole, TheScreenDrawsMeasuredModelCommandAndStatus) {
     all += l + "\n";
   }
   EXPECT_NE(lines[0].find("rpm 350"), std::string::npos) << lines[0];
+  // The title is the caller's (the tool's name): the library names none.
+  EXPECT_EQ(lines[0].rfind("console", 0), 0U) << lines[0];
+  s.title = "mcg-serial console";
+  EXPECT_EQ(render_console(s, 100, 30)[0].rfind("mcg-serial console", 0), 0U);
   EXPECT_NE(all.find('*'), std::string::npos);
   EXPECT_NE(all.find('o'), std::string::npos);
   EXPECT_NE(all.find("---"), std::string::npos);

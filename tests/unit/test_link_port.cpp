@@ -27,7 +27,8 @@ TEST(LinkPort, OpenErrorsSayWhatToDo) {
   EXPECT_EQ(open_error_message("/dev/ttyUSB0", EACCES),
             "/dev/ttyUSB0: permission denied (add your user to the 'dialout' group: sudo usermod -aG dialout $USER, "
             "then log in again)");
-  EXPECT_EQ(open_error_message("/dev/ttyUSB0", ENOENT), "/dev/ttyUSB0: no such port (mcg-serial list shows the serial ports)");
+  EXPECT_EQ(open_error_message("/dev/ttyUSB0", ENOENT),
+            "/dev/ttyUSB0: no such port (the list command shows the serial ports)");
   EXPECT_EQ(open_error_message("/dev/ttyUSB0", EBUSY), "/dev/ttyUSB0: port busy (another program has it open)");
   EXPECT_EQ(error_of([] { open_port("/dev/null", 9600); }), "/dev/null: not a serial port");
   EXPECT_EQ(error_of([] { open_port("/dev/null", 1000); }),

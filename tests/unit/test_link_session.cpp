@@ -69,7 +69,7 @@ TEST(LinkSession, WrongProtocolIsRefused) {
   Session s(line, quick());
   EXPECT_EQ(
       error_of([&] { s.hello(); }),
-      "line: wrong firmware: it speaks protocol 6 (firmware 0.9.0 on c515), mcg-serial speaks protocol 5");
+      "line: wrong firmware: it speaks protocol 6 (firmware 0.9.0 on c515), the host speaks protocol 5");
 }
 
 TEST(LinkSession, SilenceIsNothingAnsweringAfterEveryTry) {

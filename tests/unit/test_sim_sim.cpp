@@ -249,6 +249,7 @@ TEST(SimRun, NoiseIsReproducibleFromTheSeedAndRecorded) {
   RunOptions opt;
   opt.noise_i_A = 0.003;
   opt.seed = 42;
+  opt.tool = "mcg-sim";
   const std::string a = run_text(opt, input);
   EXPECT_EQ(a, run_text(opt, input));
   opt.seed = 43;

@@ -103,7 +103,8 @@ void serve(const ServeOptions& options, Diagnostics& diag) {
   EmulatedBoard board(board_options);
   const link::InterruptGuard guard;
   const link::EmulatedPortEntry entry(
-      pty.link_path(), fmt::format("emulated board (mcg-sim pid {}, {})", ::getpid(), pty.slave_path()));
+      pty.link_path(),
+      fmt::format("emulated board ({} pid {}, {})", diag.prefix(), ::getpid(), pty.slave_path()));
   diag.report(
       fmt::format("board at {} ({}); Ctrl-C ends", printable_name(pty.link_path()), pty.slave_path()));
   diag.stream().flush();

@@ -75,6 +75,7 @@ int Sim::run(Io& io) {
     board::serve(board, io.diag);
     return 0;
   }
+  options.tool = io.tool;
   sim::run_stdio(options, io.diag);
   return 0;
 }

@@ -455,6 +455,53 @@ GapData read_right(const GapData& data, const std::vector<DiscrepancyTerm>& read
 /// is below this share of what the torques (with a reading error after them) leave.
 constexpr double k_reading_first_wins = 0.8;
 
+/// The validation torque residual ||y||^2 of the weak form on `c` with the measured current
+/// read through i_map (fit_circuit's confirmation).
+double torque_rss(const model::Compiled& c, const GapData& data, double w_max, std::array<double, 2> i_map) {
+  Rows validate;
+  for (const ScoredRun& sr : data.validate) windows(c, sr.run, sr.first_scored, {}, w_max, i_map, validate);
+  return Eigen::Map<const Eigen::VectorXd>(validate.y.data(), static_cast<Eigen::Index>(validate.y.size()))
+      .squaredNorm();
+}
+
+/// The circuit's finding on `reference`. A current reading's gain g shows in the circuit as a
+/// resistance R/g, so a reference that scales its resistance (param_mismatch's R_scale s, as
+/// a gap candidate fitted it) may carry the reading's gain as s = 1/g: the circuit is then
+/// fitted again at the resistance as given, and when there the torque equation confirms a gain
+/// of the reading, that finding stands and its gain term names the scale it is the same fact as.
+Finding circuit_stage(const model::Model& reference, const GapData& data, double w_max) {
+  const model::Compiled c(reference);
+  const auto rss_on = [&](const model::Compiled& on) {
+    return [&on, &data, w_max](std::array<double, 2> i_map) { return torque_rss(on, data, w_max, i_map); };
+  };
+  Finding found = fit_circuit(c, data, rss_on(c));
+  const model::Effect* scales = reference.effect("param_mismatch");
+  if (scales == nullptr || scales->get("R_scale") == 1.0) return found;
+  const bool has_gain = std::any_of(found.terms.begin(), found.terms.end(),
+                                    [](const DiscrepancyTerm& t) { return t.basis == "current gain"; });
+  if (has_gain) return found;
+  const double s = scales->get("R_scale");
+  model::Model given = reference;
+  for (model::Effect& e : given.effects) {
+    if (e.name == "param_mismatch") e.set("R_scale", 1.0);
+  }
+  const model::Compiled cg(given);
+  Finding at_given = fit_circuit(cg, data, rss_on(cg));
+  const auto gain = std::find_if(at_given.terms.begin(), at_given.terms.end(),
+                                 [](const DiscrepancyTerm& t) { return t.basis == "current gain"; });
+  // The reading's correction must explain the torque at least as well as the scaled circuit's.
+  if (gain == at_given.terms.end() ||
+      torque_rss(c, data, w_max, at_given.i_map) > torque_rss(c, data, w_max, found.i_map)) {
+    return found;
+  }
+  at_given.columns += found.columns;
+  gain->reading = fmt::format(
+      "a scale error of the current reading: the sensor's gain or shunt; the fitted R_scale {:.4g} is this "
+      "gain (1/{:.4g}), not the resistance",
+      s, gain->coefficient);
+  return at_given;
+}
+
 }  // namespace
 
 DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& data,
@@ -468,7 +515,6 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
     return out;
   }
   out.floor_rpm = floors[f_rpm].floor;
-  const model::Compiled c(reference);
   // Speed scales of the library from the training runs.
   double w_max = 0.0;
   for (const Run& run : data.train) {
@@ -491,13 +537,7 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
 
   // The circuit first: a current reading's gain and offset, once confirmed, are taken out of
   // the measured current before the torque the model lacks is computed from it.
-  const Finding circuit = fit_circuit(c, data, [&](std::array<double, 2> i_map) {
-    Rows train;
-    Rows validate;
-    for (const ScoredRun& sr : data.validate) windows(c, sr.run, sr.first_scored, {}, w_max, i_map, validate);
-    return Eigen::Map<const Eigen::VectorXd>(validate.y.data(), static_cast<Eigen::Index>(validate.y.size()))
-        .squaredNorm();
-  });
+  const Finding circuit = circuit_stage(reference, data, w_max);
   out.library_size += circuit.columns;
   std::vector<double> orders = {1.0};
   for (double order : angle_orders) {
@@ -533,7 +573,89 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
     }
   }
   for (const DiscrepancyTerm& t : circuit.terms) out.terms.push_back(t);
+  if (!circuit.terms.empty()) {
+    out.circuit_validation_pct = circuit.validation_pct;
+    out.reading_torque_pct = circuit.torque_pct;
+  }
   if (!out.terms.empty()) out.note.clear();
+  return out;
+}
+
+namespace {
+
+bool has_place(const DiscrepancyResult& d, std::string_view place) {
+  return std::any_of(d.terms.begin(), d.terms.end(),
+                     [&](const DiscrepancyTerm& t) { return t.place == place; });
+}
+
+/// The terms that act beside the shaft, as the circuit share's subject.
+std::string circuit_subject(const DiscrepancyResult& d) {
+  const bool circuit = has_place(d, "circuit");
+  const bool reading = has_place(d, "current reading");
+  return circuit && reading ? "the circuit and current-reading terms"
+         : reading          ? "the current reading's terms"
+                            : "the circuit terms";
+}
+
+}  // namespace
+
+std::string explained_text(const DiscrepancyResult& d, bool summary) {
+  const auto g = [](double v, int digits) { return fmt::format("{:.{}g}", v, digits); };
+  std::vector<std::string> parts;
+  if (has_place(d, "shaft")) {
+    parts.push_back(summary ? fmt::format("explains {} % of the torque residual in validation",
+                                          g(d.validation_explained_pct, 3))
+                            : fmt::format("explains {:.0f} % of the torque residual in training, {:.0f} % in "
+                                          "validation",
+                                          d.train_explained_pct, d.validation_explained_pct));
+  }
+  if (std::isfinite(d.circuit_validation_pct)) {
+    parts.push_back(fmt::format(
+        "{} explain {} % of the motor circuit's voltage residual in validation", circuit_subject(d),
+        summary ? g(d.circuit_validation_pct, 3) : fmt::format("{:.0f}", d.circuit_validation_pct)));
+  }
+  if (std::isfinite(d.reading_torque_pct)) {
+    parts.push_back(
+        fmt::format("correcting the current reading removes {} % of the torque residual",
+                    summary ? g(d.reading_torque_pct, 3) : fmt::format("{:.0f}", d.reading_torque_pct)));
+  }
+  const bool speed_moved = has_place(d, "shaft") || has_place(d, "speed reading");
+  if (summary) {
+    parts.push_back(
+        speed_moved
+            ? fmt::format("validation rpm RMS {} -> {}", g(d.rms_before_rpm, 4), g(d.rms_after_rpm, 4))
+            : fmt::format("validation rpm RMS {} (not theirs to move)", g(d.rms_before_rpm, 4)));
+  } else {
+    parts.push_back(speed_moved
+                        ? fmt::format("added to the model, validation rpm RMS {:.2f} -> {:.2f} rpm (noise "
+                                      "floor {:.2f})",
+                                      d.rms_before_rpm, d.rms_after_rpm, d.floor_rpm)
+                        : fmt::format("the simulated speed is not theirs to move: validation rpm RMS "
+                                      "{:.2f} rpm (noise floor {:.2f})",
+                                      d.rms_before_rpm, d.floor_rpm));
+  }
+  std::string out;
+  for (std::size_t k = 0; k < parts.size(); ++k) out += (k == 0 ? "" : "; ") + parts[k];
+  return out;
+}
+
+std::string closing_text(const DiscrepancyResult& d) {
+  if (has_place(d, "shaft") || has_place(d, "speed reading")) {
+    const double f2 = d.floor_rpm * d.floor_rpm;
+    const double before2 = d.rms_before_rpm * d.rms_before_rpm;
+    const double rest = before2 - f2;
+    const double closed = rest > 0.0 ? 100.0 * (before2 - d.rms_after_rpm * d.rms_after_rpm) / rest : 0.0;
+    return fmt::format(", closing {:.0f} % of the rest", std::clamp(closed, -999.0, 100.0));
+  }
+  std::string out;
+  if (std::isfinite(d.circuit_validation_pct)) {
+    out += fmt::format(", {} closing {:.0f} % of the motor circuit's voltage residual", circuit_subject(d),
+                       d.circuit_validation_pct);
+  }
+  if (std::isfinite(d.reading_torque_pct)) {
+    out += fmt::format(", correcting the current reading removes {:.0f} % of the torque residual",
+                       d.reading_torque_pct);
+  }
   return out;
 }
 
@@ -544,7 +666,9 @@ std::vector<model::Effect> catalog_seeds(const DiscrepancyResult& result, const 
            std::any_of(seeds.begin(), seeds.end(), [&](const model::Effect& e) { return e.name == name; });
   };
   for (const DiscrepancyTerm& t : result.terms) {
-    const bool torque_harmonic = t.place == "shaft" && t.order != 0.0 && t.basis.rfind("sin(", 0) == 0;
+    // Cogging repeats with the slots and poles, at least twice a revolution; once per
+    // revolution is an imbalance or an eccentric load, which cogging would only imitate.
+    const bool torque_harmonic = t.place == "shaft" && t.order >= 2.0 && t.basis.rfind("sin(", 0) == 0;
     const bool drop = t.basis == "-(Kt/R) tanh(i/0.01)" || t.basis == "tanh(i/0.01)";
     const bool dead = t.basis == "-(Kt/R) tanh(v/0.01 supply)" || t.basis == "tanh(v/0.01 supply)";
     if (torque_harmonic && !seeded("cogging")) {

@@ -54,8 +54,21 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
                                   const std::vector<OutputFloor>& floors,
                                   const std::function<bool()>& stop = {});
 
+/// What the surviving terms explain, each part in its own domain, for the report: the torque
+/// terms' share of the torque residual (training and validation), the circuit and current
+/// reading terms' share of the motor circuit's voltage residual, what correcting the current
+/// reading removes of the torque residual, and the validation rpm RMS before and after.
+/// `summary`: the one-line form of the CSV metadata (validation only, 3 and 4 digits).
+std::string explained_text(const DiscrepancyResult& d, bool summary);
+
+/// The verdict's ", closing 85 % of the rest": what the terms close of the speed gap above
+/// the noise; when the terms that survive act beside the shaft without moving the simulated
+/// speed (the circuit, the current reading), what they close in their own domain.
+std::string closing_text(const DiscrepancyResult& d);
+
 /// Catalog effects whose shape a surviving term has, started from the term's values: an
-/// angle harmonic of the torque -> cogging with its order, amplitude and phase; a drop
+/// angle harmonic of the torque at two or more cycles a revolution -> cogging with its order,
+/// amplitude and phase (once per revolution is an imbalance, not cogging); a drop
 /// against the current -> brush_drop; a voltage lost in the drive's direction -> hbridge with
 /// that deadband. Effects `reference` already has are left out.
 std::vector<model::Effect> catalog_seeds(const DiscrepancyResult& result, const model::Model& reference);

@@ -8,6 +8,7 @@
 
 #include <Eigen/Dense>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -88,6 +89,10 @@ struct Finding {
   std::vector<DiscrepancyTerm> terms;
   std::array<double, 2> i_map{1.0, 0.0};  ///< the current reading's correction, when confirmed
   std::size_t columns = 0;                ///< the library's columns that were tried
+  /// Share of the validation circuit residual the terms explain, %; share of the validation
+  /// torque residual the reading's correction removes, % (NaN: nothing kept, none confirmed).
+  double validation_pct = std::numeric_limits<double>::quiet_NaN();
+  double torque_pct = std::numeric_limits<double>::quiet_NaN();
 };
 Finding fit_circuit(const model::Compiled& c, const GapData& data,
                     const std::function<double(std::array<double, 2>)>& torque_rss);

@@ -145,8 +145,10 @@ Finding fit_circuit(const model::Compiled& c, const GapData& data,
         offset_read = use_offset;
       }
     }
+    if (gain_read || offset_read) out.torque_pct = 100.0 * (1.0 - best / raw);
   }
   out.i_map = {gain_read ? a : 1.0, offset_read ? b : 0.0};
+  out.validation_pct = d.validation_pct;
   for (std::size_t j = 0; j < set.size(); ++j) {
     DiscrepancyTerm t = d.terms[j];
     t.place = "circuit";

@@ -58,11 +58,6 @@ std::string where_left(const GapReport& report) {
 /// surviving term (the catalog part is the best candidate the verdict names beside it).
 std::string shape_found(const DiscrepancyResult& d, const GapCandidate& best) {
   if (d.terms.empty()) return {};
-  const double f2 = d.floor_rpm * d.floor_rpm;
-  const double rest = d.rms_before_rpm * d.rms_before_rpm - f2;
-  const double closed =
-      rest > 0.0 ? 100.0 * (d.rms_before_rpm * d.rms_before_rpm - d.rms_after_rpm * d.rms_after_rpm) / rest
-                 : 0.0;
   std::string out = "; the discrepancy finds";
   for (std::size_t k = 0; k < d.terms.size(); ++k) {
     const DiscrepancyTerm& t = d.terms[k];
@@ -72,7 +67,7 @@ std::string shape_found(const DiscrepancyResult& d, const GapCandidate& best) {
                        : fmt::format("{:.3g} +- {:.2g} {}", t.coefficient, t.std_error, t.unit);
     out += fmt::format("{} {} ({}: {})", k == 0 ? "" : ",", t.basis, value, t.reading);
   }
-  out += fmt::format(", closing {:.0f} % of the rest", std::clamp(closed, -999.0, 100.0));
+  out += closing_text(d);
   if (!best.effects.empty()) out += fmt::format(" beside the catalog's {}", best.name);
   return out;
 }
@@ -253,7 +248,8 @@ int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
       diag.stream().flush();
     };
   }
-  const GapReport report = diagnose_gap(model, data, settings);
+  GapReport report = diagnose_gap(model, data, settings);
+  report.source = options.tool + " gap";
   if (!options.residuals.empty()) {
     std::ofstream file(options.residuals);
     if (!file) fail("--residuals: cannot open {} for writing", quote(options.residuals));

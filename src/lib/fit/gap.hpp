@@ -210,10 +210,17 @@ struct DiscrepancyResult {
   std::vector<DiscrepancySeed> seeds;  ///< catalog effects seeded from the terms
   /// The joint refit of the shaft terms with the nominal scales: what it gave on the held-out runs.
   std::string joint;
+  /// Beside the shaft, each in its own domain (NaN when nothing was kept there): the share of
+  /// the armature circuit's voltage residual the circuit and current-reading terms explain on
+  /// the validation runs, %, and the share of the validation torque residual that taking the
+  /// current reading's errors out of the measured current removes, %.
+  double circuit_validation_pct = std::numeric_limits<double>::quiet_NaN();
+  double reading_torque_pct = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// The diagnosis.
 struct GapReport {
+  std::string source;  ///< its outputs' `source` metadata ("mcg-fit gap"; none when empty)
   std::string split_note;
   std::vector<OutputFloor> floors;
   std::size_t validation_samples = 0;
@@ -259,6 +266,7 @@ void write_gap_residuals(std::ostream& out, const GapReport& report, const GapDa
 
 /// Options of `mcg-fit gap`.
 struct GapOptions {
+  std::string tool;  ///< the tool that runs the diagnosis, for its outputs' `source` ("mcg-fit")
   std::vector<std::string> config;
   std::vector<std::string> train;
   std::vector<std::string> validate;

@@ -9,6 +9,7 @@
 
 #include "common/checked.hpp"
 #include "common/demand.hpp"
+#include "fit/discrepancy.hpp"
 #include "fit/gap_parts.hpp"
 #include "table/table.hpp"
 
@@ -230,7 +231,7 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
   const double before_rpm = at_or_nan(none.rms, s.rpm);
   const double before_i = at_or_nan(none.rms, s.i);
   table::Writer w(out);
-  w.meta("source", "mcg-fit gap");
+  if (!report.source.empty()) w.meta("source", report.source);
   w.meta("diagnosis", report.diagnosis);
   if (report.partial)
     w.meta("partial", "the time budget ran out; the ranking is of the candidates fitted so far");
@@ -253,10 +254,7 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
     if (d.terms.empty()) {
       w.meta("discrepancy", d.note);
     } else {
-      w.meta("discrepancy",
-             fmt::format("explains {} % of the torque residual in validation; validation rpm RMS {} -> {}",
-                         number(d.validation_explained_pct, 3), number(d.rms_before_rpm),
-                         number(d.rms_after_rpm)));
+      w.meta("discrepancy", explained_text(d, true));
     }
   }
   w.header({"effect", "rms_before_rpm", "rms_after_rpm", "shrink_pct", "gap_before_rpm", "gap_after_rpm",
@@ -323,10 +321,7 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
         out << fmt::format("  seeds the catalog: {} (validation rpm RMS {:.2f}{})\n", sd.effect, sd.rms_rpm,
                            sd.closes ? ", closes the gap" : "");
       }
-      out << fmt::format(
-          "  explains {:.0f} % of the torque residual in training, {:.0f} % in validation; added to the "
-          "model, validation rpm RMS {:.2f} -> {:.2f} rpm (noise floor {:.2f})\n",
-          d.train_explained_pct, d.validation_explained_pct, d.rms_before_rpm, d.rms_after_rpm, d.floor_rpm);
+      out << "  " << explained_text(d, false) << "\n";
     }
   }
   out << "\ncandidates, diagnosis first (score = validation MSE in noise units summed over outputs; FPE "
@@ -366,7 +361,7 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
 
 void write_gap_residuals(std::ostream& out, const GapReport& report, const GapData& data) {
   table::Writer w(out);
-  w.meta("source", "mcg-fit gap");
+  if (!report.source.empty()) w.meta("source", report.source);
   w.meta("diagnosis", report.diagnosis);
   for (std::size_t r = 0; r < data.validate.size(); ++r) {
     w.meta(fmt::format("run_{}", r + 1), data.validate[r].run.source);

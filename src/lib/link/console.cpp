@@ -238,7 +238,7 @@ std::vector<std::string> render_console(const ConsoleState& state, int width, in
     return grid;
   }
   const auto& samples = state.view();
-  std::string title = "mcg-serial console";
+  std::string title = state.title;
   if (state.paused) title += "   PAUSED";
   if (!samples.empty()) {
     const ConsoleSample& last = samples.back();
@@ -595,6 +595,7 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
   if (!options.rig.configs.empty()) model = model::load_model(options.rig.configs, {});
   std::ofstream session_log;
   ConsoleState state(options.span_s);
+  state.title = link.tool + " console";
   const auto log = [&](std::string_view text) {
     if (!session_log.is_open() || text.empty()) return;
     session_log << session_log_line(unix_now_s(), text) << '\n' << std::flush;
@@ -603,7 +604,7 @@ int run_console(const LinkOptions& link, const ConsoleOptions& options) {
     session_log.open(path, std::ios::app);
     if (!session_log) return false;
     state.logging = true;
-    log(fmt::format("session log of mcg-serial console on {}", link.port));
+    log(fmt::format("session log of {} on {}", state.title, link.port));
     return true;
   };
   if (!options.log_path.empty() && !open_log(options.log_path)) {

@@ -66,6 +66,7 @@ class ConsoleState {
 
   std::map<std::string, std::string> registers;  ///< name -> value as the board last said
   std::string status = "connected";              ///< the last result or refusal
+  std::string title = "console";                 ///< the screen's first words: the tool's name, "console"
   std::string link_note;                         ///< the line's trouble (a stall, a vanished port), else ""
   bool paused = false;                           ///< the view is frozen (p)
   bool show_help = false;                        ///< the key list replaces the charts (?)

@@ -814,7 +814,7 @@ PortOwner::PortOwner(std::unique_ptr<Port> port) : m_impl(std::make_unique<Impl>
       ::listen(m.listen_fd, 16) != 0) {
     const int err = errno;
     ::close(m.listen_fd);
-    fail("{}: cannot listen for other mcg-serial commands: {}", m.path, std::strerror(err));
+    fail("{}: cannot listen for the port's other clients: {}", m.path, std::strerror(err));
   }
   if (::pipe2(m.wake, O_CLOEXEC) != 0) {
     m.close_listener();

@@ -212,7 +212,7 @@ std::string open_error_message(const std::string& path, int err) {
     case ENOENT:
     case ENODEV:
     case ENXIO:
-      return fmt::format("{}: no such port (mcg-serial list shows the serial ports)", path);
+      return fmt::format("{}: no such port (the list command shows the serial ports)", path);
     case EACCES:
     case EPERM:
       return fmt::format(

@@ -47,6 +47,7 @@ std::unique_ptr<Connection> connect(const LinkOptions& link, Hold hold) {
     SessionOptions so;
     so.reply_timeout_s = link.timeout_s;
     so.attempts = link.attempts;
+    so.tool = link.tool;
     if (through_owner || c->owner) so.read_many_chunk = MCG_READ_MANY_MAX;
     c->session = std::make_unique<Session>(*c->port, so);
     try {
@@ -446,7 +447,7 @@ void run_send(const LinkOptions& link, const SendOptions& options, std::ostream&
 
 void run_serve(const LinkOptions& link, const ServeOptions& options) {
   auto c = connect(link, Hold::Serve);
-  if (!c->owner) fail("{}: another mcg-serial holds the port and serves it already", link.port);
+  if (!c->owner) fail("{}: another {} holds the port and serves it already", link.port, link.tool);
   const InterruptGuard guard;
   const auto start = std::chrono::steady_clock::now();
   while (!InterruptGuard::interrupted()) {

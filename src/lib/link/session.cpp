@@ -118,8 +118,9 @@ Version Session::hello() {
   if (data.size() < sizeof(McgVersionAnswer)) fail("{}: wrong firmware: malformed version answer ({} bytes)", m_port.name(), data.size());
   Version v{data[0], data[1], data[2], data[3], data[4]};
   if (v.protocol != MCG_PROTOCOL_VERSION) {
-    fail("{}: wrong firmware: it speaks protocol {} (firmware {}.{}.{} on {}), mcg-serial speaks protocol {}",
-         m_port.name(), v.protocol, v.major, v.minor, v.patch, board_name(v.board), MCG_PROTOCOL_VERSION);
+    fail("{}: wrong firmware: it speaks protocol {} (firmware {}.{}.{} on {}), {} speaks protocol {}",
+         m_port.name(), v.protocol, v.major, v.minor, v.patch, board_name(v.board),
+         m_options.tool.empty() ? std::string("the host") : m_options.tool, MCG_PROTOCOL_VERSION);
   }
   return v;
 }

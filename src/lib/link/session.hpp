@@ -21,6 +21,8 @@ struct SessionOptions {
   /// Wait for each answer, s. At 9600 baud a reply takes under 15 ms on the wire, but it may
   /// queue behind a stream block or a log dump frame; 0.3 s leaves room for both.
   double reply_timeout_s = 0.3;
+  /// The tool that speaks for the host, as messages name it ("mcg-serial"); empty: "the host".
+  std::string tool;
   /// Attempts per request before the board counts as not answering.
   int attempts = 3;
   /// Longest silence inside a frame before the host drops it, s. Larger than the board's

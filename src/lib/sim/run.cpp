@@ -286,7 +286,7 @@ Estimation estimation(const table::Metadata& meta, const RunOptions& opt, const 
 table::Metadata output_metadata(table::Metadata meta, const RunOptions& opt, const model::Model& model,
                                 const LoopSetup& l, const Columns& c, const Estimation& est, double t_first) {
   const bool noisy = opt.noise_i_A > 0.0 || opt.noise_v_gen_V > 0.0;
-  meta.set("source", fmt::format("mcg-sim {}", k_version));
+  meta.set("source", fmt::format("{} {}", opt.tool, k_version));
   meta.set("model", opt.configs.empty() ? std::string("built-in rig (the report's, tuned friction)")
                                         : join(printable_names(opt.configs), " + "));
   std::vector<std::string> effect_texts;

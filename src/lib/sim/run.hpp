@@ -34,6 +34,8 @@ struct RunOptions {
   /// running RMS of the residual in the row's regime; the per-regime RMS goes to `report` at
   /// the end. The model's rpm goes through the capture's own rpm_estimator when it states one.
   bool compare = false;
+  /// The tool that runs the simulation, for the output's `source` metadata ("mcg-sim").
+  std::string tool;
 };
 
 /// Reads the input table from `in` (named `source` in messages), simulates, writes the

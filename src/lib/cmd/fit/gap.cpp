@@ -48,6 +48,7 @@ void FitGap::define(CLI::App& app) {
 
 int FitGap::run(Io& io) {
   options.split_given = m_split != nullptr && m_split->count() > 0;
+  options.tool = io.tool;
   Diagnostics gap(io.diag.stream(), io.diag.prefix() + " gap");
   const int status = fit::run_gap(options, io.out, gap);
   return status != 0 ? status : gap.status();
