@@ -148,6 +148,24 @@ TEST(FitFrictionNoStatic, RunThatNeverRests) {
   }
 }
 
+// Coarse starts from rest (steps of 4, 6 and -5 V, each bracketing the breakaway between 0
+// and its level) beside the slow ramps' narrow brackets: the static level follows the ramps,
+// as a plain mean of the brackets' midpoints (about 2.6 V of drive) would not.
+TEST(FitFrictionStatic, NarrowBracketsOutweighCoarseSteps) {
+  Program p;
+  p.hold(0.0, 0.3, 0).hold(4.0, 0.6, 0).hold(0.0, 0.6, 0).hold(6.0, 0.6, 0).hold(0.0, 0.6, 0);
+  p.hold(-5.0, 0.6, 0).hold(0.0, 0.6, 0);
+  const model::Model rig;
+  const std::vector<table::Table> runs{measure(rig, p.inputs, 11), measure(rig, friction_run(0, 0.6, 14.0), 12)};
+  const auto result = fit_friction(runs, model::builtin_rig());
+  ASSERT_TRUE(result.motor.has_value());
+  EXPECT_EQ(result.states[0].breakaways, 5U);
+  const double Ts = rig.params.motor.friction.Ts_Nm;
+  EXPECT_NEAR(result.motor->value.Ts_Nm, Ts, 0.05 * Ts);
+  EXPECT_NEAR(result.motor->value.Ts_Nm, Ts, 4.0 * result.motor->se.Ts_Nm);
+  EXPECT_LT(result.motor->se.Ts_Nm, 0.05 * Ts);
+}
+
 std::string error_of(const std::vector<table::Table>& runs, const FrictionOptions& options = {}) {
   return test::error_of([&] { fit_friction(runs, model::builtin_rig(), options); });
 }

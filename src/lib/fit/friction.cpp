@@ -282,19 +282,32 @@ StateFriction estimate(int clutch, const StateData& data, const FrictionOptions&
     out.total.value.Ts_Nm = out.total.value.Tc_Nm;
     out.total.se.Ts_Nm = out.total.se.Tc_Nm;
   } else {
+    // Each start from rest brackets the breakaway between the largest drive torque held and
+    // the torque that moved the shaft: a uniform interval of variance width^2 / 12. The
+    // intervals are combined by their precision, so a slow ramp's narrow bracket outweighs a
+    // staircase's coarse ones (a plain mean lands between the staircase's steps), and the
+    // error grows by the scatter beyond what the widths explain (Birge ratio), since the real
+    // breakaway varies with the shaft's position.
+    double weights = 0.0;
     double sum = 0.0;
-    double width2 = 0.0;
+    double widest = 0.0;
+    for (const auto& e : data.breakaways) widest = std::max(widest, e.upper_Nm - e.lower_Nm);
+    // A floor on the width: a bracket of one sample's drive torque is not exact.
+    const double floor2 = std::pow(std::max(1e-3 * widest, 1e-12), 2);
+    const auto variance = [&](const Breakaway& e) {
+      return (std::pow(e.upper_Nm - e.lower_Nm, 2) + floor2) / 12.0;
+    };
     for (const auto& e : data.breakaways) {
-      sum += 0.5 * (e.lower_Nm + e.upper_Nm);
-      width2 += (e.upper_Nm - e.lower_Nm) * (e.upper_Nm - e.lower_Nm);
+      weights += 1.0 / variance(e);
+      sum += 0.5 * (e.lower_Nm + e.upper_Nm) / variance(e);
     }
+    const double mean = sum / weights;
+    double chi2 = 0.0;
+    for (const auto& e : data.breakaways) chi2 += std::pow(0.5 * (e.lower_Nm + e.upper_Nm) - mean, 2) / variance(e);
     const auto count = static_cast<double>(data.breakaways.size());
-    const double mean = sum / count;
-    double spread2 = 0.0;
-    for (const auto& e : data.breakaways) spread2 += std::pow(0.5 * (e.lower_Nm + e.upper_Nm) - mean, 2);
-    const double var_mean = count > 1 ? spread2 / (count - 1.0) / count : 0.0;
+    const double birge2 = count > 1 ? std::max(1.0, chi2 / (count - 1.0)) : 1.0;
     out.total.value.Ts_Nm = mean;
-    out.total.se.Ts_Nm = std::sqrt(var_mean + width2 / count / 12.0);
+    out.total.se.Ts_Nm = std::sqrt(birge2 / weights);
   }
   out.windows = data.windows.size();
   out.breakaways = data.breakaways.size();

@@ -254,6 +254,12 @@ struct SimOptions {
   /// before the exponential step made it unnecessary: the fits keep it (the gap search's
   /// diagnoses were settled with it); mcg-sim's runs drop it (within 0.005 rpm RMS).
   bool circuit_bound = true;
+  /// Regularised stick, for fitting friction: a stuck motor shaft breaks away at a rate that
+  /// grows exponentially with its drive torque, e-fold per 1 % of Ts (plant.cpp,
+  /// k_stick_width), rather than at the instant the torque passes Ts. On the exact stick-slip
+  /// any static level between two levels of a staircase gives the same run, and a fit locks
+  /// onto a level's edge; here the run moves with Ts continuously. The generator stays exact.
+  bool smooth_stick = false;
 };
 
 class PlantImpl;

@@ -44,6 +44,13 @@ constexpr double k_quasi_static_rate = 2e4;
 constexpr double k_min_circuit_step_s = 2e-6;
 /// Events handled inside one integration step before the step is accepted as is.
 constexpr int k_max_events_per_step = 16;
+/// The regularised stick's breakaway (SimOptions::smooth_stick): a stuck motor breaks away at
+/// the rate exp((|T| - Ts) / (k_stick_width Ts)) / k_stick_time_s once its drive torque T
+/// exceeds the Coulomb level, so at Ts after 10 ms, 5 % below it after 1.5 s, 5 % above it
+/// within 0.1 ms. On a ramp of rate a it breaks at Ts + sigma ln(a tau / sigma) (sigma = 1 %
+/// of Ts, tau = 10 ms): 0.011 Ts early on a ramp that reaches Ts in 3 s.
+constexpr double k_stick_width = 0.01;
+constexpr double k_stick_time_s = 0.01;
 
 enum class Coupling { none, rigid, spring, slip };
 
@@ -544,6 +551,17 @@ class PlantImpl {
     return m_c.breakaway(rigid() ? m_c.rigid : motor_friction(), motor_load(y));
   }
   double motor_breakaway() const { return motor_breakaway(m_y); }
+
+  /// Breakaway rate of the stuck motor body (or rigid pair) at y under drive torque T, 1/s, on
+  /// the regularised stick (k_stick_width): the hazard it gathers while stuck reaches 1 at the
+  /// breakaway, which so moves continuously with Ts and with the drive, also at a step.
+  double break_rate(double T, const Vec& y) const {
+    const Friction& f = rigid() ? m_c.rigid : motor_friction();
+    if (std::abs(T) <= f.Tc_Nm) return 0.0;
+    const double Ts = motor_breakaway(y);
+    if (Ts <= 0.0) return std::numeric_limits<double>::infinity();
+    return std::exp((std::abs(T) - Ts) / (k_stick_width * Ts)) / k_stick_time_s;
+  }
   double gen_breakaway() const { return m_c.breakaway(m_c.gen); }
 
   void substep(double t0, double h_total) {
@@ -574,7 +592,8 @@ class PlantImpl {
         drive_torques(m_y, t, Tm0, Tg0);
         drive_torques(y1, t + remaining, Tm1, Tg1);
       }
-      // Motor body (or the rigid pair).
+      // Motor body (or the rigid pair); on the regularised stick its breakaway hazard over the step.
+      double hazard = 0.0;
       if (!m_stuck_m) {
         if (m_dir_m * y1[W_M] <= 0.0) {
           const double s = hermite_root(m_dir_m * m_y[W_M], m_dir_m * k1[W_M] * remaining, m_dir_m * y1[W_M],
@@ -583,6 +602,12 @@ class PlantImpl {
             best = s;
             kind = EventKind::motor_zero;
           }
+        }
+      } else if (m_opt.smooth_stick) {
+        hazard = 0.5 * (break_rate(Tm0, m_y) + break_rate(Tm1, y1)) * remaining;
+        if (m_hazard_m + hazard >= 1.0) {
+          best = std::clamp((1.0 - m_hazard_m) / hazard, 0.0, 1.0);
+          kind = EventKind::motor_break;
         }
       } else if (std::abs(Tm1) > motor_breakaway(y1)) {
         const double s = break_fraction(Tm0, Tm1, motor_breakaway(y1));
@@ -623,11 +648,13 @@ class PlantImpl {
         }
       }
       if (kind == EventKind::none) {
+        m_hazard_m += hazard;
         accept(y1, t + remaining);
         check_unlock(t);
         return;
       }
       const double h_event = best * remaining;
+      m_hazard_m += best * hazard;
       if (best < 1.0) y1 = h_event > 0.0 ? step_once(m_y, t, h_event, k1) : m_y;
       accept(y1, t + h_event);
       t += h_event;
@@ -639,6 +666,7 @@ class PlantImpl {
 
   void accept(const Vec& y, double t) {
     m_y = y;
+    if (!m_stuck_m) m_hazard_m = 0.0;
     if (rigid()) m_y[W_G] = m_y[W_M];
     if (m_stuck_m) m_y[W_M] = 0.0;
     if (rigid() && m_stuck_m) m_y[W_G] = 0.0;
@@ -657,7 +685,9 @@ class PlantImpl {
         m_y[W_M] = 0.0;
         if (rigid()) m_y[W_G] = 0.0;
         drive_torques(m_y, t, Tm, Tg);
-        if (std::abs(Tm) <= motor_breakaway()) {
+        // On the regularised stick the body stops, and its breakaway hazard decides when it goes.
+        m_hazard_m = 0.0;
+        if (m_opt.smooth_stick || std::abs(Tm) <= motor_breakaway()) {
           m_stuck_m = true;
         } else {
           m_dir_m = sign_of(Tm);
@@ -674,7 +704,8 @@ class PlantImpl {
         break;
       case EventKind::motor_break:
         drive_torques(m_y, t, Tm, Tg);
-        if (std::abs(Tm) > motor_breakaway()) {
+        m_hazard_m = 0.0;
+        if (m_opt.smooth_stick ? Tm != 0.0 : std::abs(Tm) > motor_breakaway()) {
           m_stuck_m = false;
           m_dir_m = sign_of(Tm);
         }
@@ -818,6 +849,7 @@ class PlantImpl {
   Coupling m_coupling = Coupling::none;
   bool m_stuck_m = true;
   bool m_stuck_g = true;
+  double m_hazard_m = 0.0;  ///< breakaway hazard the stuck motor body gathered (smooth_stick)
   int m_dir_m = 0;
   int m_dir_g = 0;
   int m_slip_dir = 0;

@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# Friction first, from the data: a small 12 V motor alone (speed only, 2 kHz, 16384 counts/rev)
+# with a Coulomb level of 0.6 V of drive and a breakaway of 0.85 V, run on a coarse staircase
+# (3, 6, 9 V from rest: each start brackets the breakaway between 0 and its step) and slow
+# ramps through the breakaway both ways.
+#  - mcg-fit friction: the static level follows the ramps' narrow brackets, not the mean of
+#    the staircase's coarse ones, with a standard error that covers the truth;
+#  - mcg-fit gap, given the motor without friction: friction_levels is the diagnosis, its
+#    breakaway (Tc + Ts_excess) from the ramps, not locked onto the 3 V step's edge.
+# Args: TOOL_DIR SOURCE_DIR.
+set -euo pipefail
+tools=$1
+export PATH="$tools:$PATH"
+source "$(dirname "$0")/lib.sh"
+require_tools mcg-sim mcg-fit
+
+# motor_ini TS TC C1: the motor alone, its friction in N m (1 V of drive = 0.006 N m)
+motor_ini() {
+  printf '[motor]\nR_ohm = 2.5\nL_H = 0.001\nKt_Nm_A = 0.015\nKe_V_s_rad = 0.015\nJ_kg_m2 = 3e-6\n'
+  printf 'Ts_Nm = %s\nTc_Nm = %s\nvisc1_Nm_s_rad = %s\nvisc2_Nm_s2_rad2 = 0\nvisc3_Nm_s3_rad3 = 0\n' "$1" "$2" "$3"
+  printf '[drive]\nsupply_V = 12\n'
+}
+motor_ini 0.0051 0.0036 2e-6 >"$work/truth.ini"
+motor_ini 0 0 0 >"$work/given.ini"
+
+# program SEGMENTS: the inputs at 2 kHz, clutch 0, from "hold V SECONDS" and "ramp V0 V1 SECONDS"
+program() {
+  awk -v prog="$1" 'BEGIN {
+    dt = 0.0005; t = 0; print "# sample_period: 0.0005"; print "t,v,clutch,r_load"
+    n = split(prog, seg, ";")
+    for (s = 1; s <= n; ++s) {
+      split(seg[s], f, " ")
+      if (f[1] == "hold") { v0 = f[2]; v1 = f[2]; d = f[3] } else { v0 = f[2]; v1 = f[3]; d = f[4] }
+      rows = int(d / dt + 0.5)
+      for (k = 0; k < rows; ++k) { printf "%.10g,%.10g,0,inf\n", t, v0 + (v1 - v0) * k / rows; t += dt }
+    }
+  }'
+}
+program "hold 0 0.2;hold 3 0.5;hold 6 0.5;hold 9 0.5;hold 0 0.5;hold -3 0.5;hold -6 0.5;hold 0 0.5;\
+ramp 0 1.5 3;hold 0 0.5;ramp 0 -1.5 3;hold 0 0.5" |
+  mcg-sim --config "$work/truth.ini" --encoder --window 0.0005 --counts-per-rev 16384 --seed 1 >"$work/train.csv"
+program "hold 0 0.2;hold 4 0.5;hold 8 0.5;hold 0 0.5;hold -4 0.5;hold -8 0.5;hold 0 0.5;\
+ramp 0 1.2 2;hold 0 0.5;ramp 0 -1.2 2;hold 0 0.5" |
+  mcg-sim --config "$work/truth.ini" --encoder --window 0.0005 --counts-per-rev 16384 --seed 2 >"$work/validate.csv"
+
+# near NAME VALUE TRUTH TOL: VALUE within TOL (relative) of TRUTH
+near() {
+  if awk -v v="$2" -v w="$3" -v t="$4" 'BEGIN { d = v - w; if (d < 0) d = -d; exit !(d <= t * w) }'; then
+    pass
+    echo "ok   $1 = $2 (truth $3)"
+  else
+    fail "$1 = $2, truth $3 (tolerance $4)"
+  fi
+}
+
+mcg-fit friction --config "$work/given.ini" --order 1 "$work/train.csv" "$work/validate.csv" >"$work/friction.ini"
+ts=$(awk '/^Ts_Nm = / { print $3; exit }' "$work/friction.ini")
+ts_se=$(awk '/^Ts_Nm = / { print $6; exit }' "$work/friction.ini")
+near "friction: Ts_Nm" "$ts" 0.0051 0.03
+awk -v v="$ts" -v s="$ts_se" 'BEGIN { d = v - 0.0051; if (d < 0) d = -d; exit !(s > 0 && s < 0.00025 && d <= 2 * s) }' &&
+  pass || fail "friction: Ts_Nm = $ts +- $ts_se does not cover 0.0051 within two standard errors (or is vague)"
+
+mcg-fit gap --config "$work/given.ini" --train "$work/train.csv" --validate "$work/validate.csv" \
+  >"$work/gap.csv" 2>"$work/gap.err" || fail "gap: exit $?: $(tail -1 "$work/gap.err")"
+row=$(grep -v '^#' "$work/gap.csv" | sed -n 2p)
+if [[ "$(cut -d, -f1 <<<"$row")" != friction_levels* ]]; then
+  fail "gap: diagnosis $(cut -d, -f1 <<<"$row"), expected friction_levels"
+else
+  pass
+  tc=$(grep -o 'friction_levels.Tc_Nm=[^+ ]*' <<<"$row" | cut -d= -f2)
+  excess=$(grep -o 'friction_levels.Ts_excess_Nm=[^+ ]*' <<<"$row" | cut -d= -f2)
+  near "gap: friction_levels.Tc_Nm" "$tc" 0.0036 0.05
+  near "gap: breakaway Tc_Nm + Ts_excess_Nm" "$(awk -v a="$tc" -v b="$excess" 'BEGIN { print a + b }')" 0.0051 0.06
+fi
+finish gap_friction
