@@ -36,12 +36,14 @@ program() {
     }
   }'
 }
+# speed_only: the drive and the measured rpm of mcg-sim's output (no current, no true speed)
+speed_only() { awk -F, -v OFS=, '/^#/ { print; next } { print $1, $2, $3, $4, $6 }'; }
 program "hold 0 0.2;hold 3 0.5;hold 6 0.5;hold 9 0.5;hold 0 0.5;hold -3 0.5;hold -6 0.5;hold 0 0.5;\
 ramp 0 1.5 3;hold 0 0.5;ramp 0 -1.5 3;hold 0 0.5" |
-  mcg-sim --config "$work/truth.ini" --encoder --window 0.0005 --counts-per-rev 16384 --seed 1 >"$work/train.csv"
+  mcg-sim --config "$work/truth.ini" --encoder --window 0.0005 --counts-per-rev 16384 --seed 1 | speed_only >"$work/train.csv"
 program "hold 0 0.2;hold 4 0.5;hold 8 0.5;hold 0 0.5;hold -4 0.5;hold -8 0.5;hold 0 0.5;\
 ramp 0 1.2 2;hold 0 0.5;ramp 0 -1.2 2;hold 0 0.5" |
-  mcg-sim --config "$work/truth.ini" --encoder --window 0.0005 --counts-per-rev 16384 --seed 2 >"$work/validate.csv"
+  mcg-sim --config "$work/truth.ini" --encoder --window 0.0005 --counts-per-rev 16384 --seed 2 | speed_only >"$work/validate.csv"
 
 # near NAME VALUE TRUTH TOL: VALUE within TOL (relative) of TRUTH
 near() {

@@ -90,15 +90,17 @@ TEST(SmoothStick, TheRunMovesContinuouslyWithTheBreakaway) {
   EXPECT_LT(smooth_jump, 1.0);
 }
 
-// Started where a plain mean of the staircase's brackets puts it (2.9 V), the breakaway
-// fitted on the exact stick-slip stays on the 3 V step's edge; on the regularised stick it
-// comes to the ramp's 0.85 V, and the exact run at the fitted values matches the data.
+// Started just above the 3 V step that first moves the motor (where a plain mean of the
+// staircase's brackets puts the start), the breakaway fitted on the exact stick-slip is lost
+// (the run does not move with it until it crosses the step); on the regularised stick it
+// comes to the ramps' 0.85 V (0.005 V high: on a ramp of 0.5 V/s the regularised breakaway
+// comes 0.53 % of Ts early) with a finite standard error.
 TEST(SmoothStick, TheBreakawayFitDoesNotLockOntoAStep) {
   const model::Model truth = small_motor(0.6, 0.85);
   const table::Table data = measure(truth, staircase_and_ramp(), 41, false);
   const auto fit = [&](bool smooth_stick) {
     FitProblem problem;
-    problem.model = small_motor(0.6, 2.9);
+    problem.model = small_motor(0.6, 3.05);
     problem.runs.push_back(make_run(data, {"rpm"}, problem.model.params));
     problem.free = {"motor.Ts_Nm"};
     problem.sim.smooth_stick = smooth_stick;
@@ -106,13 +108,11 @@ TEST(SmoothStick, TheBreakawayFitDoesNotLockOntoAStep) {
   };
   const FitResult exact = fit(false);
   const FitResult smooth = fit(true);
-  const double Ts_exact_V = volts(truth, exact.model.params.motor.friction.Ts_Nm);
-  const double Ts_smooth_V = volts(truth, smooth.model.params.motor.friction.Ts_Nm);
-  EXPECT_GT(Ts_exact_V, 2.0);
-  EXPECT_NEAR(Ts_smooth_V, 0.85, 0.05);
+  EXPECT_GT(std::abs(volts(truth, exact.model.params.motor.friction.Ts_Nm) - 0.85), 0.5);
+  EXPECT_NEAR(volts(truth, smooth.model.params.motor.friction.Ts_Nm), 0.85, 0.01);
   const double se_V = volts(truth, smooth.nls.std_errors[0]);
-  EXPECT_GT(se_V, 1e-4);
-  EXPECT_LT(se_V, 0.05);
+  EXPECT_GT(se_V, 1e-6);
+  EXPECT_LT(se_V, 1e-3);
 }
 
 }  // namespace

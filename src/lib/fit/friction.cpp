@@ -285,17 +285,18 @@ StateFriction estimate(int clutch, const StateData& data, const FrictionOptions&
     // Each start from rest brackets the breakaway between the largest drive torque held and
     // the torque that moved the shaft: a uniform interval of variance width^2 / 12. The
     // intervals are combined by their precision, so a slow ramp's narrow bracket outweighs a
-    // staircase's coarse ones (a plain mean lands between the staircase's steps), and the
-    // error grows by the scatter beyond what the widths explain (Birge ratio), since the real
+    // staircase's coarse ones (a plain mean lands between the staircase's steps). The error is
+    // a typical bracket's, not shrunk by their number (every bracket shares the detection's
+    // bias), grown by the scatter beyond what the widths explain (Birge ratio), since the real
     // breakaway varies with the shaft's position.
     double weights = 0.0;
     double sum = 0.0;
-    double widest = 0.0;
-    for (const auto& e : data.breakaways) widest = std::max(widest, e.upper_Nm - e.lower_Nm);
-    // A floor on the width: a bracket of one sample's drive torque is not exact.
-    const double floor2 = std::pow(std::max(1e-3 * widest, 1e-12), 2);
-    const auto variance = [&](const Breakaway& e) {
-      return (std::pow(e.upper_Nm - e.lower_Nm, 2) + floor2) / 12.0;
+    // A bracket narrower than 5 % of its level is not more exact: a real breakaway varies that
+    // much with the shaft's position, and a start seen only after the detection lag brackets
+    // the torque after the step on both sides.
+    const auto variance = [](const Breakaway& e) {
+      const double floor = 0.05 * std::abs(0.5 * (e.lower_Nm + e.upper_Nm));
+      return (std::pow(e.upper_Nm - e.lower_Nm, 2) + floor * floor + 1e-300) / 12.0;
     };
     for (const auto& e : data.breakaways) {
       weights += 1.0 / variance(e);
@@ -307,7 +308,7 @@ StateFriction estimate(int clutch, const StateData& data, const FrictionOptions&
     const auto count = static_cast<double>(data.breakaways.size());
     const double birge2 = count > 1 ? std::max(1.0, chi2 / (count - 1.0)) : 1.0;
     out.total.value.Ts_Nm = mean;
-    out.total.se.Ts_Nm = std::sqrt(birge2 / weights);
+    out.total.se.Ts_Nm = std::sqrt(birge2 * count / weights);
   }
   out.windows = data.windows.size();
   out.breakaways = data.breakaways.size();
