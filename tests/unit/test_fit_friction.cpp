@@ -156,7 +156,8 @@ TEST(FitFrictionStatic, NarrowBracketsOutweighCoarseSteps) {
   p.hold(0.0, 0.3, 0).hold(4.0, 0.6, 0).hold(0.0, 0.6, 0).hold(6.0, 0.6, 0).hold(0.0, 0.6, 0);
   p.hold(-5.0, 0.6, 0).hold(0.0, 0.6, 0);
   const model::Model rig;
-  const std::vector<table::Table> runs{measure(rig, p.inputs, 11), measure(rig, friction_run(0, 0.6, 14.0), 12)};
+  const std::vector<table::Table> runs{measure(rig, p.inputs, 11),
+                                       measure(rig, friction_run(0, 0.6, 14.0), 12)};
   const auto result = fit_friction(runs, model::builtin_rig());
   ASSERT_TRUE(result.motor.has_value());
   EXPECT_EQ(result.states[0].breakaways, 5U);

@@ -1,14 +1,13 @@
 // The regularised stick (SimOptions::smooth_stick) against the exact stick-slip, and the
 // breakaway fitted on it: a small motor (Coulomb 0.6 V, breakaway 0.85 V of drive) on a
 // staircase whose first moving step is 3 V, and a slow ramp that shows the breakaway.
-#include "fit/greybox.hpp"
-
-#include "test_fit_support.hpp"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+
+#include "fit/greybox.hpp"
+#include "test_fit_support.hpp"
 
 namespace mcg::fit {
 namespace {

@@ -304,7 +304,9 @@ StateFriction estimate(int clutch, const StateData& data, const FrictionOptions&
     }
     const double mean = sum / weights;
     double chi2 = 0.0;
-    for (const auto& e : data.breakaways) chi2 += std::pow(0.5 * (e.lower_Nm + e.upper_Nm) - mean, 2) / variance(e);
+    for (const auto& e : data.breakaways) {
+      chi2 += std::pow(0.5 * (e.lower_Nm + e.upper_Nm) - mean, 2) / variance(e);
+    }
     const auto count = static_cast<double>(data.breakaways.size());
     const double birge2 = count > 1 ? std::max(1.0, chi2 / (count - 1.0)) : 1.0;
     out.total.value.Ts_Nm = mean;
