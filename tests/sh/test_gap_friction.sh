@@ -6,8 +6,10 @@
 #  - mcg-fit friction: the static level follows the ramps' narrow brackets, not the mean of
 #    the staircase's coarse ones, with a standard error that covers the truth;
 #  - mcg-fit gap, given the motor without friction: friction_levels is the diagnosis, its
-#    Coulomb and viscous levels within 10 % and 35 %. (Its static excess is still lost: the
-#    fit takes it to zero, on the regularised stick as on the exact one.)
+#    Coulomb and viscous levels within 5 % and its breakaway (Tc + Ts_excess) within 5 % of
+#    the ramps' 0.85 V, started from the data's brackets and fitted on the regularised stick
+#    (before: the excess went to zero, Tc 6 % high and c1 30 % low to make up for it). The
+#    budget is wide: the verdict, not the machine's load, is under test.
 # Args: TOOL_DIR SOURCE_DIR.
 set -euo pipefail
 tools=$1
@@ -73,7 +75,8 @@ else
   fail "friction: Ts_Nm = $ts +- $ts_se: 0.0051 not within two standard errors (or they are vague)"
 fi
 
-mcg-fit gap --config "$work/given.ini" --train "$work/train.csv" --validate "$work/validate.csv" \
+mcg-fit gap --budget 900 --config "$work/given.ini" \
+  --train "$work/train.csv" --validate "$work/validate.csv" \
   >"$work/gap.csv" 2>"$work/gap.err" || fail "gap: exit $?: $(tail -1 "$work/gap.err")"
 row=$(grep -v '^#' "$work/gap.csv" | sed -n 2p)
 if [[ "$(cut -d, -f1 <<<"$row")" != friction_levels* ]]; then
@@ -82,7 +85,10 @@ else
   pass
   tc=$(grep -o 'friction_levels.Tc_Nm=[^+ ]*' <<<"$row" | cut -d= -f2)
   c1=$(grep -o 'friction_levels.c1_Nm_s_rad=[^+ ]*' <<<"$row" | cut -d= -f2)
-  near "gap: friction_levels.Tc_Nm" "$tc" 0.0036 0.1
-  near "gap: friction_levels.c1_Nm_s_rad" "$c1" 2e-6 0.35
+  excess=$(grep -o 'friction_levels.Ts_excess_Nm=[^+ ]*' <<<"$row" | cut -d= -f2)
+  near "gap: friction_levels.Tc_Nm" "$tc" 0.0036 0.05
+  near "gap: friction_levels.c1_Nm_s_rad" "$c1" 2e-6 0.05
+  breakaway=$(awk -v a="$tc" -v b="$excess" 'BEGIN { print a + b }')
+  near "gap: breakaway Tc_Nm + Ts_excess_Nm" "$breakaway" 0.0051 0.05
 fi
 finish gap_friction

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fit/gap_parts.hpp"
 #include "fit/greybox.hpp"
 #include "test_fit_support.hpp"
 
@@ -112,6 +113,22 @@ TEST(SmoothStick, TheBreakawayFitDoesNotLockOntoAStep) {
   const double se_V = volts(truth, smooth.nls.std_errors[0]);
   EXPECT_GT(se_V, 1e-6);
   EXPECT_LT(se_V, 1e-3);
+}
+
+// The gap search starts friction_levels where the data put it: given the motor without any
+// friction, the static excess is the data's Ts - Tc (0.25 V of drive), not net of brackets the
+// frictionless model's coasting shaft makes at the staircase's steps (which took it to its floor).
+TEST(SmoothStick, TheStaticExcessStartsFromTheData) {
+  const table::Table data = measure(small_motor(0.6, 0.85), staircase_and_ramp(), 42, false);
+  model::Model given = small_motor(0.0, 0.0);
+  given.params.motor.friction.viscous[0] = 0.0;
+  const std::vector<fit::Run> runs{make_run(data, {"rpm"}, given.params)};
+  const auto starts = gap_detail::data_friction_starts(given, runs);
+  ASSERT_EQ(starts.count("friction_levels"), 1U);
+  const auto& levels = starts.at("friction_levels");
+  EXPECT_NEAR(volts(given, levels[0]), 0.6, 0.03);
+  EXPECT_NEAR(volts(given, levels[1]), 0.25, 0.03);
+  EXPECT_NEAR(levels[2], 2e-6, 2e-7);
 }
 
 }  // namespace

@@ -432,7 +432,14 @@ std::map<std::string, std::vector<double>> data_friction_starts(const model::Mod
     return std::clamp(std::max(v, floor), it->lower, it->upper);
   };
   const double tc = within("friction_levels", "Tc_Nm", (*seen)[0] - (*own)[0], 1e-4 * stall_Nm);
-  out["friction_levels"] = {tc, within("friction_levels", "Ts_excess_Nm", (*seen)[1] - (*own)[1] - tc, 1e-4 * stall_Nm),
+  // The static excess the data show beyond the model's own: not through the model's simulated
+  // starts from rest, which a model without stiction lacks (its shaft only coasts through zero,
+  // and those brackets reach the next drive level).
+  const model::Friction& own_f = p.motor.friction;
+  const double own_excess = std::max(0.0, own_f.Ts_Nm - own_f.Tc_Nm);
+  out["friction_levels"] = {tc,
+                            within("friction_levels", "Ts_excess_Nm", (*seen)[1] - (*seen)[0] - own_excess,
+                                   1e-4 * stall_Nm),
                             within("friction_levels", "c1_Nm_s_rad", (*seen)[2] - (*own)[2],
                                    1e-4 * stall_Nm / no_load_rad_s)};
   if (both) {
