@@ -437,11 +437,9 @@ std::map<std::string, std::vector<double>> data_friction_starts(const model::Mod
   // and those brackets reach the next drive level).
   const model::Friction& own_f = p.motor.friction;
   const double own_excess = std::max(0.0, own_f.Ts_Nm - own_f.Tc_Nm);
-  out["friction_levels"] = {tc,
-                            within("friction_levels", "Ts_excess_Nm", (*seen)[1] - (*seen)[0] - own_excess,
-                                   1e-4 * stall_Nm),
-                            within("friction_levels", "c1_Nm_s_rad", (*seen)[2] - (*own)[2],
-                                   1e-4 * stall_Nm / no_load_rad_s)};
+  out["friction_levels"] = {
+      tc, within("friction_levels", "Ts_excess_Nm", (*seen)[1] - (*seen)[0] - own_excess, 1e-4 * stall_Nm),
+      within("friction_levels", "c1_Nm_s_rad", (*seen)[2] - (*own)[2], 1e-4 * stall_Nm / no_load_rad_s)};
   if (both) {
     out["friction_asymmetry"] = {within("friction_asymmetry", "dT_Nm", (*seen)[3] - (*own)[3], -1e300)};
   }
