@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -551,6 +552,34 @@ TEST(GapFrictionStart, LevelsAndAsymmetryComeFromTheData) {
                                                                                       model::builtin_rig(), 0.6).train);
   ASSERT_EQ(none.count("friction_levels"), 1U);
   EXPECT_LT(none.at("friction_levels")[0], 3e-4);
+}
+
+// The early rejection skips the joint refit of an effect that, fitted alone, removes almost
+// nothing of the training cost: the search gives the diagnosis, parameters and score of the
+// search that refits every candidate (a withheld dead time, as in test_gap_threads.sh).
+TEST(GapSearch, EarlyRejectionKeepsTheDiagnosisAndItsParameters) {
+  const std::vector<std::string> effect{"dead_time:tau_d_s=0.004"};
+  const table::Table train = measure(prbs(1.5, 6.0, 3.0, 5, 0, k_inf), effect, 1, "train.csv");
+  const table::Table validate = measure(steps(1.5, 3.0, 12.0, 2, 0, false), effect, 2, "validate.csv");
+  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+  GapSettings settings;
+  settings.threads = 2;
+  const GapReport fast = diagnose_gap(model::Model{}, data, settings);
+  settings.early_rejection = false;
+  const GapReport slow = diagnose_gap(model::Model{}, data, settings);
+  const auto rejected = [](const GapReport& r) {
+    return std::count_if(r.candidates.begin(), r.candidates.end(),
+                         [](const GapCandidate& c) { return c.status.starts_with("rejected early"); });
+  };
+  EXPECT_GT(rejected(fast), 0);
+  EXPECT_EQ(rejected(slow), 0);
+  EXPECT_EQ(fast.diagnosis, "dead_time");
+  EXPECT_EQ(fast.diagnosis, slow.diagnosis);
+  const GapCandidate& a = fast.candidates.front();
+  const GapCandidate& b = slow.candidates.front();
+  EXPECT_EQ(a.free, b.free);
+  EXPECT_EQ(a.values, b.values);
+  EXPECT_EQ(a.score, b.score);
 }
 
 }  // namespace
