@@ -84,8 +84,8 @@ struct GapSettings {
   std::map<std::string, std::pair<double, double>> bounds;  ///< [bounds] of the INI
   std::function<void(const std::string&)> progress;  ///< progress lines (none when empty)
   bool discrepancy = false;            ///< fit the discrepancy whatever the verdict
-  /// Reject a candidate whose added effect, fitted alone, removes almost nothing of the
-  /// training cost before its joint refit (false: every candidate is refitted jointly).
+  /// Reject a mixture whose added effect, fitted alone on the model it extends, removes almost
+  /// nothing of its training cost before the joint refit (false: every one is refitted jointly).
   bool early_rejection = true;
   /// When the time budget runs out: fits under way stop at their next iteration, candidates
   /// not started are reported as not fitted, and the report is marked partial.

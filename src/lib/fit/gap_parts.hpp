@@ -20,10 +20,10 @@ namespace mcg::fit::gap_detail {
 inline constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 /// Status of a candidate the time budget cut short (the start of its status text).
 inline constexpr std::string_view k_out_of_time = "time budget spent";
-/// Status of a candidate rejected early (the start of its status text): fitted alone, its
-/// added effect (not a friction effect) lowered the training cost of the model it extends by
-/// less than k_gap_reject_gain of it, so the joint refit with the nominal scales was not run;
-/// the candidate is never significant and never joins a mixture.
+/// Status of a mixture rejected early (the start of its status text): the effect (not a
+/// friction effect) it adds to the current best model, fitted alone, lowered that model's
+/// training cost by less than k_gap_reject_gain of it, so the joint refit was not run and the
+/// mixture is never significant.
 inline constexpr std::string_view k_rejected_early = "rejected early";
 /// Share of the training cost an added effect, fitted alone, must remove to be refitted jointly
 /// (a tenth of the smallest share a significant candidate removes from a score near the noise).

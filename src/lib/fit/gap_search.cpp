@@ -49,7 +49,7 @@ bool is_friction(std::string_view name) {
   return name.starts_with("friction_") || name == "stribeck";
 }
 
-/// True when the candidate was rejected early (see k_rejected_early).
+/// True when the mixture was rejected early (see k_rejected_early).
 bool rejected(const GapCandidate& c) { return c.status.starts_with(k_rejected_early); }
 
 /// The candidate effect `name`, or nullptr.
@@ -104,6 +104,9 @@ struct Job {
   /// Per effect, a starting point from the data (values of its plan's free keys), tried before
   /// its grid.
   std::map<std::string, std::vector<double>> data_starts;
+  /// A mixture extending the current best model by one effect: rejected early when that
+  /// effect, fitted alone on it, removes almost nothing (k_gap_reject_gain).
+  bool extension = false;
 };
 
 void add_effect(model::Model& m, std::string_view name) {
@@ -206,7 +209,8 @@ model::Model grid_start(const std::vector<model::Model>& bases, const model::Eff
     if (std::chrono::steady_clock::now() < deadline) costs[k] = training_cost(trials[k], runs);
   });
   const auto best = std::min_element(costs.begin(), costs.end());
-  return std::isfinite(*best) ? std::move(trials[static_cast<std::size_t>(best - costs.begin())]) : bases.front();
+  if (!std::isfinite(*best)) return bases.front();
+  return std::move(trials[static_cast<std::size_t>(best - costs.begin())]);
 }
 
 /// The nominal scales a gauge is pinned on, most reliably measured first.
@@ -298,15 +302,17 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     problem.model = start;
     problem.free = job.stage1_free;
     problem.nls.max_evaluations = budget(job.stage1_free.size());
-    // An effect that, fitted alone beside the refitted nominal model (or the mixture it would
-    // extend), removes almost nothing of that model's training cost cannot carry a significant
-    // gain: the joint refit is skipped. Not friction: a model's own friction levels, refitted
-    // through the nominal scales, may hold what the effect takes over only jointly.
-    const bool may_reject =
-        settings.early_rejection && std::none_of(job.stage1_free.begin(), job.stage1_free.end(),
-                                                 [](const std::string& key) {
-                                                   return is_friction(key.substr(0, key.find('.')));
-                                                 });
+    // An extension whose added effect, fitted alone on the current best model, removes almost
+    // nothing of its training cost cannot beat it: the joint refit is skipped. Singles are
+    // always refitted jointly (a weak effect's single fit, distorted by a stronger one it cannot
+    // explain, still ranks it for the mixtures), and so is friction: a model's own friction
+    // levels, refitted through the nominal scales, may hold what the effect takes over only
+    // jointly.
+    const auto friction_key = [](const std::string& key) {
+      return is_friction(key.substr(0, key.find('.')));
+    };
+    const bool may_reject = settings.early_rejection && job.extension &&
+                            std::none_of(job.stage1_free.begin(), job.stage1_free.end(), friction_key);
     double before = 0.0;
     if (may_reject) {
       model::Model without = start;
@@ -691,7 +697,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   parallel::for_each(singles.size(), 0, [&](std::size_t k) {
     GapCandidate& c = singles[k];
     c.fpe = fpe(c.score, c.free.size());
-    c.significant = gap && !rejected(c) && c.determined() && improves(c.score, ref_score, outputs) &&
+    c.significant = gap && c.determined() && improves(c.score, ref_score, outputs) &&
                     carries_weight(c, c.name, data, floors, outputs);
   });
   std::sort(singles.begin(), singles.end(), [](const auto& a, const auto& b) { return a.fpe < b.fpe; });
@@ -700,10 +706,12 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   // a time from a pool of the singles that did best (significant or not: a weaker effect's
   // single fit is distorted by the stronger one it cannot explain), each extension refitted
   // jointly; the best extension joins when it is significant against the model it extends,
-  // up to k_gap_max_mixture effects. Every extension tried is reported.
+  // up to k_gap_max_mixture effects; an extension whose added effect alone removes almost
+  // nothing of the current model's training cost is rejected before its joint refit. Every
+  // extension tried is reported.
   std::vector<const GapCandidate*> pool;
   for (const auto& c : singles) {
-    if (c.evaluated && !rejected(c) && std::isfinite(c.score) && c.score < before.score &&
+    if (c.evaluated && std::isfinite(c.score) && c.score < before.score &&
         pool.size() < settings.pool_effects) {
       pool.push_back(&c);
     }
@@ -736,6 +744,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         // from the model as given with every member at its single-fit values.
         Job job{name, members, current.model, mismatch_free(settings.fixed, model.params, has_current, members), {},
                 10,   {},      {base}, {}};
+        job.extension = true;
         for (const auto& f : current.free) {
           if (!f.starts_with("param_mismatch.")) job.free.push_back(f);
         }
@@ -758,8 +767,8 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       for (auto& c : fitted) c.fpe = fpe(c.score, c.free.size());
       std::sort(fitted.begin(), fitted.end(), [](const auto& x, const auto& y) { return x.fpe < y.fpe; });
       for (auto& c : fitted) {
-        c.significant = c.evaluated && !rejected(c) && c.determined() && improves(c.score, current.score, outputs) &&
-                        improves(c.score, ref_score, outputs);
+        c.significant = c.evaluated && !rejected(c) && c.determined() &&
+                        improves(c.score, current.score, outputs) && improves(c.score, ref_score, outputs);
       }
       // The best extension's gain must come from the effect it adds, not from the nominal
       // values refitted beside it.
