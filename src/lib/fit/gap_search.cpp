@@ -687,8 +687,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       if (settings.progress) settings.progress("refitting param_mismatch from a better start");
       ++total;
       Job again{"param_mismatch", {}, start, mismatch_free(settings.fixed, model.params, has_current), {}, 10, {}, {}, {}};
-      GapCandidate refit =
-          std::move(run_jobs({again}, data, floors, settings, {}, done, total).front());
+      GapCandidate refit = std::move(run_jobs({again}, data, floors, settings, {}, done, total).front());
       refit.fpe = fpe(refit.score, refit.free.size());
       if (refit.evaluated && training_cost(refit.model, data.train) < pm_cost) pm = std::move(refit);
     }
@@ -762,8 +761,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       }
       if (round.empty()) break;
       total = done + round.size();
-      std::vector<GapCandidate> fitted =
-          run_jobs(round, data, floors, settings, orders, done, total);
+      std::vector<GapCandidate> fitted = run_jobs(round, data, floors, settings, orders, done, total);
       for (auto& c : fitted) c.fpe = fpe(c.score, c.free.size());
       std::sort(fitted.begin(), fitted.end(), [](const auto& x, const auto& y) { return x.fpe < y.fpe; });
       for (auto& c : fitted) {
