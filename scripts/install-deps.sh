@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Installs what mcg needs from Debian 12's packages, if anything is missing. Run as root.
+# python3-scipy is the LSODA peer of scripts/bench.d/sim_scipy.sh.
 # --fuzz: also clang 14 and its libFuzzer runtime, for the MCG_FUZZ build (scripts/fuzz.sh).
 set -euo pipefail
 packages=(
@@ -9,6 +10,7 @@ packages=(
   sdcc sdcc-ucsim
   gnuplot-x11 mandoc groff-base socat parallel
   libncurses-dev tmux xvfb x11-apps netpbm
+  python3-scipy
 )
 if [ "${1:-}" = --fuzz ]; then
   packages+=(clang-14 libclang-rt-14-dev)

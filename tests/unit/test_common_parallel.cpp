@@ -1,9 +1,10 @@
-// The thread pool: every job runs once, the thread count is honoured, and any exception a
-// job throws reaches the caller.
+// The thread pool: every job runs once, the thread count is honoured, any exception a job
+// throws reaches the caller, and work spread inside a job shares the pool's threads.
 #include <gtest/gtest.h>
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <mutex>
 #include <set>
 #include <stdexcept>
@@ -63,6 +64,73 @@ TEST(CommonParallel, AnyExceptionReachesTheCallerAndStopsNewJobs) {
                         }),
                std::exception);
   EXPECT_LT(started.load(), 10000U);
+}
+
+/// Thread ids seen by jobs, and a wait until `count` distinct ones have run a job (10 s at
+/// most: a pool that never lends a second thread fails instead of hanging).
+struct Threads {
+  std::mutex mutex;
+  std::condition_variable seen;
+  std::set<std::thread::id> ids;
+  void enter() {
+    const std::lock_guard lock(mutex);
+    ids.insert(std::this_thread::get_id());
+    seen.notify_all();
+  }
+  void wait_for(std::size_t count) {
+    std::unique_lock lock(mutex);
+    seen.wait_for(lock, std::chrono::seconds(10), [&] { return ids.size() >= count; });
+  }
+};
+
+TEST(CommonParallel, NestedWorkSharesThePoolsThreadsAndNoneIdles) {
+  const Pool pool(2);
+  ASSERT_EQ(pool.size(), 2U);
+  Threads all;
+  Threads inner;
+  std::atomic<int> leaves{0};
+  // Two outer jobs, the first done at once: the second's inner jobs must get both threads
+  // (each waits until two threads have run inner jobs), and nothing makes a third thread.
+  for_each(2, 0, [&](std::size_t outer) {
+    all.enter();
+    if (outer == 0) return;
+    for_each(6, 0, [&](std::size_t) {
+      all.enter();
+      inner.enter();
+      inner.wait_for(2);
+      for_each(3, 0, [&](std::size_t) {
+        all.enter();
+        ++leaves;
+      });
+    });
+  });
+  EXPECT_EQ(inner.ids.size(), 2U);
+  EXPECT_EQ(all.ids.size(), 2U);
+  EXPECT_EQ(leaves.load(), 18);
+}
+
+TEST(CommonParallel, InsideAPoolOneThreadStaysInTheCaller) {
+  const Pool pool(2);
+  for_each(2, 0, [&](std::size_t) {
+    const auto caller = std::this_thread::get_id();
+    for_each(20, 1, [&](std::size_t) { EXPECT_EQ(std::this_thread::get_id(), caller); });
+  });
+}
+
+TEST(CommonParallel, AnErrorDeepInsideAPoolReachesTheOutermostCaller) {
+  const Pool pool(2);
+  EXPECT_EQ(test::error_of([] {
+              for_each(4, 0, [](std::size_t) {
+                for_each(30, 0, [](std::size_t k) {
+                  if (k == 11) fail("inner job {} failed", k);
+                });
+              });
+            }),
+            "inner job 11 failed");
+  // The pool is still usable afterwards.
+  std::atomic<int> count{0};
+  for_each(10, 0, [&](std::size_t) { ++count; });
+  EXPECT_EQ(count.load(), 10);
 }
 
 TEST(CommonParallel, NothingToDo) {

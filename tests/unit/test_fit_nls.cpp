@@ -60,6 +60,31 @@ TEST(FitNls, LogParameterRecoversTimeConstant) {
   EXPECT_LT(result.cost, 1e-20);
 }
 
+// A time budget interrupts the solver between iterations: one already spent returns the start
+// untouched, one that runs out after two iterations returns the result of those two.
+TEST(FitNls, StopInterruptsBeforeTheNextIteration) {
+  const int n = 100;
+  Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(n, 0.0, 0.06);
+  const Eigen::VectorXd y = 3.0 * (-t.array() / 0.0147).exp();
+  const auto residual = [&](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
+    r = p[0] * (-t.array() / p[1]).exp() - y.array();
+  };
+  const std::vector<ParameterSpec> specs{{"A", 1.0, Transform::log}, {"tau_s", 0.1, Transform::log}};
+  NlsOptions options;
+  options.stop = [] { return true; };
+  const auto spent = least_squares(specs, n, residual, options);
+  EXPECT_FALSE(spent.converged);
+  EXPECT_EQ(spent.reason, "stopped early (time budget spent)");
+  EXPECT_EQ(spent.values[0], 1.0);
+  EXPECT_EQ(spent.values[1], 0.1);
+  int asked = 0;
+  options.stop = [&] { return ++asked > 2; };
+  const auto two = least_squares(specs, n, residual, options);
+  EXPECT_FALSE(two.converged);
+  EXPECT_EQ(two.iterations, spent.iterations + 2);  // Eigen counts from 1
+  EXPECT_NE(two.values[1], 0.1);
+}
+
 TEST(FitNls, BudgetSpentIsNotConvergence) {
   NlsOptions options;
   options.max_evaluations = 3;

@@ -7,6 +7,7 @@
 
 #include "common/demand.hpp"
 #include "common/error.hpp"
+#include "common/parallel.hpp"
 #include "common/tool.hpp"
 #include "config/ini.hpp"
 #include "fit/discrepancy.hpp"
@@ -149,6 +150,8 @@ void seed_catalog(GapReport& report, const GapData& data, const GapSettings& set
 GapReport diagnose_gap(const model::Model& model, const GapData& data, const GapSettings& settings) {
   MCG_DEMAND(!data.train.empty() && !data.validate.empty());
   check_excluded(settings.excluded);
+  // One pool for the whole diagnosis: candidates, their grid points, Jacobian columns and runs.
+  const parallel::Pool pool(settings.threads);
   GapReport report;
   report.split_note = data.split_note;
   report.validation_samples = validation_count(data);

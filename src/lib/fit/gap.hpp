@@ -73,7 +73,7 @@ inline constexpr std::size_t k_gap_max_mixture = 3;
 
 /// How the diagnosis runs.
 struct GapSettings {
-  unsigned threads = 0;                ///< candidates fitted at once; 0 = all cores
+  unsigned threads = 0;                ///< threads of the diagnosis' one pool; 0 = all cores
   std::size_t pool_effects = 4;        ///< mixtures are formed from this many best single effects
   int max_evaluations = 0;             ///< simulation budget per candidate fit; 0 = by size
   /// Nominal parameters pinned at measured values (--fix): the refit leaves the scale that
@@ -84,6 +84,9 @@ struct GapSettings {
   std::map<std::string, std::pair<double, double>> bounds;  ///< [bounds] of the INI
   std::function<void(const std::string&)> progress;  ///< progress lines (none when empty)
   bool discrepancy = false;            ///< fit the discrepancy whatever the verdict
+  /// Reject a mixture whose added effect, fitted alone on the model it extends, removes almost
+  /// nothing of its training cost before the joint refit (false: every one is refitted jointly).
+  bool early_rejection = true;
   /// When the time budget runs out: fits under way stop at their next iteration, candidates
   /// not started are reported as not fitted, and the report is marked partial.
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();

@@ -20,6 +20,14 @@ namespace mcg::fit::gap_detail {
 inline constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 /// Status of a candidate the time budget cut short (the start of its status text).
 inline constexpr std::string_view k_out_of_time = "time budget spent";
+/// Status of a mixture rejected early (the start of its status text): the effect (not a
+/// friction effect) it adds to the current best model, fitted alone, lowered that model's
+/// training cost by less than k_gap_reject_gain of it, so the joint refit was not run and the
+/// mixture is never significant.
+inline constexpr std::string_view k_rejected_early = "rejected early";
+/// Share of the training cost an added effect, fitted alone, must remove to be refitted jointly
+/// (a tenth of the smallest share a significant candidate removes from a score near the noise).
+inline constexpr double k_gap_reject_gain = 0.01;
 
 // --- data ------------------------------------------------------------------------------
 

@@ -49,6 +49,9 @@ bool is_friction(std::string_view name) {
   return name.starts_with("friction_") || name == "stribeck";
 }
 
+/// True when the mixture was rejected early (see k_rejected_early).
+bool rejected(const GapCandidate& c) { return c.status.starts_with(k_rejected_early); }
+
 /// The candidate effect `name`, or nullptr.
 const model::EffectSpec* find_plan(std::string_view name) {
   const model::EffectSpec* spec = model::find_effect(name);
@@ -101,6 +104,9 @@ struct Job {
   /// Per effect, a starting point from the data (values of its plan's free keys), tried before
   /// its grid.
   std::map<std::string, std::vector<double>> data_starts;
+  /// A mixture extending the current best model by one effect: rejected early when that
+  /// effect, fitted alone on it, removes almost nothing (k_gap_reject_gain).
+  bool extension = false;
 };
 
 void add_effect(model::Model& m, std::string_view name) {
@@ -176,39 +182,35 @@ model::Model grid_start(const std::vector<model::Model>& bases, const model::Eff
   }
   std::size_t points = 1;
   for (const auto& a : axes) points *= a.size();
-  double best = std::numeric_limits<double>::infinity();
-  model::Model best_model = bases.front();
-  // The point the data put the effect at (data_friction_starts) is tried first, on each base.
+  // The trials in the order they are ranked: the point the data put the effect at
+  // (data_friction_starts) on each base first, then the grid on each base; the first of equal
+  // costs wins, so the choice does not depend on which thread scored what.
+  std::vector<model::Model> trials;
   if (data_point != nullptr) {
     MCG_DEMAND(data_point->size() == plan.free.size());
     for (const model::Model& base : bases) {
-      model::Model trial = base;
+      model::Model& trial = trials.emplace_back(base);
       for (std::size_t k = 0; k < plan.free.size(); ++k)
         model::set_parameter(trial, effect.name + "." + plan.free[k], (*data_point)[k]);
-      const double cost = training_cost(trial, runs);
-      if (cost < best) {
-        best = cost;
-        best_model = std::move(trial);
-      }
     }
   }
   for (const model::Model& base : bases) {
     for (std::size_t p = 0; p < points; ++p) {
-      if (std::chrono::steady_clock::now() >= deadline) return best_model;
-      model::Model trial = base;
+      model::Model& trial = trials.emplace_back(base);
       std::size_t rest = p;
       for (std::size_t k = 0; k < keys.size(); ++k) {
         model::set_parameter(trial, effect.name + "." + keys[k], axes[k][rest % axes[k].size()]);
         rest /= axes[k].size();
       }
-      const double cost = training_cost(trial, runs);
-      if (cost < best) {
-        best = cost;
-        best_model = std::move(trial);
-      }
     }
   }
-  return best_model;
+  std::vector<double> costs(trials.size(), std::numeric_limits<double>::infinity());
+  parallel::for_each(trials.size(), 0, [&](std::size_t k) {
+    if (std::chrono::steady_clock::now() < deadline) costs[k] = training_cost(trials[k], runs);
+  });
+  const auto best = std::min_element(costs.begin(), costs.end());
+  if (!std::isfinite(*best)) return bases.front();
+  return std::move(trials[static_cast<std::size_t>(best - costs.begin())]);
 }
 
 /// The nominal scales a gauge is pinned on, most reliably measured first.
@@ -229,8 +231,7 @@ bool gauge_trade(const std::vector<FitFlag>& flags, std::string_view key) {
 }
 
 GapCandidate run_job(const Job& job, const GapData& data, const std::vector<OutputFloor>& floors,
-                     const GapSettings& settings, unsigned jacobian_threads,
-                     const std::vector<double>& orders) {
+                     const GapSettings& settings, const std::vector<double>& orders) {
   GapCandidate c;
   c.name = job.name;
   c.effects = job.effects;
@@ -259,7 +260,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   }
   FitProblem problem;
   problem.runs = data.train;
-  problem.nls.threads = jacobian_threads;
+  problem.nls.threads = 0;  // the search's pool: columns and runs beside the other candidates
   problem.nls.xtol = 1e-4;
   problem.nls.ftol = 1e-5;
   problem.nls.check_smoothness = false;
@@ -277,18 +278,6 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     return settings.max_evaluations > 0 ? settings.max_evaluations
                                         : job.evaluations_per_parameter * static_cast<int>(free + 1);
   };
-  // Stage 1: the added effect alone on the refitted nominal model (cheap, and it brings the
-  // effect into its basin before the nominal parameters may move to absorb it).
-  if (!job.stage1_free.empty()) {
-    problem.model = start;
-    problem.free = job.stage1_free;
-    problem.nls.max_evaluations = budget(job.stage1_free.size());
-    start = fit_model(problem).model;
-  }
-  problem.model = start;
-  problem.free = job.free;
-  problem.nls.max_evaluations = budget(job.free.size());
-  FitResult fit = fit_model(problem);
   const auto take = [&](const FitResult& r, const std::vector<std::string>& free) {
     c.model = r.model;
     c.free = free;
@@ -301,6 +290,58 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     c.warnings = r.warnings;
     c.flags = r.flags;
   };
+  const auto score = [&] {
+    for (const auto& e : job.effects) {
+      if (const model::EffectSpec* plan = find_plan(e)) c.added_parameters += plan->plan.free.size();
+    }
+    c.evaluated = true;
+    const Evaluation ev = evaluate(c.model, data, floors);
+    c.score = ev.score;
+    c.rms = ev.rms;
+    c.train_rms_rpm = training_rms_rpm(c.model, data.train);
+  };
+  // Stage 1: the added effect alone on the refitted nominal model (cheap, and it brings the
+  // effect into its basin before the nominal parameters may move to absorb it).
+  if (!job.stage1_free.empty()) {
+    problem.model = start;
+    problem.free = job.stage1_free;
+    problem.nls.max_evaluations = budget(job.stage1_free.size());
+    // An extension whose added effect, fitted alone on the current best model, removes almost
+    // nothing of its training cost cannot beat it: the joint refit is skipped. Singles are
+    // always refitted jointly (a weak effect's single fit, distorted by a stronger one it cannot
+    // explain, still ranks it for the mixtures), and so is friction: a model's own friction
+    // levels, refitted through the nominal scales, may hold what the effect takes over only
+    // jointly.
+    const auto friction_key = [](const std::string& key) {
+      return is_friction(key.substr(0, key.find('.')));
+    };
+    const bool may_reject = settings.early_rejection && job.extension &&
+                            std::none_of(job.stage1_free.begin(), job.stage1_free.end(), friction_key);
+    double before = 0.0;
+    if (may_reject) {
+      model::Model without = start;
+      std::erase_if(without.effects, [&](const model::Effect& e) {
+        return std::any_of(job.stage1_free.begin(), job.stage1_free.end(),
+                           [&](const std::string& key) { return key.starts_with(e.name + "."); });
+      });
+      before = training_cost(without, data.train);
+    }
+    const FitResult alone = fit_model(problem);
+    start = alone.model;
+    const double gain = before > 0.0 ? (before - alone.nls.cost) / before : 1.0;
+    if (may_reject && !(gain >= k_gap_reject_gain) && std::isfinite(before) &&
+        std::chrono::steady_clock::now() < settings.deadline) {
+      take(alone, job.stage1_free);
+      c.status = fmt::format("{}: fitted alone it removes {:.2g} % of the training cost", k_rejected_early,
+                             100.0 * std::max(gain, 0.0));
+      score();
+      return c;
+    }
+  }
+  problem.model = start;
+  problem.free = job.free;
+  problem.nls.max_evaluations = budget(job.free.size());
+  FitResult fit = fit_model(problem);
   take(fit, job.free);
   // A gauge the data cannot fix: an added effect that trades exactly against the nominal
   // scales (a drive dead band wider than one drive level leaves the volt unmeasured, so Kt, R,
@@ -310,7 +351,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   std::vector<std::string> pinned;
   for (const std::string_view pin : k_gauge_pins) {
     const std::string key(pin);
-    if (c.determined() || !gauge_trade(c.flags, key)) continue;
+    if (c.determined() || !gauge_trade(c.flags, key) || std::chrono::steady_clock::now() >= settings.deadline)
+      continue;
     std::vector<std::string> free = c.free;
     std::erase(free, key);
     problem.model = c.model;
@@ -321,9 +363,6 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     take(fit, free);
     pinned.push_back(key);
   }
-  for (const auto& e : job.effects) {
-    if (const model::EffectSpec* plan = find_plan(e)) c.added_parameters += plan->plan.free.size();
-  }
   const bool out_of_time = settings.deadline != std::chrono::steady_clock::time_point::max() &&
                            std::chrono::steady_clock::now() >= settings.deadline;
   c.status = out_of_time         ? std::string(k_out_of_time) + "; fit stopped early"
@@ -331,24 +370,18 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
                                  : "fitted; budget spent";
   if (!pinned.empty())
     c.status += fmt::format("; {} pinned at the given value (a gauge)", fmt::join(pinned, " "));
-  c.evaluated = true;
-  const Evaluation ev = evaluate(c.model, data, floors);
-  c.score = ev.score;
-  c.rms = ev.rms;
-  c.train_rms_rpm = training_rms_rpm(c.model, data.train);
+  score();
   return c;
 }
 
-/// Runs the jobs on `threads` workers; each result lands at its job's index.
+/// Runs the jobs on the search's pool (their Jacobian columns and runs share it); each result
+/// lands at its job's index.
 std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& data,
                                    const std::vector<OutputFloor>& floors, const GapSettings& settings,
-                                   unsigned threads, const std::vector<double>& orders, std::size_t& done,
-                                   std::size_t total) {
+                                   const std::vector<double>& orders, std::size_t& done, std::size_t total) {
   std::vector<GapCandidate> out(jobs.size());
   std::mutex mutex;
-  const unsigned workers = parallel::worker_count(threads, jobs.size());
-  const unsigned jac_threads = std::max(1U, threads / workers);
-  parallel::for_each(jobs.size(), workers, [&](std::size_t k) {
+  parallel::for_each(jobs.size(), 0, [&](std::size_t k) {
     if (std::chrono::steady_clock::now() >= settings.deadline) {
       GapCandidate& c = out[k];
       c.name = jobs[k].name;
@@ -362,7 +395,7 @@ std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& 
       return;
     }
     try {
-      out[k] = run_job(jobs[k], data, floors, settings, jac_threads, orders);
+      out[k] = run_job(jobs[k], data, floors, settings, orders);
     } catch (const Error& e) {
       // A candidate the data cannot fit is reported as such; the others go on.
       GapCandidate& c = out[k];
@@ -571,7 +604,6 @@ double training_rms_rpm(const model::Model& model, const std::vector<Run>& runs)
 Candidates search_candidates(const model::Model& model, const GapData& data,
                              const std::vector<OutputFloor>& floors, const Evaluation& before, bool gap,
                              const GapSettings& settings) {
-  const unsigned threads = parallel::worker_count(settings.threads, std::numeric_limits<std::size_t>::max());
   const std::size_t outputs = floors.size();
   const bool has_current = measures_current(data.train);
   const auto n_val = static_cast<double>(validation_count(data) * outputs);
@@ -596,7 +628,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   add_effect(base, "param_mismatch");
   Job pm_job{"param_mismatch", {}, base, mismatch_free(settings.fixed, model.params, has_current), {}, 20, {}, {}, {}};
   if (settings.progress) settings.progress("fitting param_mismatch (nominal parameters)");
-  std::vector<GapCandidate> pm_result = run_jobs({pm_job}, data, floors, settings, threads, {}, done, total);
+  std::vector<GapCandidate> pm_result = run_jobs({pm_job}, data, floors, settings, {}, done, total);
   GapCandidate pm = std::move(pm_result.front());
   pm.fpe = fpe(pm.score, pm.free.size());
 
@@ -637,7 +669,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   // Friction is what every real motor has and what a model made from a datasheet lacks: its
   // candidates are fitted first, so that a time budget never leaves them unfitted.
   std::stable_partition(jobs.begin(), jobs.end(), [](const Job& j) { return is_friction(j.name); });
-  std::vector<GapCandidate> singles = run_jobs(jobs, data, floors, settings, threads, orders, done, total);
+  std::vector<GapCandidate> singles = run_jobs(jobs, data, floors, settings, orders, done, total);
 
   // The refit must not lose to an effect fit that merely found better nominal values: when
   // some candidate's nominal scales alone fit the training runs better, refit from there.
@@ -645,41 +677,46 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
     model::Model start = pm.model;
     const double pm_cost = training_cost(pm.model, data.train);
     double best = pm_cost;
-    for (const auto& c : singles) {
-      if (!c.evaluated) continue;
-      model::Model trial = pm.model;
-      *std::find_if(trial.effects.begin(), trial.effects.end(), [](const auto& e) {
+    std::vector<model::Model> trials(singles.size(), pm.model);
+    std::vector<double> costs(singles.size(), std::numeric_limits<double>::infinity());
+    parallel::for_each(singles.size(), 0, [&](std::size_t k) {
+      if (!singles[k].evaluated) return;
+      *std::find_if(trials[k].effects.begin(), trials[k].effects.end(), [](const auto& e) {
         return e.name == "param_mismatch";
-      }) = *c.model.effect("param_mismatch");
-      const double cost = training_cost(trial, data.train);
-      if (cost < best) {
-        best = cost;
-        start = trial;
+      }) = *singles[k].model.effect("param_mismatch");
+      costs[k] = training_cost(trials[k], data.train);
+    });
+    for (std::size_t k = 0; k < singles.size(); ++k) {
+      if (costs[k] < best) {
+        best = costs[k];
+        start = trials[k];
       }
     }
     if (best < pm_cost) {
       if (settings.progress) settings.progress("refitting param_mismatch from a better start");
       ++total;
       Job again{"param_mismatch", {}, start, mismatch_free(settings.fixed, model.params, has_current), {}, 10, {}, {}, {}};
-      GapCandidate refit =
-          std::move(run_jobs({again}, data, floors, settings, threads, {}, done, total).front());
+      GapCandidate refit = std::move(run_jobs({again}, data, floors, settings, {}, done, total).front());
       refit.fpe = fpe(refit.score, refit.free.size());
       if (refit.evaluated && training_cost(refit.model, data.train) < pm_cost) pm = std::move(refit);
     }
   }
   const double ref_score = std::min(before.score, pm.score);
-  for (auto& c : singles) {
+  parallel::for_each(singles.size(), 0, [&](std::size_t k) {
+    GapCandidate& c = singles[k];
     c.fpe = fpe(c.score, c.free.size());
     c.significant = gap && c.determined() && improves(c.score, ref_score, outputs) &&
                     carries_weight(c, c.name, data, floors, outputs);
-  }
+  });
   std::sort(singles.begin(), singles.end(), [](const auto& a, const auto& b) { return a.fpe < b.fpe; });
 
   // Mixtures by forward selection: the best significant single is extended by one effect at
   // a time from a pool of the singles that did best (significant or not: a weaker effect's
   // single fit is distorted by the stronger one it cannot explain), each extension refitted
   // jointly; the best extension joins when it is significant against the model it extends,
-  // up to k_gap_max_mixture effects. Every extension tried is reported.
+  // up to k_gap_max_mixture effects; an extension whose added effect alone removes almost
+  // nothing of the current model's training cost is rejected before its joint refit. Every
+  // extension tried is reported.
   std::vector<const GapCandidate*> pool;
   for (const auto& c : singles) {
     if (c.evaluated && std::isfinite(c.score) && c.score < before.score &&
@@ -715,6 +752,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         // from the model as given with every member at its single-fit values.
         Job job{name, members, current.model, mismatch_free(settings.fixed, model.params, has_current, members), {},
                 10,   {},      {base}, {}};
+        job.extension = true;
         for (const auto& f : current.free) {
           if (!f.starts_with("param_mismatch.")) job.free.push_back(f);
         }
@@ -732,13 +770,12 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       }
       if (round.empty()) break;
       total = done + round.size();
-      std::vector<GapCandidate> fitted =
-          run_jobs(round, data, floors, settings, threads, orders, done, total);
+      std::vector<GapCandidate> fitted = run_jobs(round, data, floors, settings, orders, done, total);
       for (auto& c : fitted) c.fpe = fpe(c.score, c.free.size());
       std::sort(fitted.begin(), fitted.end(), [](const auto& x, const auto& y) { return x.fpe < y.fpe; });
       for (auto& c : fitted) {
-        c.significant = c.evaluated && c.determined() && improves(c.score, current.score, outputs) &&
-                        improves(c.score, ref_score, outputs);
+        c.significant = c.evaluated && !rejected(c) && c.determined() &&
+                        improves(c.score, current.score, outputs) && improves(c.score, ref_score, outputs);
       }
       // The best extension's gain must come from the effect it adds, not from the nominal
       // values refitted beside it.

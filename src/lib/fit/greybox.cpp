@@ -12,6 +12,7 @@
 #include <tuple>
 
 #include "common/error.hpp"
+#include "common/parallel.hpp"
 #include "common/units.hpp"
 
 namespace mcg::fit {
@@ -432,9 +433,11 @@ FitResult fit_model(const FitProblem& problem) {
 
   // Per (run, output): the normalisation std(y) sqrt(N) and the offset of its block.
   std::vector<std::vector<double>> norm(problem.runs.size());
+  std::vector<std::size_t> offset(problem.runs.size());
   std::size_t total = 0;
   for (std::size_t r = 0; r < problem.runs.size(); ++r) {
     const Run& run = problem.runs[r];
+    offset[r] = total;
     for (std::size_t o = 0; o < run.outputs.size(); ++o) {
       std::size_t count = 0;
       const double mean = mean_of_finite(run.measured[o], count);
@@ -461,17 +464,18 @@ FitResult fit_model(const FitProblem& problem) {
       model::set_parameter(m, specs[i].name, v);
     }
     apply_ties(m, problem.ties);
-    Eigen::Index k = 0;
-    for (std::size_t r = 0; r < problem.runs.size(); ++r) {
+    // The runs are simulated side by side (each fills its own block of the residuals).
+    parallel::for_each(problem.runs.size(), problem.nls.threads, [&](std::size_t r) {
       const Run& run = problem.runs[r];
       const auto sim = simulate_as_measured(m, run, problem.sim);
+      auto k = static_cast<Eigen::Index>(offset[r]);
       for (std::size_t o = 0; o < run.outputs.size(); ++o) {
         const auto& y = run.measured[o];
         for (std::size_t n = 0; n < y.size(); ++n, ++k) {
           out[k] = std::isfinite(y[n]) ? (sim[o][n] - y[n]) / norm[r][o] : 0.0;
         }
       }
-    }
+    });
   };
 
   FitResult result;

@@ -98,7 +98,7 @@ struct Functor : Eigen::DenseFunctor<double> {
     if (!options.central_differences) evaluate(u, r0);
     jac.resize(values(), inputs());
     const auto n = static_cast<std::size_t>(inputs());
-    parallel::for_each(n, std::max(1U, options.threads),
+    parallel::for_each(n, options.threads,
                        [&](std::size_t j) { column(u, r0, static_cast<Eigen::Index>(j), jac); });
     const int per_column = options.central_differences ? 2 : 1;
     return per_column * inputs() + (options.central_differences ? 0 : 1);
@@ -207,14 +207,16 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
   lm.setGtol(0.0);
   lm.setMaxfev(options.max_evaluations);
   Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
-  // Eigen's minimize() loop, with the caller's stop asked after every iteration.
+  // Eigen's minimize() loop, with the caller's stop asked before every iteration (a fit begun
+  // after its budget ran out returns its start at once).
   auto status = lm.minimizeInit(u);
   bool stopped = false;
   if (status != Eigen::LevenbergMarquardtSpace::ImproperInputParameters) {
     do {
+      stopped = options.stop && options.stop();
+      if (stopped) break;
       status = lm.minimizeOneStep(u);
-      stopped = status == Eigen::LevenbergMarquardtSpace::Running && options.stop && options.stop();
-    } while (status == Eigen::LevenbergMarquardtSpace::Running && !stopped);
+    } while (status == Eigen::LevenbergMarquardtSpace::Running);
   }
 
   NlsResult result;

@@ -37,14 +37,15 @@ struct NlsOptions {
   double fd_step = 1e-6;
   /// Central differences (2 evaluations per column) instead of forward (1 per column).
   bool central_differences = false;
-  /// Threads evaluating Jacobian columns at once (1 = in the caller's thread). The
-  /// residual function must then be safe to call concurrently.
+  /// Threads evaluating Jacobian columns at once (1 = in the caller's thread; 0 = the current
+  /// parallel::Pool, or every core outside one). The residual function must then be safe to
+  /// call concurrently; it sees the same value in FitProblem's simulations of its runs.
   unsigned threads = 1;
   /// Check at the optimum whether the residual is smooth in each parameter (NlsResult::rough),
   /// at the cost of one more Jacobian.
   bool check_smoothness = true;
-  /// Asked after every iteration: true stops the solver there (a time budget), with the
-  /// result so far, not converged. Empty: never stops early.
+  /// Asked before every iteration: true stops the solver there (a time budget), with the
+  /// result so far (the start, when it is true at once), not converged. Empty: never stops.
   std::function<bool()> stop;
 };
 

@@ -40,7 +40,7 @@ void FitGap::define(CLI::App& app) {
       ->capture_default_str();
   gp->add_flag("--progress,!--no-progress", gap.progress,
                "progress lines on stderr (default: when it is a terminal)");
-  gp->add_option("--threads", gap.threads, "candidates fitted at once (0 = every core)")
+  gp->add_option("--threads", gap.threads, "threads of the one pool (0 = every core)")
       ->check(mcg::Range(0, 1024))
       ->capture_default_str();
   gap.progress = stderr_is_terminal();
