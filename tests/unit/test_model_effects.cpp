@@ -61,6 +61,30 @@ TEST(ModelEffects, EveryModuleIsCompleteAndItsPlanNamesItsParameters) {
   EXPECT_FALSE(find_effect("param_mismatch")->plan.candidate);
 }
 
+TEST(ModelEffects, FrictionPlansSayWhatTheyAreAndStartFromTheData) {
+  std::vector<std::string> friction;
+  for (const EffectSpec& spec : effect_catalog()) {
+    if (spec.plan.friction) friction.push_back(spec.name);
+  }
+  EXPECT_EQ(friction,
+            (std::vector<std::string>{"stribeck", "friction_levels", "friction_asymmetry", "friction_load"}))
+      << "in the catalog's order";
+  const Params p = builtin_rig();
+  const double stall_Nm = p.motor.Kt_Nm_A * p.supply_V / p.motor.R_ohm;
+  DataFriction seen;
+  seen.coulomb_Nm = 3e-3;
+  seen.static_excess_Nm = -1.0;  // below the model's own: starts at its floor, 1e-4 stall torque
+  seen.viscous_Nm_s_rad = 2e-6;
+  seen.asymmetry_Nm = -4e-4;
+  const EffectPlan& levels = find_effect("friction_levels")->plan;
+  EXPECT_EQ(levels.data_start(seen, p), (std::vector<double>{3e-3, 1e-4 * stall_Nm, 2e-6}));
+  const EffectPlan& asymmetry = find_effect("friction_asymmetry")->plan;
+  EXPECT_TRUE(asymmetry.data_start(seen, p).empty()) << "one direction does not determine it";
+  seen.both_directions = true;
+  EXPECT_EQ(asymmetry.data_start(seen, p), (std::vector<double>{-4e-4}));
+  EXPECT_EQ(find_effect("stribeck")->plan.data_start, nullptr);
+}
+
 TEST(ModelEffects, ParseFillsDefaultsAndRoundTrips) {
   const Effect e = parse_effect("cogging:T_c_Nm=0.0021, phase_rad=-1.2");
   EXPECT_EQ(e.get("T_c_Nm"), 0.0021);

@@ -44,9 +44,10 @@ std::vector<const model::EffectSpec*> candidate_effects() {
   return out;
 }
 
-/// A friction effect of the catalog: levels, their asymmetry, the Stribeck curve.
+/// A friction effect of the catalog (its plan says so).
 bool is_friction(std::string_view name) {
-  return name.starts_with("friction_") || name == "stribeck";
+  const model::EffectSpec* spec = model::find_effect(name);
+  return spec != nullptr && spec->plan.friction;
 }
 
 /// True when the mixture was rejected early (see k_rejected_early).
@@ -452,29 +453,30 @@ std::map<std::string, std::vector<double>> data_friction_starts(const model::Mod
   const auto own = seen_friction(simulated, model.params, both);
   if (!seen || !own) return out;
   // What the data show beyond what the model's own friction shows through the same estimate
-  // (so that the estimate's biases cancel), kept inside the effects' ranges and positive (the
-  // fit moves the levels in log coordinates).
-  const model::Params& p = model.params;
-  const double stall_Nm = p.motor.Kt_Nm_A * p.supply_V / p.motor.R_ohm;
-  const double no_load_rad_s = p.supply_V / p.motor.Ke_V_s_rad;
-  const auto within = [](std::string_view effect, std::string_view key, double v, double floor) {
-    const model::EffectSpec* spec = model::find_effect(effect);
-    MCG_DEMAND(spec != nullptr);
-    const auto it = std::find_if(spec->params.begin(), spec->params.end(), [&](const auto& q) { return q.name == key; });
-    MCG_DEMAND(it != spec->params.end());
-    return std::clamp(std::max(v, floor), it->lower, it->upper);
-  };
-  const double tc = within("friction_levels", "Tc_Nm", (*seen)[0] - (*own)[0], 1e-4 * stall_Nm);
-  // The static excess the data show beyond the model's own: not through the model's simulated
-  // starts from rest, which a model without stiction lacks (its shaft only coasts through zero,
-  // and those brackets reach the next drive level).
-  const model::Friction& own_f = p.motor.friction;
-  const double own_excess = std::max(0.0, own_f.Ts_Nm - own_f.Tc_Nm);
-  out["friction_levels"] = {
-      tc, within("friction_levels", "Ts_excess_Nm", (*seen)[1] - (*seen)[0] - own_excess, 1e-4 * stall_Nm),
-      within("friction_levels", "c1_Nm_s_rad", (*seen)[2] - (*own)[2], 1e-4 * stall_Nm / no_load_rad_s)};
-  if (both) {
-    out["friction_asymmetry"] = {within("friction_asymmetry", "dT_Nm", (*seen)[3] - (*own)[3], -1e300)};
+  // (so that the estimate's biases cancel). The static excess is the data's beyond the model's
+  // own parameters, not through the model's simulated starts from rest, which a model without
+  // stiction lacks (its shaft only coasts through zero, and those brackets reach the next drive
+  // level).
+  const model::Friction& own_f = model.params.motor.friction;
+  model::DataFriction d;
+  d.coulomb_Nm = (*seen)[0] - (*own)[0];
+  d.static_excess_Nm = (*seen)[1] - (*seen)[0] - std::max(0.0, own_f.Ts_Nm - own_f.Tc_Nm);
+  d.viscous_Nm_s_rad = (*seen)[2] - (*own)[2];
+  d.asymmetry_Nm = (*seen)[3] - (*own)[3];
+  d.both_directions = both;
+  // Each friction effect's own start (its plan), kept inside the effect's ranges.
+  for (const model::EffectSpec& spec : model::effect_catalog()) {
+    if (spec.plan.data_start == nullptr) continue;
+    std::vector<double> start = spec.plan.data_start(d, model.params);
+    if (start.empty()) continue;
+    MCG_DEMAND(start.size() == spec.plan.free.size());
+    for (std::size_t k = 0; k < start.size(); ++k) {
+      const auto it = std::find_if(spec.params.begin(), spec.params.end(),
+                                   [&](const auto& q) { return q.name == spec.plan.free[k]; });
+      MCG_DEMAND(it != spec.params.end());
+      start[k] = std::clamp(start[k], it->lower, it->upper);
+    }
+    out[spec.name] = std::move(start);
   }
   return out;
 }

@@ -97,6 +97,17 @@ struct EffectParamSpec {
 
 struct Compiled;
 
+/// The friction the training runs show beyond the model's own (the gap diagnosis reads it from
+/// steady states and starts from rest, through the same estimate on the data and on the model's
+/// simulation, so the estimate's biases cancel): where a friction effect's fit starts.
+struct DataFriction {
+  double coulomb_Nm = 0.0;        ///< Coulomb level
+  double static_excess_Nm = 0.0;  ///< breakaway beyond the Coulomb level
+  double viscous_Nm_s_rad = 0.0;  ///< viscous coefficient
+  double asymmetry_Nm = 0.0;      ///< half the forward-minus-reverse level (both_directions only)
+  bool both_directions = false;   ///< the runs move the shaft both ways
+};
+
 /// How `mcg-fit gap` tries an effect as a candidate: the parameters it sets free, a coarse
 /// grid of starting values for each (the best grid point on the training cost starts the
 /// fit), and what the training runs must contain to excite the effect at all.
@@ -116,6 +127,12 @@ struct EffectPlan {
   /// Keys of param_mismatch the refit holds at 1 while this effect is in the model (they
   /// would move what the effect's own parameters move).
   std::vector<std::string> supersedes;
+  /// A friction effect: tried before the others, and fitted on the regularised stick
+  /// (SimOptions::smooth_stick), scored on the exact one.
+  bool friction = false;
+  /// Starting values of `free` (in its order) from the friction the data show, tried before
+  /// the grid; an empty vector when the data do not determine them. nullptr: the grid only.
+  std::vector<double> (*data_start)(const DataFriction& seen, const Params& nominal) = nullptr;
 
   static EffectPlan fit(std::vector<std::string> free, std::vector<std::vector<double>> grid,
                         Needs needs = Needs::nothing, std::string angle_order_key = {}) {
@@ -125,6 +142,12 @@ struct EffectPlan {
     plan.needs = needs;
     plan.angle_order_key = std::move(angle_order_key);
     return plan;
+  }
+  /// This plan as a friction effect's, started from the data by `start` when given.
+  EffectPlan as_friction(std::vector<double> (*start)(const DataFriction&, const Params&) = nullptr) && {
+    friction = true;
+    data_start = start;
+    return std::move(*this);
   }
   static EffectPlan not_a_candidate() {
     EffectPlan plan;

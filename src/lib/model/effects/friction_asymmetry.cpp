@@ -18,6 +18,12 @@ void compile(const Effect& e, Compiled& c) {
   c.motor_torque.push_back({bias, {e.get("dT_Nm"), 0.0, 0.0, 0.0}});
 }
 
+/// The asymmetry the data show, when the runs move both ways.
+std::vector<double> start_from_data(const DataFriction& seen, const Params& /*nominal*/) {
+  if (!seen.both_directions) return {};
+  return {seen.asymmetry_Nm};
+}
+
 }  // namespace
 
 EffectSpec friction_asymmetry() {
@@ -28,7 +34,8 @@ EffectSpec friction_asymmetry() {
           {{"dT_Nm", 5e-4, -0.05, 0.05, "N m", "half the forward-minus-reverse friction level"}},
           compile,
           EffectPlan::fit({"dT_Nm"}, {{-0.005, -0.0015, -0.0003, 0.0003, 0.0015, 0.005}},
-                          EffectPlan::Needs::both_directions)};
+                          EffectPlan::Needs::both_directions)
+              .as_friction(start_from_data)};
 }
 
 }  // namespace mcg::model::effects

@@ -7,6 +7,8 @@
 // and the viscous level at 0.1 % and 1 % of stall torque per no-load speed supply_V / Ke, so
 // the grid fits any motor. The starts are not 0: the fit moves positive levels in log
 // coordinates, by ratios.
+#include <algorithm>
+
 #include "model/effects/compiled.hpp"
 
 namespace mcg::model::effects {
@@ -26,9 +28,18 @@ std::vector<double> stall_scale(const Params& p) {
   return {stall_Nm, stall_Nm, stall_Nm / no_load_rad_s};
 }
 
+/// The levels the data show, each at least 1e-4 of its motor-sized scale: the fit moves the
+/// levels in log coordinates, so a start is positive.
+std::vector<double> start_from_data(const DataFriction& seen, const Params& p) {
+  const std::vector<double> scale = stall_scale(p);
+  return {std::max(seen.coulomb_Nm, 1e-4 * scale[0]), std::max(seen.static_excess_Nm, 1e-4 * scale[1]),
+          std::max(seen.viscous_Nm_s_rad, 1e-4 * scale[2])};
+}
+
 EffectPlan plan() {
   EffectPlan p = EffectPlan::fit({"Tc_Nm", "Ts_excess_Nm", "c1_Nm_s_rad"},
-                                 {{0.002, 0.01, 0.04}, {0.001, 0.01}, {0.001, 0.01}});
+                                 {{0.002, 0.01, 0.04}, {0.001, 0.01}, {0.001, 0.01}})
+                     .as_friction(start_from_data);
   p.grid_scale = stall_scale;
   p.supersedes = {"coulomb_scale", "static_scale", "viscous_scale"};
   return p;

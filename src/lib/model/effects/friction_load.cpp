@@ -27,7 +27,7 @@ EffectSpec friction_load() {
           "moving F = sign(w) (Tc + P(|w|) + mu |Kt i|); at rest held up to Ts + mu |Kt i|",
           {{"mu", 0.05, 0.0, 0.5, "1", "friction per newton metre of motor torque"}},
           compile,
-          EffectPlan::fit({"mu"}, {{0.01, 0.03, 0.1, 0.3}})};
+          EffectPlan::fit({"mu"}, {{0.01, 0.03, 0.1, 0.3}}).as_friction()};
 }
 
 }  // namespace mcg::model::effects

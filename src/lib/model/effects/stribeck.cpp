@@ -22,14 +22,15 @@ void compile(const Effect& e, Compiled& c) {
 }  // namespace
 
 EffectSpec stribeck() {
-  return {"stribeck",
-          "kinetic friction falls from the static level to the Coulomb level over a velocity scale",
-          "every friction element: F(w) = sign(w) [Tc + (Ts - Tc) exp(-(|w|/v_s)^shape_exp) + P(|w|)]; "
-          "breakaway level Ts unchanged",
-          {{"v_s_rad_s", 10.0, 0.1, 200.0, "rad/s", "Stribeck velocity"},
-           {"shape_exp", 1.5, 0.5, 3.0, "1", "exponent of the Stribeck curve"}},
-          compile,
-          EffectPlan::fit({"v_s_rad_s", "shape_exp"}, {{2.0, 5.0, 12.0, 30.0, 80.0}, {1.0, 2.0}})};
+  return {
+      "stribeck",
+      "kinetic friction falls from the static level to the Coulomb level over a velocity scale",
+      "every friction element: F(w) = sign(w) [Tc + (Ts - Tc) exp(-(|w|/v_s)^shape_exp) + P(|w|)]; "
+      "breakaway level Ts unchanged",
+      {{"v_s_rad_s", 10.0, 0.1, 200.0, "rad/s", "Stribeck velocity"},
+       {"shape_exp", 1.5, 0.5, 3.0, "1", "exponent of the Stribeck curve"}},
+      compile,
+      EffectPlan::fit({"v_s_rad_s", "shape_exp"}, {{2.0, 5.0, 12.0, 30.0, 80.0}, {1.0, 2.0}}).as_friction()};
 }
 
 }  // namespace mcg::model::effects
