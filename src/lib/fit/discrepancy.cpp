@@ -57,7 +57,7 @@ double b_decay(const std::array<double, 4>& k, double, double w, double, double 
 /// A voltage V (k[3]) against the current in the armature circuit, as the torque it costs:
 /// -(Kt/R) V tanh(i / 0.01 A), k[0] = Kt/R (brush_drop's shape).
 double b_drop(const std::array<double, 4>& k, double, double, double i, double) {
-  return -k[0] * k[3] * std::tanh(i / 0.01);
+  return -k[0] * k[3] * std::tanh(i / model::k_brush_smooth_i_A);
 }
 
 /// A term of the torque library: its column and its basis with the basis' numbers (k[3] = 1).

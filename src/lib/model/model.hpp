@@ -29,6 +29,10 @@ class Ini;
 
 namespace mcg::model {
 
+/// The brush drop's smoothing current: V_b tanh(i / k_brush_smooth_i_A) reaches 76 % of V_b at
+/// 10 mA (the reference definition; brush_drop, and the diagnosis' term of its shape).
+inline constexpr double k_brush_smooth_i_A = 0.01;
+
 /// One friction element. Moving: F(w) = sign(w) (Tc_Nm + c1 |w| + c2 |w|^2 + c3 |w|^3);
 /// at rest it holds up to Ts_Nm. The viscous polynomial is applied with odd symmetry.
 struct Friction {

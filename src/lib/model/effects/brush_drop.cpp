@@ -6,12 +6,9 @@ namespace mcg::model::effects {
 
 namespace {
 
-/// The drop's smoothing current: the drop reaches 76 % of V_b at 10 mA (reference definition).
-constexpr double k_smooth_i_A = 0.01;
-
 void compile(const Effect& e, Compiled& c) {
   c.circuit.V_sat_V = e.get("V_b_V");
-  c.circuit.i_sat_A = k_smooth_i_A;
+  c.circuit.i_sat_A = k_brush_smooth_i_A;
 }
 
 }  // namespace
