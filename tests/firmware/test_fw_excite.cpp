@@ -101,12 +101,17 @@ TEST(FwExcite, StaircaseClimbsAndReturns) {
   EXPECT_EQ(first[20], 100);
 }
 
-TEST(FwExcite, ClosedLoopPlaysTheCommand) {
-  Board b;
+/// Makes the board run a PI (b0 300, b1 -290) in closed loop.
+void commit_test_pi(Board& b) {
   ASSERT_EQ(b.write(MCG_REG_B0, 300), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_B1, -290), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
   ASSERT_EQ(b.write(MCG_REG_COMMIT, 1), MCG_ST_OK);
+}
+
+TEST(FwExcite, ClosedLoopPlaysTheCommand) {
+  Board b;
+  commit_test_pi(b);
   setup_prbs(b, 3, 10, 50, 400, 1);
   ASSERT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
   std::vector<int> cmds;
@@ -132,10 +137,7 @@ TEST(FwExcite, ClosedLoopPlaysTheCommand) {
 // amplitude is negative, so the level above the offset is the one the LFSR's zeros select.
 TEST(FwExcite, ClosedLoopPrbsGivesTheControllerTheWrittenCommand) {
   Board b;
-  ASSERT_EQ(b.write(MCG_REG_B0, 300), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_B1, -290), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PI), MCG_ST_OK);
-  ASSERT_EQ(b.write(MCG_REG_COMMIT, 1), MCG_ST_OK);
+  commit_test_pi(b);
   setup_prbs(b, 3, 10, -57, 421, 1);
   ASSERT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
   int checked = 0;
