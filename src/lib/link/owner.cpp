@@ -550,11 +550,16 @@ struct PortOwner::Impl {
   void drop_stager(bool silent) {
     if (silent) dropped_stagers.push_back(stager);
     stager = -1;
-    Frame discard;
-    discard.cmd = MCG_CMD_WRITE;
-    discard.payload = {commit_reg};
-    put_i16(discard.payload, 0);
-    queue.push_back({-1, std::move(discard), nullptr});
+    queue_own_write(commit_reg, 0);
+  }
+
+  /// A write of the owner's own to the board, after what is queued.
+  void queue_own_write(std::uint8_t reg, std::int16_t value) {
+    Frame f;
+    f.cmd = MCG_CMD_WRITE;
+    f.payload = {reg};
+    put_i16(f.payload, value);
+    queue.push_back({-1, std::move(f), nullptr});
   }
 
   /// A whole frame from client `c`: queued for the board, or answered here when it would
@@ -674,11 +679,7 @@ struct PortOwner::Impl {
     std::erase_if(clients, [](const Client& c) { return c.fd < 0; });
     if (stopped_streaming && !anyone_streams(-1)) {
       // The last reader of the stream went away without turning it off.
-      Frame off;
-      off.cmd = MCG_CMD_WRITE;
-      off.payload = {stream_reg};
-      put_i16(off.payload, 0);
-      queue.push_back({-1, std::move(off), nullptr});
+      queue_own_write(stream_reg, 0);
     }
   }
 
