@@ -116,6 +116,15 @@ TEST(PlotScript, DumbStepsWithDefaultColumnsAndMissingValues) {
             "     $data1 using 1:3 with steps linecolor 2 title 'rpm'\n");
 }
 
+TEST(PlotScript, DefaultColumnsLeaveOutOneWithNothingToDraw) {
+  Spec spec;
+  spec.output = {Output::Kind::dumb, "", "", 100, 30};
+  const auto script = build_script(spec, {input("t,v,r_load,rpm\n0,1,inf,0\n1,2,inf,5\n")});
+  EXPECT_NE(script.find("title 'v'"), std::string::npos) << script;
+  EXPECT_NE(script.find("title 'rpm'"), std::string::npos) << script;
+  EXPECT_EQ(script.find("r_load"), std::string::npos) << script;
+}
+
 TEST(PlotScript, BodePanelsWithOverlay) {
   Spec spec;
   spec.mode = Mode::bode;
@@ -231,6 +240,8 @@ TEST(PlotScript, ErrorsNameTheTableAndColumn) {
               ThrowsMessage<Error>("<stdin>: column 'v' has no finite value to plot"));
   spec.y.clear();
   EXPECT_THAT([&] { build_script(spec, {input("t\n0\n")}); },
+              ThrowsMessage<Error>("<stdin>: no column to plot besides 't'"));
+  EXPECT_THAT([&] { build_script(spec, {input("t,r_load\n0,inf\n")}); },
               ThrowsMessage<Error>("<stdin>: no column to plot besides 't'"));
   spec.mode = Mode::bode;
   EXPECT_THAT([&] { build_script(spec, {input("f_hz,mag_db\n1,0\n")}); },

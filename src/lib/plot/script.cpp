@@ -82,8 +82,14 @@ Selection select(const Spec& spec, const table::Table& first) {
   s.y2 = spec.y2;
   s.y = spec.y;
   if (s.y.empty()) {
+    // Every other column, but one that has nothing to draw (an unloaded generator's r_load,
+    // inf throughout): a column named with -y that has none is an error.
     for (const std::string& name : first.names) {
-      if (name != s.x && std::find(s.y2.begin(), s.y2.end(), name) == s.y2.end()) s.y.push_back(name);
+      const auto& values = first.col(name);
+      const bool drawable =
+          std::any_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
+      if (name != s.x && drawable && std::find(s.y2.begin(), s.y2.end(), name) == s.y2.end())
+        s.y.push_back(name);
     }
   }
   if (s.y.empty() && s.y2.empty()) fail("{}: no column to plot besides {}", first.source, quote(s.x));
