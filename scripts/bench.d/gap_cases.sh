@@ -2,8 +2,7 @@
 # public gap case: train.csv and validate.csv of every directory under GAP_CASES (default: the
 # shared data beside the project's checkout, ../shared/data/gap-cases; the rows say so when it
 # is absent). One run a case; the rows name the diagnosis, and the total is set against the
-# goal (the eight cases in <= 40 s together on 2 cores). GAP_REAL names a real capture to
-# diagnose against itself as train and validate (a row says when none is given). Sourced by
+# goal (the eight cases in <= 40 s together on 2 cores). Real captures: gap_real.sh. Sourced by
 # scripts/bench.sh (row, met, wanted, $work, $raw, $root).
 if wanted gap_cases; then
   cases=${GAP_CASES:-$root/../shared/data/gap-cases}
@@ -32,18 +31,5 @@ if wanted gap_cases; then
     s=$(awk -v m="$total_ms" 'BEGIN {printf "%.1f", m / 1000}')
     row "\`mcg-fit gap\` on the $n public gap cases, one after another" whole-process "<= 40 s together" \
       "$s s" "$(met "$s" "<=" 40)"
-  fi
-  if [[ -n ${GAP_REAL:-} && -f $GAP_REAL ]]; then
-    t0=$(date +%s%N)
-    status=0
-    mcg-fit gap --train "$GAP_REAL" --validate "$GAP_REAL" >"$work/gap_real.csv" 2>"$work/gap_real.err" || status=$?
-    t1=$(date +%s%N)
-    s=$(awk -v a="$t0" -v b="$t1" 'BEGIN {printf "%.1f", (b - a) / 1e9}')
-    rows_in=$(grep -vc '^#' "$GAP_REAL")
-    row "\`mcg-fit gap\` on a real capture (${GAP_REAL##*/}, $((rows_in - 1)) rows)" whole-process "<= 10 s" \
-      "$s s, exit $status" "$(met "$s" "<=" 10)"
-  else
-    row "\`mcg-fit gap\` on a real capture of about 7000 rows" whole-process "<= 10 s" \
-      "not measured: no real v/rpm capture ships with the project (set GAP_REAL)" "missed (no data)"
   fi
 fi
