@@ -2,9 +2,9 @@
 # The rules for real measurements in tests/data/real/NAME/ (docs/hacking.md, "How to add a real
 # data set"), checked for every set: a LICENSE file and a PROVENANCE.md that names the source and
 # a licence that lets the data live here (MIT, BSD, Apache-2.0, CC0, CC BY) and documents every
-# column of every data file; no data file of 2 MB or more; a shell suite that uses the set; and
-# each file the set's gap.args names (gap's options for the set, run by the bench row gap_real)
-# present beside it. Needs no tool. Args: TOOL_DIR SOURCE_DIR.
+# column of every data file; no data file of 2 MB or more; a shell suite or unit test that uses
+# the set; and each file the set's gap.args names (gap's options for the set, run by the bench
+# row gap_real) present beside it. Needs no tool. Args: TOOL_DIR SOURCE_DIR.
 src=$(cd "$2" && pwd)
 source "$(dirname "$0")/lib.sh"
 
@@ -30,8 +30,8 @@ for dir in "$src"/tests/data/real/*/; do
       check "$name/$file: column '$column' is described in PROVENANCE.md" grep -qF "\`$column\`" "$prov"
     done
   done
-  check "$name: a shell suite uses the set" \
-    eval 'grep -q "tests/data/real/$name" "$src"/tests/sh/test_*.sh'
+  check "$name: a test uses the set" \
+    eval 'grep -q "tests/data/real/$name" "$src"/tests/sh/test_*.sh "$src"/tests/unit/*.cpp'
   if [[ -f $dir/gap.args ]]; then
     for word in $(grep -v '^[[:space:]]*#' "$dir/gap.args"); do
       [[ $word == *.csv || $word == *.ini ]] || continue
