@@ -1,12 +1,13 @@
 // Levenberg-Marquardt wrapper: optimum and statistics against closed forms.
-#include "fit/nls.hpp"
-
-#include "common/error.hpp"
-
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <vector>
+
+#include "common/error.hpp"
+#include "fit/nls.hpp"
 
 namespace mcg::fit {
 namespace {
@@ -58,6 +59,27 @@ TEST(FitNls, LogParameterRecoversTimeConstant) {
   EXPECT_NEAR(result.values[1], 0.0147, 1e-10);
   EXPECT_NEAR(result.values[0], 3.0, 1e-8);
   EXPECT_LT(result.cost, 1e-20);
+}
+
+// The point the solver stands on is simulated once: its start, the base of every forward-difference
+// Jacobian and the optimum whose statistics are reported are looked up, not evaluated again
+// (each evaluation of a grey-box fit is a whole simulation).
+TEST(FitNls, NoPointIsEvaluatedTwice) {
+  const int n = 100;
+  const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(n, 0.0, 0.06);
+  const Eigen::VectorXd y = 3.0 * (-t.array() / 0.0147).exp() + 0.2;
+  std::vector<std::vector<double>> seen;
+  const auto result = least_squares(
+      {{"A", 1.0, Transform::log}, {"tau_s", 0.1, Transform::log}, {"c", 0.0, Transform::linear, 1.0}}, n,
+      [&](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
+        seen.emplace_back(p.data(), p.data() + p.size());
+        r = p[0] * (-t.array() / p[1]).exp() + p[2] - y.array();
+      });
+  ASSERT_TRUE(result.converged) << result.reason;
+  EXPECT_NEAR(result.values[1], 0.0147, 1e-9);
+  EXPECT_GT(result.iterations, 3);
+  std::sort(seen.begin(), seen.end());
+  EXPECT_EQ(std::adjacent_find(seen.begin(), seen.end()), seen.end()) << "a point was evaluated twice";
 }
 
 // A time budget interrupts the solver between iterations: one already spent returns the start

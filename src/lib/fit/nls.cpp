@@ -71,8 +71,35 @@ struct Functor : Eigen::DenseFunctor<double> {
     sanitise(r);
   }
 
-  int operator()(const InputType& u, ValueType& r) const {
+  /// The residuals at u when u is the best point the solver has evaluated (the point it
+  /// differentiates next, and the optimum it returns), looked up instead of simulated again.
+  bool recall(const Eigen::VectorXd& u, Eigen::VectorXd& r) const {
+    if (m_best_u.size() != u.size() || !(m_best_u.array() == u.array()).all()) return false;
+    r = m_best_r;
+    return true;
+  }
+
+  /// An evaluation by the solver's own thread (never a Jacobian column's): kept when it is the
+  /// best so far. The solver accepts a step only when it lowers the cost, so the best point is
+  /// where it stands.
+  void remember(const Eigen::VectorXd& u, const Eigen::VectorXd& r) const {
+    const double cost = r.squaredNorm();
+    if (m_best_u.size() == 0 || cost < m_best_cost) {
+      m_best_u = u;
+      m_best_r = r;
+      m_best_cost = cost;
+    }
+  }
+
+  /// The residuals at u, looked up when u is the best point so far.
+  void at(const Eigen::VectorXd& u, Eigen::VectorXd& r) const {
+    if (recall(u, r)) return;
     evaluate(u, r);
+    remember(u, r);
+  }
+
+  int operator()(const InputType& u, ValueType& r) const {
+    at(u, r);
     return 0;
   }
 
@@ -92,17 +119,30 @@ struct Functor : Eigen::DenseFunctor<double> {
     }
   }
 
-  /// Finite-difference Jacobian in solver coordinates; returns the evaluations it spent.
-  int df(const InputType& u, JacobianType& jac) const {
-    Eigen::VectorXd r0;
-    if (!options.central_differences) evaluate(u, r0);
+  /// Finite-difference Jacobian in solver coordinates about u, whose residuals are r0 (unused
+  /// by central differences).
+  void jacobian(const Eigen::VectorXd& u, const Eigen::VectorXd& r0, JacobianType& jac) const {
     jac.resize(values(), inputs());
     const auto n = static_cast<std::size_t>(inputs());
     parallel::for_each(n, options.threads,
                        [&](std::size_t j) { column(u, r0, static_cast<Eigen::Index>(j), jac); });
+  }
+
+  /// The solver's Jacobian; returns the evaluations it is charged. A forward-difference
+  /// Jacobian is charged its base point too, though that is looked up (the solver evaluated it
+  /// last): the budget then stops a fit where it always did, and the lookup only saves time.
+  int df(const InputType& u, JacobianType& jac) const {
+    Eigen::VectorXd r0;
+    if (!options.central_differences) at(u, r0);
+    jacobian(u, r0, jac);
     const int per_column = options.central_differences ? 2 : 1;
     return per_column * inputs() + (options.central_differences ? 0 : 1);
   }
+
+ private:
+  mutable Eigen::VectorXd m_best_u;
+  mutable Eigen::VectorXd m_best_r;
+  mutable double m_best_cost = 0.0;
 };
 
 std::string describe(Eigen::LevenbergMarquardtSpace::Status status, bool& converged) {
@@ -196,9 +236,11 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
   const Coordinates coords(specs);
   Functor functor(coords, residuals, options, n, m);
   {
+    const Eigen::VectorXd u0 = Eigen::VectorXd::Zero(n);
     Eigen::VectorXd r(m);
-    residuals(coords.to_physical(Eigen::VectorXd::Zero(n)), r);
+    residuals(coords.to_physical(u0), r);
     if (!r.allFinite()) fail("the model gives non-finite residuals at the initial parameter values");
+    functor.remember(u0, r);  // the solver starts here
   }
 
   Eigen::LevenbergMarquardt<Functor> lm(functor);
@@ -225,7 +267,7 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
   result.iterations = static_cast<int>(lm.iterations());
   result.evaluations = static_cast<int>(lm.nfev());
   result.values = coords.to_physical(u);
-  functor.evaluate(u, result.residuals);
+  functor.at(u, result.residuals);
   result.cost = result.residuals.squaredNorm();
   if (result.cost >= k_penalty) {
     result.converged = false;
@@ -233,7 +275,7 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
   }
 
   Eigen::MatrixXd jac_u;
-  functor.df(u, jac_u);
+  functor.jacobian(u, result.residuals, jac_u);
   // A discontinuity (a friction level at a breakaway) makes a small finite-difference step
   // see a jump: the column then shrinks in proportion to a larger step.
   result.rough.assign(specs.size(), false);
@@ -243,7 +285,7 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
     wide.central_differences = false;
     const Functor coarse(coords, residuals, wide, n, m);
     Eigen::MatrixXd jac_wide;
-    coarse.df(u, jac_wide);
+    coarse.jacobian(u, result.residuals, jac_wide);
     for (Eigen::Index j = 0; j < n; ++j) {
       const double a = jac_u.col(j).norm();
       const double b = jac_wide.col(j).norm();

@@ -27,7 +27,9 @@ struct ParameterSpec {
 };
 
 struct NlsOptions {
-  /// Stop after this many residual evaluations (Jacobian columns included).
+  /// Stop after this many residual evaluations (Jacobian columns included). A forward-difference
+  /// Jacobian is charged n + 1, its base point included, though that point (where the solver
+  /// stands) is looked up rather than evaluated again: no point is evaluated twice.
   int max_evaluations = 4000;
   /// Relative change of the scaled parameters below which the solver stops (MINPACK xtol).
   double xtol = 1e-8;
