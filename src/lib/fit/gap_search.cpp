@@ -409,6 +409,13 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   problem.free = job.free;
   problem.nls.max_evaluations = budget(job.free.size());
   FitResult fit = fit_model(problem);
+  // A mixture's members may trade along a long valley (a drive dead band against Coulomb
+  // friction: the steady states see only their sum, the coasts and reversals tell them apart):
+  // a joint fit that spent its budget still moving goes on once from where it stopped.
+  if (job.effects.size() > 1 && !fit.nls.converged && std::chrono::steady_clock::now() < settings.deadline) {
+    problem.model = fit.model;
+    fit = fit_model(problem);
+  }
   take(fit, job.free);
   // A gauge the data cannot fix: an added effect that trades exactly against the nominal
   // scales (a drive dead band wider than one drive level leaves the volt unmeasured, so Kt, R,
