@@ -483,6 +483,34 @@ TEST(GapDecision, AnUndeterminedCandidateIsNeverTheDiagnosis) {
   EXPECT_EQ(with_current.size(), speed_only.size() + 1);
 }
 
+// The emulated board running exactly the given model: the validation score is 1.81 against
+// about 1 for noise (the floor leaves out the board's quantisation and timing), and every
+// candidate fitted to the training run predicts the validation run worse (-16 %). Nothing is
+// missing: `none`, not `unexplained`. A candidate that predicts it better, or a larger excess,
+// keeps the verdict `unexplained`.
+TEST(GapDecision, ASmallExcessNothingPredictsBetterIsNone) {
+  const auto decide = [](double none_score, double pm_score) {
+    gap_detail::Candidates cands;
+    cands.none = scored("none", none_score, {});
+    cands.none.status = "as given";
+    cands.pm = scored("param_mismatch", pm_score, {"param_mismatch.Kt_scale", "param_mismatch.J_scale"});
+    cands.singles = {scored("friction_levels", 2.46, {"friction_levels.Tc_Nm"}),
+                     scored("hbridge", 2.45, {"hbridge.deadband"})};
+    GapReport report;
+    report.floors = {OutputFloor{"rpm", {}, 0.75}};
+    gap_detail::decide(cands, true, 1, report);
+    return report;
+  };
+  const GapReport board = decide(1.81, 2.46);
+  EXPECT_EQ(board.diagnosis, "none");
+  EXPECT_NE(
+      board.reason.find("no candidate, not even a refit of its nominal parameters, predicts them better"),
+      std::string::npos)
+      << board.reason;
+  EXPECT_EQ(decide(1.81, 1.75).diagnosis, "unexplained");
+  EXPECT_EQ(decide(2.2, 2.46).diagnosis, "unexplained");
+}
+
 // Every row of the gap CSV has the header's columns, so that the flags column is the flags:
 // a status of several clauses or an error message with commas stays one cell.
 TEST(GapCsv, EveryRowHasTheHeadersColumnsWhateverTheStatusSays) {

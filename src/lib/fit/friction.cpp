@@ -6,8 +6,10 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
+#include "common/demand.hpp"
 #include "common/error.hpp"
 #include "common/units.hpp"
 #include "fit/nls.hpp"
@@ -26,12 +28,19 @@ constexpr double k_detect_lag_s = 0.015;
 /// from the voltage balance is noise-free and used sample by sample.
 constexpr std::size_t k_smooth_samples = 3;
 constexpr std::size_t k_min_rows = 100;
+/// A quasi-steady stretch longer than this is split into blocks of it for the jackknife: a
+/// hold's windows share its drive level and the speed's quantisation at that speed, so they err
+/// together; a long slow ramp passes through many speeds and would otherwise be one block.
+constexpr double k_block_s = 2.0;
+/// Fewer blocks than this give a jackknife error too coarse to stand beside the OLS one.
+constexpr std::size_t k_min_jackknife_blocks = 5;
 
 struct Window {
   double omega_rad_s;
   double torque_Nm;
   bool from_current;
   double accel_rad_s2;  ///< (w_end - w_start) / window
+  std::size_t block;    ///< the quasi-steady stretch (at most k_block_s long) it belongs to
 };
 
 struct Breakaway {
@@ -41,6 +50,7 @@ struct Breakaway {
 
 struct StateData {
   std::vector<Window> windows;
+  std::size_t blocks = 0;  ///< distinct Window::block values (ids are shared by the states)
   std::vector<Breakaway> breakaways;
   double max_drive_Nm = 0.0;
 };
@@ -55,7 +65,7 @@ double largest(const std::vector<double>& torque, int d, std::size_t from, std::
 }
 
 void collect(const table::Table& table, const model::Params& p, const FrictionOptions& options,
-             std::map<int, StateData>& states) {
+             std::map<int, StateData>& states, std::size_t& block) {
   table::require_increasing(table, "t");
   if (table.rows() < k_min_rows) fail("{}: too short: {} rows (at least {} needed)", table.source, table.rows(), k_min_rows);
   model::Inputs in;
@@ -115,11 +125,17 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
 
   // Quasi-steady windows.
   double event_t = in.t_s[0];
+  double block_t = in.t_s[0];
+  ++block;
   std::size_t start = 0;
   for (std::size_t k = 0; k < n; ++k) {
     const bool changed = k > 0 && (std::abs(in.v_V[k] - in.v_V[k - 1]) > options.jump_V ||
                                    in.clutch[k] != in.clutch[k - 1] || in.r_load_ohm[k] != in.r_load_ohm[k - 1]);
     if (changed) event_t = in.t_s[k];
+    if (changed || in.t_s[k] - block_t >= k_block_s) {
+      block_t = in.t_s[k];
+      ++block;
+    }
     const bool usable = in.t_s[k] - event_t >= options.settle_s && std::isfinite(omega[k]);
     if (!usable || changed) {
       start = k + 1;
@@ -156,7 +172,9 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
                             : p.generator.Kt_Nm_A * p.generator.Ke_V_s_rad * w / (p.generator.R_ohm + in.r_load_ohm[k]);
       }
       const double inertial = options.fit_inertia ? 0.0 : j_shaft * accel;
-      states[clutch].windows.push_back({w, tau - inertial - load, all_measured, accel});
+      auto& st = states[clutch];
+      if (st.windows.empty() || st.windows.back().block != block) ++st.blocks;
+      st.windows.push_back({w, tau - inertial - load, all_measured, accel, block});
     }
     start = k + 1;
   }
@@ -187,7 +205,9 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
       const int d = sign_of(omega[k]);
       std::size_t split = k;
       while (split > rest_start && in.t_s[k] - in.t_s[split - 1] <= k_detect_lag_s) --split;
-      if (split > rest_start) {
+      // A start with no drive torque toward it (a coast read as rest between encoder counts)
+      // brackets nothing.
+      if (split > rest_start && largest(held, d, split, k + 1) > 0.0) {
         const double lower = largest(held, d, rest_start, split);
         const double upper = largest(held, d, split, k + 1);
         st.breakaways.push_back({std::min(lower, upper), std::max(lower, upper)});
@@ -236,33 +256,82 @@ StateFriction estimate(int clutch, const StateData& data, const FrictionOptions&
          clutch, levels, out.omega_min_rad_s, out.omega_max_rad_s, options.order, needed);
   }
 
-  const auto rows = static_cast<Eigen::Index>(data.windows.size());
   const auto poly = static_cast<Eigen::Index>(needed);
   const Eigen::Index col_inertia = options.fit_inertia ? poly : -1;
   const Eigen::Index col_offset = options.offset ? poly + (options.fit_inertia ? 1 : 0) : -1;
   const Eigen::Index cols = poly + (options.fit_inertia ? 1 : 0) + (options.offset ? 1 : 0);
-  if (rows <= cols) {
-    fail("clutch state {}: {} windows for {} unknowns: no excitation in the needed range", clutch, rows, cols);
+  if (static_cast<Eigen::Index>(data.windows.size()) <= cols) {
+    fail("clutch state {}: {} windows for {} unknowns: no excitation in the needed range", clutch,
+         data.windows.size(), cols);
   }
-  Eigen::MatrixXd a(rows, cols);
-  Eigen::VectorXd b(rows);
-  out.from_current = true;
-  for (Eigen::Index r = 0; r < rows; ++r) {
-    const auto& w = data.windows[static_cast<std::size_t>(r)];
-    const double s = w.omega_rad_s > 0.0 ? 1.0 : -1.0;
-    const double x = std::abs(w.omega_rad_s);
-    double xp = 1.0;
-    for (Eigen::Index c = 0; c < poly; ++c, xp *= x) a(r, c) = s * xp;
-    if (col_inertia >= 0) a(r, col_inertia) = w.accel_rad_s2;
-    if (col_offset >= 0) a(r, col_offset) = 1.0;
-    b[r] = w.torque_Nm;
-    out.from_current = out.from_current && w.from_current;
-  }
+  // The regression on the windows, leaving out those of block `skip` (none: every window).
+  const auto regress = [&](std::size_t skip, Eigen::MatrixXd& a, Eigen::VectorXd& b) {
+    std::vector<const Window*> used;
+    std::vector<double> used_speeds;
+    for (const auto& w : data.windows) {
+      if (w.block == skip) continue;
+      used.push_back(&w);
+      used_speeds.push_back(std::abs(w.omega_rad_s));
+    }
+    const auto rows = static_cast<Eigen::Index>(used.size());
+    if (rows <= cols || distinct_speeds(used_speeds) < needed) return false;
+    a.resize(rows, cols);
+    b.resize(rows);
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      const Window& w = *used[static_cast<std::size_t>(r)];
+      const double s = w.omega_rad_s > 0.0 ? 1.0 : -1.0;
+      const double x = std::abs(w.omega_rad_s);
+      double xp = 1.0;
+      for (Eigen::Index c = 0; c < poly; ++c, xp *= x) a(r, c) = s * xp;
+      if (col_inertia >= 0) a(r, col_inertia) = w.accel_rad_s2;
+      if (col_offset >= 0) a(r, col_offset) = 1.0;
+      b[r] = w.torque_Nm;
+    }
+    return true;
+  };
+  Eigen::MatrixXd a;
+  Eigen::VectorXd b;
+  MCG_DEMAND(regress(std::numeric_limits<std::size_t>::max(), a, b));
+  out.from_current =
+      std::all_of(data.windows.begin(), data.windows.end(), [](const Window& w) { return w.from_current; });
   const Eigen::VectorXd coef = a.colPivHouseholderQr().solve(b);
   Eigen::VectorXd se;
   Eigen::MatrixXd corr;
   double sigma = 0.0;
   covariance_statistics(a, a * coef - b, se, corr, sigma);
+  // The OLS errors take the windows as independent; windows of one stretch err together (its
+  // drive level, the speed's quantisation at its speed), which the jackknife over the stretches
+  // sees: var = (g - 1)/g sum (coef_(i) - mean)^2 over the g fits that leave out block i.
+  out.blocks = data.blocks;
+  out.se_ols.assign(se.begin(), se.end());
+  out.se_jackknife.assign(static_cast<std::size_t>(se.size()), std::numeric_limits<double>::quiet_NaN());
+  if (data.blocks >= k_min_jackknife_blocks) {
+    std::vector<Eigen::VectorXd> fits;
+    std::size_t last = std::numeric_limits<std::size_t>::max();
+    for (const auto& w : data.windows) {
+      if (w.block == last) continue;
+      last = w.block;
+      Eigen::MatrixXd ai;
+      Eigen::VectorXd bi;
+      if (!regress(w.block, ai, bi)) {
+        fits.clear();
+        break;
+      }
+      fits.push_back(ai.colPivHouseholderQr().solve(bi));
+    }
+    if (!fits.empty()) {
+      const auto g = static_cast<double>(fits.size());
+      Eigen::VectorXd mean = Eigen::VectorXd::Zero(cols);
+      for (const auto& f : fits) mean += f / g;
+      Eigen::VectorXd var = Eigen::VectorXd::Zero(cols);
+      for (const auto& f : fits) var += (f - mean).cwiseAbs2();
+      var *= (g - 1.0) / g;
+      for (Eigen::Index c = 0; c < cols; ++c) {
+        out.se_jackknife[static_cast<std::size_t>(c)] = std::sqrt(var[c]);
+        se[c] = std::max(se[c], std::sqrt(var[c]));
+      }
+    }
+  }
   out.total.value.Tc_Nm = coef[0];
   out.total.se.Tc_Nm = se[0];
   for (Eigen::Index c = 1; c < poly; ++c) {
@@ -340,7 +409,8 @@ FrictionResult fit_friction(const std::vector<table::Table>& runs, const model::
   if (options.order < 1 || options.order > 3) fail("--order must be 1, 2 or 3");
   if (runs.empty()) fail("no runs given");
   std::map<int, StateData> data;
-  for (const auto& table : runs) collect(table, base, options, data);
+  std::size_t block = 0;
+  for (const auto& table : runs) collect(table, base, options, data, block);
 
   FrictionResult result;
   result.params = base;

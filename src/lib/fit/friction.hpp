@@ -60,10 +60,10 @@ struct FrictionTerm {
 
 /// What the runs in one clutch state show: the total friction on the motor shaft.
 ///   moving windows: T_f = mean(T_drive) - J_shaft dw/dt - T_gen_load, regressed on
-///                   sign(w) (Tc + c1 |w| + ... + c_order |w|^order), standard errors from OLS
-///                   (fit_inertia: J dw/dt is a regressor, not subtracted; offset: a constant
-///                   regressor too); dw/dt = (w_end - w_start) / window, so the window mean of
-///                   J dw/dt is exact without differentiating twice;
+///                   sign(w) (Tc + c1 |w| + ... + c_order |w|^order), standard errors the
+///                   larger of OLS and a jackknife over the stretches (fit_inertia: J dw/dt is a regressor,
+///                   not subtracted; offset: a constant regressor too); dw/dt = (w_end - w_start) / window,
+///                   so the window mean of J dw/dt is exact without differentiating twice;
 ///   T_drive       = Kt i (measured current) or Kt (v - Ke w) / R (voltage balance, the
 ///                   armature at steady state: L di/dt averages out over a window);
 ///   T_gen_load    = Kt_g i_gen, or Kt_g Ke_g w / (R_g + r_load) (state 2 only);
@@ -83,6 +83,15 @@ struct StateFriction {
   double inertia_se = std::numeric_limits<double>::quiet_NaN();
   double offset = std::numeric_limits<double>::quiet_NaN();      ///< offset: constant bias (N m, or N)
   double offset_se = std::numeric_limits<double>::quiet_NaN();
+  /// Quasi-steady stretches (split at most 2 s long) the windows come from.
+  std::size_t blocks = 0;
+  /// Standard errors of the regressed values (Tc, c1 .. c_order, then inertia and offset when
+  /// fitted) two ways: the windows' OLS, which takes them as independent, and a delete-one-block
+  /// jackknife over the stretches, which sees what a stretch's windows share (NaN when there
+  /// are fewer than 5 blocks or one block alone carries a needed speed). The reported errors
+  /// (total.se, inertia_se, offset_se) are the larger of the two.
+  std::vector<double> se_ols;
+  std::vector<double> se_jackknife;
 };
 
 /// The stacked elements (standard errors add in quadrature):

@@ -23,11 +23,12 @@
 //   score_ref - score > max(k_abs, k_rel (score_ref - outputs))
 // i.e. it removes a clear part of the gap above the noise that the reference leaves.
 // The diagnosis: `none` unless the model as given misses by more than the noise allows;
-// the largest accepted mixture, else the best significant effect over the refit; else `param_mismatch` if the refit
-// alone is significant. That choice is accepted only when it explains the gap: its score
-// is near the noise or it removes a stated share of the excess (k_gap_near_noise,
-// k_gap_explained_share); otherwise, and when nothing is significant, `unexplained`, with
-// the best candidate's residual analysed to say where what is left lies.
+// the largest accepted mixture, else the best significant effect over the refit; else `param_mismatch` if the
+// refit alone is significant. That choice is accepted only when it explains the gap: its score is near the
+// noise or it removes a stated share of the excess (k_gap_near_noise, k_gap_explained_share); otherwise, and
+// when nothing is significant, `unexplained`, with the best candidate's residual analysed to say where what
+// is left lies; but `none` when the excess is small and no candidate predicts the validation runs any better
+// (k_gap_small_excess).
 #pragma once
 
 #include "common/diagnostics.hpp"
@@ -55,6 +56,11 @@ inline constexpr double k_gap_rel_threshold = 0.2;
 /// is near the noise, score <= (1 + k_gap_near_noise) outputs (an RMS within about 22 % of
 /// the floor per output), ...
 inline constexpr double k_gap_near_noise = 0.5;
+/// A model as given whose score is within (1 + this) outputs (an RMS within about 41 % of the
+/// floor per output) and that no candidate, not even the refit of its nominal parameters,
+/// predicts the validation runs better than, is `none`: the small excess is not a missing
+/// effect (noise beyond the floor, a quantisation or timing the floor leaves out).
+inline constexpr double k_gap_small_excess = 1.0;
 /// ... or it removes at least this share of the score above the noise that the model as
 /// given leaves (three quarters of the squared excess: half of its RMS). Otherwise the
 /// verdict is `unexplained`.

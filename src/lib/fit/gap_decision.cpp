@@ -106,6 +106,21 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
     chosen = &pm;
     report.reason = "refitting the nominal parameters closes the gap; no effect adds to it beyond the noise";
   }
+  // A small excess that no candidate predicts the held-out runs better than is no missing
+  // effect: every candidate fitted to the training runs scores worse on the validation runs.
+  const auto better = [&](const GapCandidate& c) { return c.evaluated && c.score < before_score; };
+  const bool none_better = !better(pm) && std::none_of(singles.begin(), singles.end(), better) &&
+                           std::none_of(mixtures.begin(), mixtures.end(), better);
+  if (gap && chosen == nullptr && none_better &&
+      before_score <= (1.0 + k_gap_small_excess) * static_cast<double>(outputs)) {
+    report.reason = fmt::format(
+        "the model as given misses the validation runs by a little more than the noise (score {:.2f} for {} "
+        "output{}, noise alone gives about {}), but no candidate, not even a refit of its nominal "
+        "parameters, "
+        "predicts them better: no effect is missing",
+        before_score, outputs, outputs > 1 ? "s" : "", outputs);
+    gap = false;
+  }
   // Accepted only when it explains the gap: near the noise, or most of the excess removed.
   const bool near_noise =
       chosen != nullptr && chosen->score <= (1.0 + k_gap_near_noise) * static_cast<double>(outputs);

@@ -231,6 +231,72 @@ bool gauge_trade(const std::vector<FitFlag>& flags, std::string_view key) {
   });
 }
 
+/// Points of the breakaway profile on each side of the fitted value.
+constexpr int k_profile_half_points = 16;
+
+/// The breakaway level `key` of a friction effect, fitted on the regularised stick, profiled on
+/// the exact stick-slip the final score uses: the training cost at values around the fit, the
+/// other parameters held. The value moves to the profile's least cost, and its standard error
+/// is the half-width of the values whose cost lies within one standard error's worth of it
+/// (a likelihood ratio of 1: cost_min / M for M residuals, times the AR(1) widening squared,
+/// since a simulation error is autocorrelated), when that is wider than the Jacobian's. A
+/// staircase whose steps bracket the breakaway coarsely gives a flat profile between the
+/// steps: the error then says how little the data tell. Returns the note for the status.
+std::string profile_breakaway(GapCandidate& c, const std::string& key, const FitResult& fit,
+                              const std::vector<Run>& runs, std::chrono::steady_clock::time_point deadline) {
+  const auto it = std::find(c.free.begin(), c.free.end(), key);
+  if (it == c.free.end()) return {};
+  const auto k = static_cast<std::size_t>(it - c.free.begin());
+  if (k >= c.values.size() || k >= c.std_errors.size()) return {};
+  const double value = c.values[k];
+  const double jacobian_se = c.std_errors[k];
+  const auto residuals = static_cast<double>(fit.nls.residuals.size());
+  if (!std::isfinite(value) || residuals < 1.0) return {};
+  double lower = 0.0;
+  for (const model::ParamInfo& info : model::parameters(c.model)) {
+    if (info.name == key) lower = info.lower;
+  }
+  const double half = std::max(0.3 * std::abs(value), 5.0 * (std::isfinite(jacobian_se) ? jacobian_se : 0.0));
+  if (!(half > 0.0)) return {};
+  const double step = half / k_profile_half_points;
+  std::vector<double> points;
+  for (int n = -k_profile_half_points; n <= k_profile_half_points; ++n) {
+    const double x = value + step * n;
+    if (x >= lower) points.push_back(x);
+  }
+  std::vector<double> costs(points.size(), std::numeric_limits<double>::infinity());
+  parallel::for_each(points.size(), 0, [&](std::size_t n) {
+    if (std::chrono::steady_clock::now() >= deadline) return;
+    model::Model m = c.model;
+    model::set_parameter(m, key, points[n]);
+    costs[n] = training_cost(m, runs);
+  });
+  const auto centre =
+      static_cast<std::size_t>(std::find(points.begin(), points.end(), value) - points.begin());
+  if (centre >= points.size() ||
+      !std::all_of(costs.begin(), costs.end(), [](double x) { return std::isfinite(x); }))
+    return {};
+  // The least cost, ties to the fitted value.
+  std::size_t best = centre;
+  for (std::size_t n = 0; n < points.size(); ++n) {
+    const auto far = [&](std::size_t a) { return a > centre ? a - centre : centre - a; };
+    if (costs[n] < costs[best] || (costs[n] == costs[best] && far(n) < far(best))) best = n;
+  }
+  const double threshold = costs[best] / residuals * fit.se_widening * fit.se_widening;
+  std::size_t lo = best;
+  std::size_t hi = best;
+  while (lo > 0 && costs[lo - 1] <= costs[best] + threshold) --lo;
+  while (hi + 1 < points.size() && costs[hi + 1] <= costs[best] + threshold) ++hi;
+  const double profile_se = 0.5 * (points[hi] - points[lo]) + 0.5 * step;
+  const bool open = (lo == 0 && points[0] > lower) || hi + 1 == points.size();
+  model::set_parameter(c.model, key, points[best]);
+  c.values[k] = points[best];
+  c.std_errors[k] = open ? std::numeric_limits<double>::infinity() : std::max(jacobian_se, profile_se);
+  return fmt::format("{} profiled on the exact stick: {:.4g} +- {}{:.2g} (regularised fit {:.4g} +- {:.2g})",
+                     key, points[best], open ? "more than " : "", open ? half : profile_se, value,
+                     jacobian_se);
+}
+
 GapCandidate run_job(const Job& job, const GapData& data, const std::vector<OutputFloor>& floors,
                      const GapSettings& settings, const std::vector<double>& orders) {
   GapCandidate c;
@@ -343,6 +409,13 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   problem.free = job.free;
   problem.nls.max_evaluations = budget(job.free.size());
   FitResult fit = fit_model(problem);
+  // A mixture's members may trade along a long valley (a drive dead band against Coulomb
+  // friction: the steady states see only their sum, the coasts and reversals tell them apart):
+  // a joint fit that spent its budget still moving goes on once from where it stopped.
+  if (job.effects.size() > 1 && !fit.nls.converged && std::chrono::steady_clock::now() < settings.deadline) {
+    problem.model = fit.model;
+    fit = fit_model(problem);
+  }
   take(fit, job.free);
   // A gauge the data cannot fix: an added effect that trades exactly against the nominal
   // scales (a drive dead band wider than one drive level leaves the volt unmeasured, so Kt, R,
@@ -364,6 +437,14 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     take(fit, free);
     pinned.push_back(key);
   }
+  std::vector<std::string> profiled;
+  for (const auto& e : job.effects) {
+    const model::EffectSpec* spec = find_plan(e);
+    if (spec == nullptr || spec->plan.breakaway_key.empty()) continue;
+    std::string note =
+        profile_breakaway(c, e + "." + spec->plan.breakaway_key, fit, data.train, settings.deadline);
+    if (!note.empty()) profiled.push_back(std::move(note));
+  }
   const bool out_of_time = settings.deadline != std::chrono::steady_clock::time_point::max() &&
                            std::chrono::steady_clock::now() >= settings.deadline;
   c.status = out_of_time         ? std::string(k_out_of_time) + "; fit stopped early"
@@ -371,6 +452,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
                                  : "fitted; budget spent";
   if (!pinned.empty())
     c.status += fmt::format("; {} pinned at the given value (a gauge)", fmt::join(pinned, " "));
+  for (const std::string& note : profiled) c.status += "; " + note;
   score();
   return c;
 }

@@ -137,6 +137,10 @@ struct EffectPlan {
   /// Starting values of `free` (in its order) from the friction the data show, tried before
   /// the grid; an empty vector when the data do not determine them. nullptr: the grid only.
   std::vector<double> (*data_start)(const DataFriction& seen, const Params& nominal) = nullptr;
+  /// The free key that sets a friction effect's breakaway level (empty: none). The regularised
+  /// stick moves the response continuously in it, the exact stick-slip decides it: the search
+  /// profiles it on the exact model after the fit (value and standard error).
+  std::string breakaway_key;
 
   static EffectPlan fit(std::vector<std::string> free, std::vector<std::vector<double>> grid,
                         Needs needs = Needs::nothing, std::string angle_order_key = {}) {

@@ -142,6 +142,16 @@ int FitFriction::run(Io& io) {
     if (std::isfinite(st.offset)) {
       ini.set(sec, p + "offset" + torque_key, num6(st.offset), se_comment(st.offset_se, torque_unit));
     }
+    ini.set(sec, p + "blocks", static_cast<double>(st.blocks), "quasi-steady stretches, split at 2 s");
+    // Each regressed value's two standard errors: the reported one is the larger.
+    std::vector<std::string> names{std::string("Tc") + torque_key};
+    for (int c = 1; c <= options.fit.order; ++c) names.push_back(fmt::format("visc{}", c));
+    if (std::isfinite(st.inertia)) names.emplace_back(lin ? "mass_kg" : "inertia_kg_m2");
+    if (std::isfinite(st.offset)) names.push_back(std::string("offset") + torque_key);
+    for (std::size_t c = 0; c < names.size() && c < st.se_ols.size(); ++c) {
+      ini.set(sec, p + "se_" + names[c], fmt::format("{} {}", num6(st.se_ols[c]), num6(st.se_jackknife[c])),
+              "OLS over the windows, jackknife over the blocks (nan: too few)");
+    }
   }
   ini.write(io.out);
   return 0;

@@ -42,6 +42,7 @@ EffectPlan plan() {
                      .as_friction(start_from_data);
   p.grid_scale = stall_scale;
   p.supersedes = {"coulomb_scale", "static_scale", "viscous_scale"};
+  p.breakaway_key = "Ts_excess_Nm";
   return p;
 }
 
