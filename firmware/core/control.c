@@ -45,6 +45,16 @@ static int32_t MCG_XDATA s_next_u_bias;              /* bias in Q(F+8) */
 static int32_t MCG_XDATA s_next_r;                   /* R once the command is settled */
 static uint16_t MCG_XDATA s_next_bp[3];              /* operands of arith_pid_sum */
 static uint8_t MCG_XDATA s_staged; /* a shadow register written since the last commit or discard */
+/* Two commands a PRBS on rpm_cmd alternates between (control_levels), the command before them, and the
+ * R each combination of the command and the two before it gives with the active set (refresh_r's sums):
+ *   r0[k 8 + h] = c0 q_k + c1 q_k1 + c2 q_k2, h = k1 2 + k2 (k1, k2 < 2) or 4 + k1 (k2 = 2);
+ *   r1[k 4 + k1] = (c0 + c1) q_k + c2 q_k1;  r2[k] = (c0 + c1 + c2) q_k;  k < 2, k1, k2 <= 2.
+ * A new level is then three copies where the products and their 32-bit sums took about 600 cycles on
+ * the 8051 (the PI update with a new level was 1.13 ms). */
+static int16_t MCG_XDATA s_lv_q[3];
+static uint8_t MCG_XDATA s_lv_ok; /* the table holds the active set's R (no commit since) */
+static int32_t MCG_XDATA s_lv_r0[16], s_lv_r1[8], s_lv_r2[2];
+static int32_t MCG_XDATA s_lv_p[3][3]; /* c_i q_k (the bias added to c0 q_k in P mode) */
 uint8_t g_ctl_p_hi;
 int32_t MCG_IDATA g_ctl_r[3];
 uint8_t g_ctl_r_k;
@@ -66,6 +76,7 @@ static int32_t scale_next(int16_t x) {
 }
 static void next_r(void);
 static void refresh_r(void);
+static uint8_t level_r(void);
 
 static void rescale(void) {
   g_ctl_shift = (uint8_t)(g_coef_frac + MCG_ERR_FRAC_BITS);
@@ -121,6 +132,7 @@ void control_init(void) {
   s_r1 = 0;
   s_r2 = 0;
   g_ctl_settle = 0;
+  s_lv_ok = 0;
   for (i = 0; i < 3; ++i) {
     g_pid.p[i] = 0;
   }
@@ -139,6 +151,10 @@ void control_set_q8(int16_t r_q8) {
   /* 56 at 720 rpm; never above 85, so that three pulse counts sum to at most 255 */
   g_ctl_p_hi = hi > 85 ? 85u : (uint8_t)hi;
   g_ctl_settle = 2; /* the tick shifts the command history until it holds the new one twice */
+  if (!s_staged && level_r()) {
+    s_next_r = g_ctl_r[2];
+    return;
+  }
   refresh_r();
   /* Unstaged, the shadow set is the active one, whose settled R control_refresh just gave. */
   if (s_staged) {
@@ -207,6 +223,73 @@ static void refresh_r(void) {
     g_ctl_r[1] = g_ctl_r[2];
   }
   g_ctl_r_k = 0;
+}
+
+void control_levels(int16_t q_a, int16_t q_b) MCG_REENTRANT {
+  uint8_t k;
+  uint8_t h;
+  s_lv_q[0] = q_a;
+  s_lv_q[1] = q_b;
+  s_lv_q[2] = s_r_q8;
+  s_c0 = (int16_t)(g_pid.bp[0] ^ 0x8000u);
+  s_c1 = (int16_t)(g_pid.bp[1] ^ 0x8000u);
+  s_c2 = (int16_t)(g_pid.bp[2] ^ 0x8000u);
+  for (k = 0; k < 3u; ++k) {
+    s_lv_p[0][k] = arith_mul16(s_c0, s_lv_q[k]);
+    if (g_mode == MCG_MODE_P) {
+      s_lv_p[0][k] += s_u_bias;
+    }
+    s_lv_p[1][k] = arith_mul16(s_c1, s_lv_q[k]);
+    s_lv_p[2][k] = arith_mul16(s_c2, s_lv_q[k]);
+  }
+  /* mod 2^32, as refresh_r sums them */
+  for (k = 0; k < 2u; ++k) {
+    for (h = 0; h < 7u; ++h) {
+      uint8_t k1 = h < 4u ? (uint8_t)(h >> 1) : (uint8_t)(h - 4u);
+      uint8_t k2 = h < 4u ? (uint8_t)(h & 1u) : 2u;
+      s_lv_r0[k * 8u + h] =
+          (int32_t)((uint32_t)s_lv_p[0][k] + (uint32_t)s_lv_p[1][k1] + (uint32_t)s_lv_p[2][k2]);
+    }
+    for (h = 0; h < 3u; ++h) {
+      s_lv_r1[k * 4u + h] =
+          (int32_t)((uint32_t)s_lv_p[0][k] + (uint32_t)s_lv_p[1][k] + (uint32_t)s_lv_p[2][h]);
+    }
+    s_lv_r2[k] = (int32_t)((uint32_t)s_lv_p[0][k] + (uint32_t)s_lv_p[1][k] + (uint32_t)s_lv_p[2][k]);
+  }
+  s_lv_ok = 1;
+}
+
+/* Which of control_levels' commands q is (0..2), 3 none. A macro: a function's argument would need
+ * internal RAM the 8051 has no room for. */
+#define LEVEL_OF(q) ((q) == s_lv_q[0] ? 0u : (q) == s_lv_q[1] ? 1u : (q) == s_lv_q[2] ? 2u : 3u)
+
+/* refresh_r for a new command from control_levels' table: 1 if it holds the command and the two
+ * before it, 0 (nothing changed) otherwise. */
+static uint8_t level_r(void) {
+  MCG_SLOW uint8_t k;
+  MCG_SLOW uint8_t k1;
+  MCG_SLOW uint8_t h;
+  if (!s_lv_ok) {
+    return 0;
+  }
+  k = (uint8_t)LEVEL_OF(s_r_q8);
+  k1 = (uint8_t)LEVEL_OF(s_r1);
+  h = (uint8_t)LEVEL_OF(s_r2);
+  if (k > 1u || k1 > 2u || h > 2u) {
+    return 0;
+  }
+  if (h == 2u) {
+    h = (uint8_t)(4u + k1);
+  } else if (k1 == 2u) {
+    return 0;
+  } else {
+    h = (uint8_t)((uint8_t)(k1 << 1) | h);
+  }
+  g_ctl_r[0] = s_lv_r0[(uint8_t)(k << 3) | h];
+  g_ctl_r[1] = s_lv_r1[(uint8_t)(k << 2) | k1];
+  g_ctl_r[2] = s_lv_r2[k];
+  g_ctl_r_k = 0;
+  return 1;
 }
 
 /* The shadow set's settled R = sum_i c_i r (+ the bias in P mode), and its operands bp. */
@@ -303,6 +386,7 @@ uint8_t control_commit(void) {
   g_duty_bias = g_ctl_shadow.duty_bias;
   g_duty_min = g_ctl_shadow.duty_min;
   g_duty_max = g_ctl_shadow.duty_max;
+  s_lv_ok = 0; /* control_levels' table holds the old set's R */
   /* Bumpless: U[n-1] is the present output within the new limits, in the new format; the error
    * history (pulses, command) carries on, so PI and PID continue from the duty now driving the motor,
    * and open loop keeps it. */

@@ -107,6 +107,10 @@ uint8_t control_pending(void);
 void control_set_rpm_cmd(int16_t rpm);
 /* The same for a command already in Q8 pulses per tick (control_rpm_to_q8): a level precomputed. */
 void control_set_q8(int16_t r_q8);
+/* Precomputes R for commands that alternate between q_a and q_b (Q8), from the present command on,
+ * with the active set, so that control_set_q8 of either costs copies, not products (exactly the same
+ * R), until the next commit; not while a set is staged. */
+void control_levels(int16_t q_a, int16_t q_b) MCG_REENTRANT;
 /* Recomputes what depends on the command, the coefficients or the mode (after a change of any). */
 void control_refresh(void);
 /* Speed over the last MCG_SPEED_WINDOW_MS: rpm = counts * 1875 / 1024, rounded. */

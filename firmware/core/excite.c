@@ -24,7 +24,8 @@
  * is the excitation's start).
  * The per-tick cost is a down-counter; the LFSR step, the chirp's phase and table step and the
  * target write run once per level. A PRBS on rpm_cmd converts its two levels to the controller's Q8
- * command at the start, so that a new bit costs the command's refresh without the conversion. Fixed
+ * command at the start and has the controller precompute its R for them (control_levels), so that a
+ * new bit costs copies, without the conversion or a product. Fixed
  * point only: every level is an int16 computed at the start, by one addition, or by one 16 x 16
  * multiply. */
 #include "arith.h" /* arith_mul16 */
@@ -235,6 +236,9 @@ uint8_t excite_set_run(uint8_t run) {
     s_taps = k_taps[g_exc_order - 2u];
     s_q8_up = control_rpm_to_q8((int16_t)s_hi);
     s_q8_down = control_rpm_to_q8((int16_t)s_lo);
+    if (s_on_rpm) {
+      control_levels(s_q8_up, s_q8_down);
+    }
   } else if (g_exc_kind == MCG_EXC_CHIRP) {
     if (!chirp_setup()) {
       return MCG_ST_RANGE;

@@ -155,6 +155,43 @@ TEST(FwExcite, ClosedLoopPrbsGivesTheControllerTheWrittenCommand) {
   EXPECT_GE(checked, 50);
 }
 
+// A PRBS on rpm_cmd with a new bit every tick sets R from control_levels' table: on every tick R is what
+// refresh_r sums for the command and the two before it, R[0] = sum_i b_i r[n-i], R[1] = (b0 + b1) r[n]
+// + b2 r[n-1], R[2] = sum_i b_i r[n], from the first level (the command before the start in the
+// history) on, and after a commit changes the gains mid-run.
+TEST(FwExcite, PrbsOnTheCommandSetsRAsItsSumsEveryTick) {
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_B0, 300), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_B1, -290), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_B2, 7), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_MODE, MCG_MODE_PID), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_COMMIT, 1), MCG_ST_OK);
+  ASSERT_EQ(b.write(MCG_REG_RPM_CMD, 333), MCG_ST_OK);
+  b.run(5);
+  setup_prbs(b, 5, 1, 61, 400, 0);
+  ASSERT_EQ(b.write(MCG_REG_EXC_RUN, 1), MCG_ST_OK);
+  std::vector<std::int32_t> q = {control_rpm_to_q8(333), control_rpm_to_q8(333)};
+  std::int32_t c[3] = {300, -290, 7};
+  int changed = 0;
+  for (int i = 0; i < 120; ++i) {
+    if (i == 60) {
+      ASSERT_EQ(b.write(MCG_REG_B0, 280), MCG_ST_OK);
+      ASSERT_EQ(b.write(MCG_REG_COMMIT, 1), MCG_ST_OK);
+      c[0] = 280;
+    }
+    b.run(1);
+    int16_t rpm = 0;
+    host_board_reg_read(MCG_REG_RPM_CMD, &rpm);
+    q.push_back(control_rpm_to_q8(rpm));
+    const std::size_t n = q.size() - 1;
+    changed += q[n] != q[n - 1];
+    ASSERT_EQ(g_ctl_r[0], c[0] * q[n] + c[1] * q[n - 1] + c[2] * q[n - 2]) << "tick " << i;
+    ASSERT_EQ(g_ctl_r[1], (c[0] + c[1]) * q[n] + c[2] * q[n - 1]) << "tick " << i;
+    ASSERT_EQ(g_ctl_r[2], (c[0] + c[1] + c[2]) * q[n]) << "tick " << i;
+  }
+  EXPECT_GE(changed, 40);
+}
+
 // A command written while a controller set is staged is committed with that set: R is the new set's
 // sum_i b_i r, whether the staged set differs from the active one or repeats it.
 TEST(FwExcite, CommandWrittenWhileASetIsStagedIsCommittedWithIt) {

@@ -259,7 +259,8 @@ FrequencyResponse read_frequency_response(const table::Table& table) {
     fr.coherence = table.col("coherence");
     for (std::size_t k = 0; k < fr.coherence.size(); ++k) {
       const double c = fr.coherence[k];
-      if (!(c >= 0.0 && c <= 1.0)) {
+      // nan: the estimator could not judge it (lines over one period); the fit then weighs the point 1.
+      if (!std::isnan(c) && !(c >= 0.0 && c <= 1.0)) {
         fail("{}:{}: column 'coherence': {} is outside 0..1", table.source, table.line_of(k), c);
       }
     }
@@ -299,7 +300,7 @@ TfFit fit_tf(const FrequencyResponse& response, const TfFitOptions& options) {
     const double f = response.f_hz[k];
     if (f < options.f_min_hz || f > options.f_max_hz) continue;
     double weight = 1.0;
-    if (options.use_coherence && !response.coherence.empty()) {
+    if (options.use_coherence && !response.coherence.empty() && !std::isnan(response.coherence[k])) {
       const double g2 = std::min(response.coherence[k], 0.999);
       weight = g2 / (1.0 - g2);
     }

@@ -417,6 +417,35 @@ void bode(const table::Table& input, const BodeOptions& options, std::ostream& o
       lines_name = fmt::format("{}: multisine_lines_hz", tbl.meta.where(tbl.source, "multisine_lines_hz"));
     }
   }
+  // A chirp the board repeats is periodic: its period is a whole number of updates, the phase starting
+  // from 0 in each. Over two whole periods or more the lines k / period in its band are read as a
+  // multisine's, the first period (the start's transient) skipped. Welch over one short sweep reads
+  // little of its lowest octave: a 0.5 -> 20 Hz sweep of 4 s spends 0.3 s below 2 Hz, and a 1 Hz bin
+  // came out 8.5 % high there.
+  std::string chirp_note;
+  if (played && played->kind == "chirp" && lines.empty() && !period && o.method == BodeMethod::automatic) {
+    const auto f0 = played->value("f0");
+    const auto f1 = played->value("f1");
+    const auto sweep = played->value("sweep");
+    const auto update = played->value("update");
+    if (f0 && f1 && sweep && update && *update > 0 && *sweep >= *update) {
+      const double chirp_period = std::floor(*sweep / *update + 1e-9) * *update;
+      const double span_s = static_cast<double>(x.size()) * dt;
+      if (span_s + 1e-9 >= 2.0 * chirp_period) {
+        const double lo = std::max(std::min(*f0, *f1), o.f_min_hz.value_or(0.0));
+        const double hi = std::min({std::max(*f0, *f1), o.f_max_hz.value_or(*f1 + *f0), 0.5 / dt});
+        for (double k = std::ceil(lo * chirp_period - 1e-9); k <= std::floor(hi * chirp_period + 1e-9); ++k) {
+          if (k >= 1 && k / chirp_period < 0.5 / dt) lines.push_back(k / chirp_period);
+        }
+        if (!lines.empty()) {
+          period = chirp_period;
+          period_name = fmt::format("{}: excitation", tbl.meta.where(tbl.source, "excitation"));
+          lines_name = period_name;
+          chirp_note = fmt::format(", the lines k / {} s of the board's chirp", format_number(chirp_period));
+        }
+      }
+    }
+  }
   if (!period && !lines.empty()) {
     if (const auto meta_period = tbl.meta.get("multisine_period_s")) {
       const auto values = numbers_in(*meta_period);
@@ -457,9 +486,9 @@ void bode(const table::Table& input, const BodeOptions& options, std::ostream& o
     }
     r = line_response(x, y, dt, period_samples, harmonics);
     const std::size_t periods = x.size() / period_samples;
-    meta.set("estimator", fmt::format("multisine lines, DFT over {} whole period(s) of {} s{}",
+    meta.set("estimator", fmt::format("multisine lines, DFT over {} whole period(s) of {} s{}{}",
                                       periods >= 2 ? periods - 1 : periods, format_number(exact_period),
-                                      periods >= 2 ? ", first period skipped" : ""));
+                                      periods >= 2 ? ", first period skipped" : "", chirp_note));
   } else {
     // A framed excitation (a chirp with settling time) is analysed from half a segment before
     // its start to half a segment after its end: every segment holding the sweep, no more.
