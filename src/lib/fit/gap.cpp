@@ -240,6 +240,12 @@ int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
   const std::vector<table::Table> train = load(options.train);
   const std::vector<table::Table> validate = load(options.validate);
   GapData data = prepare_gap_data(train, validate, model.params, options.split_fraction, options.split_given);
+  if (options.linear) {
+    if (data.speed_unit.column != "omega")
+      fail("--linear: the runs must measure the axis' speed as omega, m/s");
+    data.speed_unit.name = "m/s";
+    data.speed_unit.key = "m_s";
+  }
   for (auto& run : data.train) apply_speed_path(run, speed, options.gear_ratio);
   for (auto& sr : data.validate) apply_speed_path(sr.run, speed, options.gear_ratio);
   settings.threads = options.threads;

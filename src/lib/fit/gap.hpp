@@ -302,6 +302,9 @@ struct GapOptions {
   /// Motor turns per turn of the measured shaft, over the captures' `# gear_ratio:` and the
   /// INI's `[measurement] gear_ratio` (unset: theirs, else 1).
   std::optional<double> gear_ratio;
+  /// The measured omega is a linear axis' speed, m/s (the gear ratio then the motor's rad per m
+  /// of travel, 2 pi / lead): the reports say m/s.
+  bool linear = false;
   double budget_s = 120.0;       ///< wall-clock budget of the diagnosis (partial results after it)
   bool progress = false;         ///< progress report lines on the diagnostics
   bool discrepancy = false;      ///< the catalog-free discrepancy fit whatever the verdict
