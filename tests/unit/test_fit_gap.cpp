@@ -60,7 +60,7 @@ TEST(GapRegimes, RmsAndSharesPerRegimeAreExact) {
   for (std::size_t n = 300; n < 400; ++n) rpm[n] = -100.0;  // reverse, below 150 rpm
   rpm[0] = 0.0;                                               // stuck
   r[5] = std::numeric_limits<double>::quiet_NaN();            // not measured: not counted
-  const RegimeContext ctx{&in, rpm, 5.859375};
+  const RegimeContext ctx{&in, rpm, 5.859375, 150.0, "150 rpm"};
   const std::vector<RegimeStat> stats = regime_breakdown(ctx, r);
   auto find = [&](std::string_view regime) {
     for (const auto& s : stats) {

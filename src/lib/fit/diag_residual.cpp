@@ -98,7 +98,7 @@ std::vector<RegimeStat> regime_breakdown(const RegimeContext& context, std::span
     const double speed = std::abs(rpm);
     if (!(speed >= stuck_rpm)) {
       stuck.add(r);
-    } else if (speed < k_low_speed_rpm) {
+    } else if (speed < context.low_speed) {
       low.add(r);
     } else {
       high.add(r);
@@ -115,8 +115,8 @@ std::vector<RegimeStat> regime_breakdown(const RegimeContext& context, std::span
       make_stat("load", "open", open, total),
       make_stat("load", "closed", closed, total),
       make_stat("speed", "stuck", stuck, total),
-      make_stat("speed", "< 150 rpm", low, total),
-      make_stat("speed", ">= 150 rpm", high, total),
+      make_stat("speed", "< " + context.low_label, low, total),
+      make_stat("speed", ">= " + context.low_label, high, total),
       make_stat("direction", "forward", forward, total),
       make_stat("direction", "reverse", reverse, total),
       make_stat("timing", "transient", trans, total),

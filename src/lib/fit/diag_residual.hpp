@@ -17,8 +17,9 @@ namespace mcg::fit {
 inline constexpr double k_transient_window_s = 0.1;
 /// A jump of the applied voltage larger than this between two rows is an event, V.
 inline constexpr double k_event_voltage_jump_V = 1.0;
-/// The speed band boundary of the report's low-speed regime, rpm.
-inline constexpr double k_low_speed_rpm = 150.0;
+/// The report's low-speed regime: moving slower than this share of the largest |speed| measured
+/// (relative, so that it means the same on a 60:1 gearmotor's output shaft and a fast spindle).
+inline constexpr double k_low_speed_share = 0.05;
 
 /// Row indices n (n >= 1) where an input changes: the clutch state, the relay (r_load
 /// switching between open and closed or changing value), or |v(n) - v(n-1)| > 1 V.
@@ -34,22 +35,26 @@ std::vector<bool> transient_mask(const model::Inputs& inputs);
 /// Only finite residual samples count; rms is NaN for an empty regime.
 struct RegimeStat {
   std::string group;    ///< "all", "clutch", "load", "speed", "direction", "timing", "band"
-  std::string regime;   ///< "state 0", "open", "stuck", "< 150 rpm", "forward", "transient", "1-10 Hz", ...
+  std::string regime;   ///< "state 0", "open", "stuck", "< 12.5 rad/s", "forward", "1-10 Hz", ...
   std::size_t samples = 0;
   double rms = 0.0;
   double share = 0.0;
 };
 
 /// What a breakdown needs besides the residual: the inputs of the run and the measured
-/// speed (stuck = |rpm| below half the encoder resolution `rpm_resolution`).
+/// speed (stuck = |speed| below half the resolution `rpm_resolution`; low = moving below
+/// `low_speed`, both in the measured series' unit; `low_label` names that bound in the report's
+/// unit, "12.5 rad/s").
 struct RegimeContext {
   const model::Inputs* inputs = nullptr;
   std::span<const double> rpm_measured;
   double rpm_resolution = 0.0;
+  double low_speed = 0.0;
+  std::string low_label;
 };
 
 /// Breakdown of `residual` (one value per row of the context's inputs) over the time-domain
-/// regimes: all; clutch state 0/1/2; load open/closed; speed stuck / below 150 rpm / above;
+/// regimes: all; clutch state 0/1/2; load open/closed; speed stuck / below low_speed / above;
 /// direction forward (rpm >= 0) / reverse; transient / steady. Regimes without samples are
 /// kept (samples = 0) so that tables of several models line up.
 std::vector<RegimeStat> regime_breakdown(const RegimeContext& context, std::span<const double> residual);

@@ -599,7 +599,7 @@ std::string circuit_subject(const DiscrepancyResult& d) {
 
 }  // namespace
 
-std::string explained_text(const DiscrepancyResult& d, bool summary) {
+std::string explained_text(const DiscrepancyResult& d, bool summary, const SpeedUnit& unit) {
   const auto g = [](double v, int digits) { return fmt::format("{:.{}g}", v, digits); };
   std::vector<std::string> parts;
   if (has_place(d, "shaft")) {
@@ -620,19 +620,22 @@ std::string explained_text(const DiscrepancyResult& d, bool summary) {
                     summary ? g(d.reading_torque_pct, 3) : fmt::format("{:.0f}", d.reading_torque_pct)));
   }
   const bool speed_moved = has_place(d, "shaft") || has_place(d, "speed reading");
+  const double before = unit.per_rpm * d.rms_before_rpm;
+  const double after = unit.per_rpm * d.rms_after_rpm;
+  const double floor = unit.per_rpm * d.floor_rpm;
+  const std::string& col = unit.column;
   if (summary) {
-    parts.push_back(
-        speed_moved
-            ? fmt::format("validation rpm RMS {} -> {}", g(d.rms_before_rpm, 4), g(d.rms_after_rpm, 4))
-            : fmt::format("validation rpm RMS {} (not theirs to move)", g(d.rms_before_rpm, 4)));
+    parts.push_back(speed_moved
+                        ? fmt::format("validation {} RMS {} -> {}", col, g(before, 4), g(after, 4))
+                        : fmt::format("validation {} RMS {} (not theirs to move)", col, g(before, 4)));
   } else {
     parts.push_back(speed_moved
-                        ? fmt::format("added to the model, validation rpm RMS {:.2f} -> {:.2f} rpm (noise "
+                        ? fmt::format("added to the model, validation {} RMS {:.2f} -> {:.2f} {} (noise "
                                       "floor {:.2f})",
-                                      d.rms_before_rpm, d.rms_after_rpm, d.floor_rpm)
-                        : fmt::format("the simulated speed is not theirs to move: validation rpm RMS "
-                                      "{:.2f} rpm (noise floor {:.2f})",
-                                      d.rms_before_rpm, d.floor_rpm));
+                                      col, before, after, unit.name, floor)
+                        : fmt::format("the simulated speed is not theirs to move: validation {} RMS "
+                                      "{:.2f} {} (noise floor {:.2f})",
+                                      col, before, unit.name, floor));
   }
   std::string out;
   for (std::size_t k = 0; k < parts.size(); ++k) out += (k == 0 ? "" : "; ") + parts[k];

@@ -58,8 +58,9 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
 /// terms' share of the torque residual (training and validation), the circuit and current
 /// reading terms' share of the motor circuit's voltage residual, what correcting the current
 /// reading removes of the torque residual, and the validation rpm RMS before and after.
-/// `summary`: the one-line form of the CSV metadata (validation only, 3 and 4 digits).
-std::string explained_text(const DiscrepancyResult& d, bool summary);
+/// `summary`: the one-line form of the CSV metadata (validation only, 3 and 4 digits). Speeds
+/// in `unit`.
+std::string explained_text(const DiscrepancyResult& d, bool summary, const SpeedUnit& unit = {});
 
 /// The verdict's ", closing 85 % of the rest": what the terms close of the speed gap above
 /// the noise; when the terms that survive act beside the shaft without moving the simulated

@@ -20,7 +20,7 @@ using namespace gap_detail;
 
 namespace {
 
-/// "; what is left lies mostly in direction reverse (82 % of it), speed < 150 rpm (70 %)...":
+/// "; what is left lies mostly in direction reverse (82 % of it), speed < 12.5 rad/s (70 %)...":
 /// per group of regimes (and the frequency bands) the regime carrying most of the residual
 /// left, named when it carries clearly more than its share of the samples.
 std::string where_left(const GapReport& report) {
@@ -154,6 +154,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   const parallel::Pool pool(settings.threads);
   GapReport report;
   report.split_note = data.split_note;
+  report.speed_unit = data.speed_unit;
   report.validation_samples = validation_count(data);
   report.floors = noise_floors(data);
   const std::size_t outputs = report.floors.size();
@@ -239,6 +240,12 @@ int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
   const std::vector<table::Table> train = load(options.train);
   const std::vector<table::Table> validate = load(options.validate);
   GapData data = prepare_gap_data(train, validate, model.params, options.split_fraction, options.split_given);
+  if (options.linear) {
+    if (data.speed_unit.column != "omega")
+      fail("--linear: the runs must measure the axis' speed as omega, m/s");
+    data.speed_unit.name = "m/s";
+    data.speed_unit.key = "m_s";
+  }
   for (auto& run : data.train) apply_speed_path(run, speed, options.gear_ratio);
   for (auto& sr : data.validate) apply_speed_path(sr.run, speed, options.gear_ratio);
   settings.threads = options.threads;

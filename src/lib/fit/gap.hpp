@@ -109,11 +109,21 @@ struct ScoredRun {
   double i_sigma_A = std::numeric_limits<double>::quiet_NaN();
 };
 
+/// The unit the reports give speeds in: the data's own. The runs hold every speed in rpm
+/// (with_rpm); a report multiplies by `per_rpm` (1 for rpm, pi/30 for rad/s).
+struct SpeedUnit {
+  std::string name = "rpm";    ///< as printed: "rpm", "rad/s"
+  std::string key = "rpm";     ///< in column and metadata names: "rpm", "rad_s"
+  std::string column = "rpm";  ///< the measured column it came from: "rpm", "omega"
+  double per_rpm = 1.0;
+};
+
 /// The prepared data: training runs, validation runs, and how they were obtained.
 struct GapData {
   std::vector<Run> train;
   std::vector<ScoredRun> validate;
   std::string split_note;  ///< empty unless a single file was split
+  SpeedUnit speed_unit;    ///< the data's own, for the reports
 };
 
 /// An automatic split's training rows must hold, in each direction the scored rows drive, a
@@ -231,6 +241,7 @@ struct DiscrepancyResult {
 struct GapReport {
   std::string source;  ///< its outputs' `source` metadata ("mcg-fit gap"; none when empty)
   std::string split_note;
+  SpeedUnit speed_unit;  ///< every speed reported (floors, RMS, regimes, series) is in it
   std::vector<OutputFloor> floors;
   std::size_t validation_samples = 0;
   std::vector<GapCandidate> candidates;  ///< diagnosis first, then the rest best first
@@ -291,6 +302,9 @@ struct GapOptions {
   /// Motor turns per turn of the measured shaft, over the captures' `# gear_ratio:` and the
   /// INI's `[measurement] gear_ratio` (unset: theirs, else 1).
   std::optional<double> gear_ratio;
+  /// The measured omega is a linear axis' speed, m/s (the gear ratio then the motor's rad per m
+  /// of travel, 2 pi / lead): the reports say m/s.
+  bool linear = false;
   double budget_s = 120.0;       ///< wall-clock budget of the diagnosis (partial results after it)
   bool progress = false;         ///< progress report lines on the diagnostics
   bool discrepancy = false;      ///< the catalog-free discrepancy fit whatever the verdict

@@ -9,6 +9,7 @@
 
 #include "common/demand.hpp"
 #include "common/error.hpp"
+#include "common/units.hpp"
 #include "fit/gap_parts.hpp"
 #include "measurement/measurement.hpp"
 #include "table/table.hpp"
@@ -264,6 +265,12 @@ GapData prepare_gap_data(const std::vector<table::Table>& train, const std::vect
                          const model::Params& params, double split_fraction, bool split_given) {
   if (train.empty()) fail("--train: no training file");
   GapData data;
+  // The reports speak the data's unit: rad/s when every file measures omega and none rpm.
+  const auto omega_only = [](const table::Table& t) { return t.has("omega") && !t.has("rpm"); };
+  if (std::all_of(train.begin(), train.end(), omega_only) &&
+      std::all_of(validate.begin(), validate.end(), omega_only)) {
+    data.speed_unit = SpeedUnit{"rad/s", "rad_s", "omega", k_rad_s_per_rpm};
+  }
   // make_run() drops the current samples at the rails of the run's stated chain.
   auto make = [&](const table::Table& measured) {
     const table::Table t = with_rpm(measured);

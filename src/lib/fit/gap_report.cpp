@@ -88,10 +88,22 @@ void gap_detail::analyse(const GapData& data, const std::vector<std::vector<std:
   std::vector<double> joined_u;
   std::size_t max_lag = 50;
   std::size_t first_lag = 1;
+  // One low-speed bound for every run (their tables are pooled): a share of the fastest
+  // scored speed, named in the data's unit.
+  double top_rpm = 0.0;
+  for (const ScoredRun& sr : data.validate) {
+    const std::vector<double> rpm = measured_rpm(sr.run);
+    for (std::size_t n = sr.first_scored; n < rpm.size(); ++n) {
+      if (std::isfinite(rpm[n])) top_rpm = std::max(top_rpm, std::abs(rpm[n]));
+    }
+  }
+  const double low_rpm = k_low_speed_share * top_rpm;
+  const std::string low_label =
+      fmt::format("{:.3g} {}", data.speed_unit.per_rpm * low_rpm, data.speed_unit.name);
   for (std::size_t r = 0; r < data.validate.size(); ++r) {
     const Run& run = data.validate[r].run;
     const std::vector<double> rpm = measured_rpm(run);
-    const RegimeContext ctx{&run.inputs, rpm, speed_resolution(run)};
+    const RegimeContext ctx{&run.inputs, rpm, speed_resolution(run), low_rpm, low_label};
     reg.push_back(regime_breakdown(ctx, rpm_res[r]));
     cur.push_back(regime_breakdown(ctx, i_res[r]));
     std::vector<double> dt;
@@ -210,7 +222,8 @@ Summary summary_of(const GapReport& report) {
 }
 
 void write_regime_table(std::ostream& out, const std::string& title, const std::vector<RegimeStat>& before,
-                        const std::vector<RegimeStat>& after, const char* unit, int digits) {
+                        const std::vector<RegimeStat>& after, const std::string& unit, int digits,
+                        double scale = 1.0) {
   out << fmt::format("{}\n  {:<22} {:>8} {:>12} {:>7} {:>12} {:>7}\n", title, "regime", "samples",
                      fmt::format("before {}", unit), "share", fmt::format("after {}", unit), "share");
   for (std::size_t k = 0; k < before.size() && k < after.size(); ++k) {
@@ -218,17 +231,38 @@ void write_regime_table(std::ostream& out, const std::string& title, const std::
     const auto& a = after[k];
     if (b.samples == 0) continue;
     out << fmt::format("  {:<22} {:>8} {:>12.{}f} {:>6.1f}% {:>12.{}f} {:>6.1f}%\n", b.group + " " + b.regime,
-                       b.samples, b.rms, digits, 100.0 * b.share, a.rms, digits, 100.0 * a.share);
+                       b.samples, scale * b.rms, digits, 100.0 * b.share, scale * a.rms, digits,
+                       100.0 * a.share);
   }
+}
+
+/// An output's name and scale in the report: the speed in the data's own unit and column
+/// ("omega", rad/s), the current as it is.
+std::string output_name(const GapReport& report, const std::string& output) {
+  return output == "rpm" ? report.speed_unit.column : output;
+}
+double output_scale(const GapReport& report, const std::string& output) {
+  return output == "rpm" ? report.speed_unit.per_rpm : 1.0;
+}
+
+/// Decimals that show a speed in the report's unit to the noise floor's second significant
+/// digit (at least 2: 0.86 rpm and 0.0017 rad/s both read).
+int speed_decimals(const GapReport& report, double floor_rpm) {
+  const double f = report.speed_unit.per_rpm * floor_rpm;
+  if (!(f > 0.0) || !std::isfinite(f)) return 2;
+  return std::clamp(1 - static_cast<int>(std::floor(std::log10(f))), 2, 9);
 }
 
 }  // namespace
 
 void write_gap_csv(std::ostream& out, const GapReport& report) {
   const Summary s = summary_of(report);
+  const std::string& key = report.speed_unit.key;
+  const double k = report.speed_unit.per_rpm;
   const GapCandidate& none = *std::find_if(report.candidates.begin(), report.candidates.end(),
                                            [](const auto& c) { return c.name == "none"; });
-  const double before_rpm = at_or_nan(none.rms, s.rpm);
+  const double before_rpm = k * at_or_nan(none.rms, s.rpm);
+  const double floor_rpm = k * s.floor_rpm;
   const double before_i = at_or_nan(none.rms, s.i);
   table::Writer w(out);
   if (!report.source.empty()) w.meta("source", report.source);
@@ -237,9 +271,10 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
     w.meta("partial", "the time budget ran out; the ranking is of the candidates fitted so far");
   if (!report.split_note.empty()) w.meta("split", report.split_note);
   for (const auto& f : report.floors) {
-    w.meta("noise_floor_" + f.output,
-           fmt::format("{} (measurement chain {}, from the data {})", number(f.floor), number(f.noise.chain),
-                       number(f.noise.data)));
+    const double u = output_scale(report, f.output);
+    w.meta("noise_floor_" + output_name(report, f.output),
+           fmt::format("{} (measurement chain {}, from the data {})", number(u * f.floor),
+                       number(u * f.noise.chain), number(u * f.noise.data)));
   }
   w.meta("validation_samples", std::to_string(report.validation_samples));
   if (report.discrepancy) {
@@ -248,27 +283,28 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
     for (const auto& t : d.dropped) w.meta("discrepancy_dropped", t + " (the held-out runs do not gain)");
     if (!d.joint.empty()) w.meta("discrepancy_joint", d.joint);
     for (const auto& sd : d.seeds) {
-      w.meta("discrepancy_seed", fmt::format("{} (validation rpm RMS {}{})", sd.effect, number(sd.rms_rpm),
-                                             sd.closes ? ", closes the gap" : ""));
+      w.meta("discrepancy_seed",
+             fmt::format("{} (validation {} RMS {}{})", sd.effect, report.speed_unit.column,
+                         number(k * sd.rms_rpm), sd.closes ? ", closes the gap" : ""));
     }
     if (d.terms.empty()) {
       w.meta("discrepancy", d.note);
     } else {
-      w.meta("discrepancy", explained_text(d, true));
+      w.meta("discrepancy", explained_text(d, true, report.speed_unit));
     }
   }
-  w.header({"effect", "rms_before_rpm", "rms_after_rpm", "shrink_pct", "gap_before_rpm", "gap_after_rpm",
-            "gap_shrink_pct", "rms_before_i_A", "rms_after_i_A", "train_rms_rpm", "score", "fpe", "n_params",
-            "n_added", "params", "significant", "status", "flags"});
+  w.header({"effect", "rms_before_" + key, "rms_after_" + key, "shrink_pct", "gap_before_" + key,
+            "gap_after_" + key, "gap_shrink_pct", "rms_before_i_A", "rms_after_i_A", "train_rms_" + key,
+            "score", "fpe", "n_params", "n_added", "params", "significant", "status", "flags"});
   for (const auto& c : report.candidates) {
-    const double after_rpm = at_or_nan(c.rms, s.rpm);
-    const double gap_before = above_noise(before_rpm, s.floor_rpm);
-    const double gap_after = above_noise(after_rpm, s.floor_rpm);
+    const double after_rpm = k * at_or_nan(c.rms, s.rpm);
+    const double gap_before = above_noise(before_rpm, floor_rpm);
+    const double gap_after = above_noise(after_rpm, floor_rpm);
     const double shrink = 100.0 * (before_rpm - after_rpm) / before_rpm;
     const double gap_shrink = gap_before > 0.0 ? 100.0 * (gap_before - gap_after) / gap_before : k_nan;
     w.text_row({c.name, number(before_rpm, 6), number(after_rpm, 6), number(shrink, 4), number(gap_before, 6),
                 number(gap_after, 6), number(gap_shrink, 4), number(before_i, 6),
-                number(at_or_nan(c.rms, s.i), 6), number(c.train_rms_rpm, 6), number(c.score, 6),
+                number(at_or_nan(c.rms, s.i), 6), number(k * c.train_rms_rpm, 6), number(c.score, 6),
                 number(c.fpe, 6), std::to_string(c.free.size()), std::to_string(c.added_parameters),
                 cell(params_text(c)), c.significant ? "1" : "0", cell(c.status), cell(flags_text(c))});
   }
@@ -280,19 +316,25 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
   const GapCandidate& diag = report.candidates.front();
   const GapCandidate& none = *std::find_if(report.candidates.begin(), report.candidates.end(),
                                            [](const auto& c) { return c.name == "none"; });
+  const SpeedUnit& unit = report.speed_unit;
+  const double k = unit.per_rpm;
+  const int dec = speed_decimals(report, s.floor_rpm);
   out << fmt::format("diagnosis: {}\n  {}.\n", report.diagnosis, report.reason);
   if (!report.split_note.empty()) out << "split: " << report.split_note << "\n";
   for (const auto& f : report.floors) {
-    const char* unit = f.output == "rpm" ? "rpm" : "A";
-    out << fmt::format("noise floor {}: {} {} (measurement chain {}, estimated from the data {})\n", f.output,
-                       number(f.floor), unit, number(f.noise.chain), number(f.noise.data));
+    const std::string& u = f.output == "rpm" ? unit.name : "A";
+    const double x = output_scale(report, f.output);
+    out << fmt::format("noise floor {}: {} {} (measurement chain {}, estimated from the data {})\n",
+                       output_name(report, f.output), number(x * f.floor), u, number(x * f.noise.chain),
+                       number(x * f.noise.data));
   }
   if (s.rpm != std::string::npos) {
-    const double b = none.rms[s.rpm];
-    const double a = diag.rms[s.rpm];
+    const double b = k * none.rms[s.rpm];
+    const double a = k * diag.rms[s.rpm];
     out << fmt::format(
-        "validation rpm RMS: {:.2f} -> {:.2f} rpm ({:.0f} % less); above the noise {:.2f} -> {:.2f} rpm\n", b,
-        a, 100.0 * (b - a) / b, above_noise(b, s.floor_rpm), above_noise(a, s.floor_rpm));
+        "validation {} RMS: {:.{}f} -> {:.{}f} {} ({:.0f} % less); above the noise {:.{}f} -> {:.{}f} {}\n",
+        unit.column, b, dec, a, dec, unit.name, 100.0 * (b - a) / b, above_noise(b, k * s.floor_rpm), dec,
+        above_noise(a, k * s.floor_rpm), dec, unit.name);
   }
   if (s.i != std::string::npos) {
     out << fmt::format("validation i RMS: {:.4f} -> {:.4f} A\n", none.rms[s.i], diag.rms[s.i]);
@@ -318,26 +360,28 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
       for (const auto& t : d.dropped) out << "  left out, the held-out runs do not gain: " << t << "\n";
       if (!d.joint.empty()) out << "  joint refit with the nominal scales: " << d.joint << "\n";
       for (const auto& sd : d.seeds) {
-        out << fmt::format("  seeds the catalog: {} (validation rpm RMS {:.2f}{})\n", sd.effect, sd.rms_rpm,
-                           sd.closes ? ", closes the gap" : "");
+        out << fmt::format("  seeds the catalog: {} (validation {} RMS {:.{}f}{})\n", sd.effect, unit.column,
+                           k * sd.rms_rpm, dec, sd.closes ? ", closes the gap" : "");
       }
-      out << "  " << explained_text(d, false) << "\n";
+      out << "  " << explained_text(d, false, unit) << "\n";
     }
   }
   out << "\ncandidates, diagnosis first (score = validation MSE in noise units summed over outputs; FPE "
          "ranks):\n";
-  out << fmt::format("  {:<32} {:>10} {:>10} {:>9} {:>3}  {}\n", "effect", "rms rpm", "score", "fpe", "sig",
-                     "status");
+  out << fmt::format("  {:<32} {:>10} {:>10} {:>9} {:>3}  {}\n", "effect", "rms " + unit.name, "score", "fpe",
+                     "sig", "status");
   for (const auto& c : report.candidates) {
-    out << fmt::format("  {:<32} {:>10} {:>10} {:>9} {:>3}  {}{}\n", c.name, number(at_or_nan(c.rms, s.rpm)),
-                       number(c.score), number(c.fpe), c.significant ? "yes" : "no", c.status,
+    out << fmt::format("  {:<32} {:>10} {:>10} {:>9} {:>3}  {}{}\n", c.name,
+                       number(k * at_or_nan(c.rms, s.rpm)), number(c.score), number(c.fpe),
+                       c.significant ? "yes" : "no", c.status,
                        c.flags.empty() ? "" : ", flagged: " + flags_text(c));
   }
   out << "\n";
   if (s.rpm != std::string::npos) {
-    write_regime_table(out, "where the speed gap lies (validation residual rpm, before and after):",
-                       report.regimes_before, report.regimes_after, "rpm", 2);
-    write_regime_table(out, "by frequency band:", report.bands_before, report.bands_after, "rpm", 2);
+    write_regime_table(
+        out, fmt::format("where the speed gap lies (validation residual {}, before and after):", unit.name),
+        report.regimes_before, report.regimes_after, unit.name, dec, k);
+    write_regime_table(out, "by frequency band:", report.bands_before, report.bands_after, unit.name, dec, k);
   }
   if (s.i != std::string::npos) {
     write_regime_table(out,
@@ -369,7 +413,7 @@ void write_gap_residuals(std::ostream& out, const GapReport& report, const GapDa
   std::vector<std::string> names = {"run", "t", "v", "clutch", "r_load", "transient"};
   for (const auto& f : report.floors) {
     for (const char* suffix : {"", "_before", "_after", "_res_before", "_res_after"})
-      names.push_back(f.output + suffix);
+      names.push_back(output_name(report, f.output) + suffix);
   }
   w.header(names);
   std::vector<double> row(names.size());
@@ -389,9 +433,10 @@ void write_gap_residuals(std::ostream& out, const GapReport& report, const GapDa
         const auto it = std::find(sr.run.outputs.begin(), sr.run.outputs.end(), f.output);
         const bool has = it != sr.run.outputs.end();
         const auto o = static_cast<std::size_t>(it - sr.run.outputs.begin());
-        const double y = has ? sr.run.measured[o][n] : k_nan;
-        const double b = has ? report.simulated_before[r][o][n] : k_nan;
-        const double a = has ? report.simulated_after[r][o][n] : k_nan;
+        const double u = output_scale(report, f.output);
+        const double y = has ? u * sr.run.measured[o][n] : k_nan;
+        const double b = has ? u * report.simulated_before[r][o][n] : k_nan;
+        const double a = has ? u * report.simulated_after[r][o][n] : k_nan;
         row[k++] = y;
         row[k++] = b;
         row[k++] = a;

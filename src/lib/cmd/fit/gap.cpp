@@ -32,6 +32,8 @@ void FitGap::define(CLI::App& app) {
                  "motor turns per turn of the shaft whose speed was measured (default: the captures' "
                  "gear_ratio, else the INI's [measurement], else 1)")
       ->check(mcg::Range(1e-6, 1e6));
+  gp->add_flag("--linear", gap.linear,
+               "omega is a linear axis' speed, m/s; the gear ratio is then the motor's rad per m of travel");
   gp->add_flag("--discrepancy", gap.discrepancy,
                "fit the catalog-free discrepancy terms whatever the verdict (always for an unexplained gap)");
   gp->add_option("--budget", gap.budget_s,
