@@ -7,15 +7,16 @@ and optionally r_load (clutch engaged throughout; without r_load the generator i
 same equations as mcg's plant (model/model.hpp): L di/dt = v - R i - Ke w,
 Lg dig/dt = Keg w - (Rg + r_load) ig, (Jm + Jg) dw/dt = Kt i - Ktg ig - F(w), F the sum of the
 motor's, the engaged clutch's and the generator's friction, sign(w) (Tc + c1|w| + c2 w^2 + c3|w|^3)
-moving, holding up to Ts at rest. One LSODA integration (max_step 10 ms, rtol 1e-6) over the
-run with each input row held until the next, as mcg-sim holds it.
+moving, holding up to Ts at rest. LSODA (max_step 10 ms, rtol 1e-6) over the run with each
+input row held until the next, as mcg-sim holds it, restarted at each stop and breakaway.
 Whole process: numpy and scipy imports, CSV in and out included.
 """
 import math
 import sys
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy.integrate import LSODA
+from scipy.optimize import brentq
 
 
 def params(path):
@@ -50,26 +51,81 @@ def main():
     Rg, Lg = p["generator.R_ohm"], p["generator.L_H"]
     Ktg, Keg = p["generator.Kt_Nm_A"], p["generator.Ke_V_s_rad"]
 
-    def rhs(tt, y):
-        i, w, ig = y
+    def row(tt):
         # The input row in force, held until the next row, as mcg-sim holds it.
-        n = max(0, min(len(t) - 1, int(np.searchsorted(t, tt, side="right")) - 1))
+        return max(0, min(len(t) - 1, int(np.searchsorted(t, tt, side="right")) - 1))
+
+    def currents(tt, y):
+        n = row(tt)
+        i, w, ig = y
         vin = min(max(v[n], -supply), supply)
         di = (vin - R * i - Ke * w) / L
         # An open generator (r_load inf) carries no current: ig stays 0.
         dig = (Keg * w - (Rg + r_load[n]) * ig) / Lg if math.isfinite(r_load[n]) else 0.0
-        T = Kt * i - Ktg * ig
-        if abs(w) < 1e-9 and abs(T) <= Ts:
-            return [di, 0.0, dig]  # held by static friction
-        a = abs(w)
-        F = math.copysign(Tc + a * (c1 + a * (c2 + a * c3)), w if w != 0.0 else T)
-        return [di, (T - F) / J, dig]
+        return di, dig, Kt * i - Ktg * ig
 
-    sol = solve_ivp(rhs, (t[0], t[-1]), [0.0, 0.0, 0.0], method="LSODA", max_step=0.01, t_eval=t,
-                    rtol=1e-6, atol=[1e-9, 1e-6, 1e-9])
-    if not sol.success:
-        sys.exit(f"sim_scipy.py: {sol.message}")
-    cur, rpm = sol.y[0], sol.y[1] * 30.0 / math.pi
+    # Stick-slip as mcg-sim steps it: a moving shaft keeps its direction d until its speed
+    # reaches zero (an event), a stuck one is held at w = 0 until |T| reaches Ts (an event);
+    # LSODA then restarts in the new mode, so it never chatters at the switch.
+    def moving(d):
+        def rhs(tt, y):
+            di, dig, T = currents(tt, y)
+            a = d * y[1]
+            return [di, (T - d * (Tc + a * (c1 + a * (c2 + a * c3)))) / J, dig]
+
+        return rhs, lambda tt, y: -d * y[1]
+
+    def stuck():
+        def rhs(tt, y):
+            di, dig, _ = currents(tt, y)
+            return [di, 0.0, dig]
+
+        return rhs, lambda tt, y: abs(currents(tt, y)[2]) - Ts
+
+    out = np.zeros((3, len(t)))
+    k = 0  # the next output row
+
+    def run(rhs, event, t0, y0):
+        """Steps LSODA from (t0, y0) until event(t, y) rises through zero; fills the output
+        rows on the way and returns (t, y) at the event, or None at the end of the input."""
+        nonlocal k
+        solver = LSODA(rhs, t0, y0, t[-1], max_step=0.01, rtol=1e-6, atol=[1e-9, 1e-6, 1e-9])
+        g_old = event(t0, y0)
+        while solver.status == "running":
+            solver.step()
+            if solver.status == "failed":
+                sys.exit("sim_scipy.py: LSODA failed")
+            dense = solver.dense_output()
+            t_end, g_new = solver.t, event(solver.t, solver.y)
+            hit = g_old < 0.0 <= g_new
+            if hit:
+                # The dense output's ends need not match the step's own values: bisect where
+                # they bracket the root, interpolate linearly where they do not.
+                f = lambda s: event(s, dense(s))
+                fa, fb = f(solver.t_old), f(t_end)
+                t_end = (brentq(f, solver.t_old, t_end, xtol=1e-12) if fa < 0.0 < fb else
+                         solver.t_old + (t_end - solver.t_old) * g_old / (g_old - g_new))
+            n = int(np.searchsorted(t, t_end, side="right"))
+            if n > k:
+                out[:, k:n] = dense(t[k:n])
+                k = n
+            if hit:
+                return t_end, dense(t_end)
+            g_old = g_new
+        return None
+
+    def mode_at(tt, y):
+        T = currents(tt, y)[2]
+        return 0 if abs(T) <= Ts else (1 if T > 0 else -1)
+
+    state = (t[0], np.zeros(3))
+    while state is not None:
+        t0, y0 = state
+        y0 = np.array(y0)
+        y0[1] = 0.0
+        mode = mode_at(t0, y0)
+        state = run(*(moving(mode) if mode else stuck()), t0, y0)
+    cur, rpm = out[0], out[1] * 30.0 / math.pi
     with open(sys.argv[3], "w") as out:
         out.write("t,rpm,i\n")
         for n in range(len(t)):
