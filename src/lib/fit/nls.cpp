@@ -57,15 +57,21 @@ void sanitise(Eigen::VectorXd& r) {
   }
 }
 
+/// Thrown out of an evaluation inside an iteration once the caller's stop says so: the
+/// iteration is abandoned, its parameters are those of the last accepted step.
+struct Interrupted {};
+
 struct Functor : Eigen::DenseFunctor<double> {
   const Coordinates& coords;
   const ResidualFunction& residuals;
   const NlsOptions& options;
+  bool interruptible = false;  ///< evaluations ask options.stop first (inside the iterations)
 
   Functor(const Coordinates& c, const ResidualFunction& r, const NlsOptions& o, int n, int m)
       : Eigen::DenseFunctor<double>(n, m), coords(c), residuals(r), options(o) {}
 
   void evaluate(const Eigen::VectorXd& u, Eigen::VectorXd& r) const {
+    if (interruptible && options.stop && options.stop()) throw Interrupted{};
     r.resize(values());
     residuals(coords.to_physical(u), r);
     sanitise(r);
@@ -250,15 +256,24 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
   lm.setMaxfev(options.max_evaluations);
   Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
   // Eigen's minimize() loop, with the caller's stop asked before every iteration (a fit begun
-  // after its budget ran out returns its start at once).
+  // after its budget ran out returns its start at once) and before every evaluation inside
+  // one: a budget is kept within one simulation of the runs, not one iteration (a Jacobian and
+  // its trial steps). Eigen moves u only once a trial step is accepted, so an interrupted
+  // iteration leaves u at the last accepted point.
   auto status = lm.minimizeInit(u);
   bool stopped = false;
   if (status != Eigen::LevenbergMarquardtSpace::ImproperInputParameters) {
-    do {
-      stopped = options.stop && options.stop();
-      if (stopped) break;
-      status = lm.minimizeOneStep(u);
-    } while (status == Eigen::LevenbergMarquardtSpace::Running);
+    functor.interruptible = true;
+    try {
+      do {
+        stopped = options.stop && options.stop();
+        if (stopped) break;
+        status = lm.minimizeOneStep(u);
+      } while (status == Eigen::LevenbergMarquardtSpace::Running);
+    } catch (const Interrupted&) {
+      stopped = true;
+    }
+    functor.interruptible = false;
   }
 
   NlsResult result;
@@ -279,7 +294,8 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
   // A discontinuity (a friction level at a breakaway) makes a small finite-difference step
   // see a jump: the column then shrinks in proportion to a larger step.
   result.rough.assign(specs.size(), false);
-  if (options.check_smoothness) {
+  // A stopped fit skips the smoothness check (a second Jacobian): its budget is spent.
+  if (options.check_smoothness && !stopped) {
     NlsOptions wide = options;
     wide.fd_step = 100.0 * options.fd_step;
     wide.central_differences = false;
