@@ -50,7 +50,8 @@ check "load: mu ${mu:-missing} within two standard errors of 0.15" awk -v m="${m
 # The Coulomb level withheld, one direction only.
 printf '[motor]\nTc_Nm = 0\nTs_Nm = 0.003\n' >"$work/no-coulomb.ini"
 staircase 2 1.5 0.3 0 0 | mcg-sim --encoder --seed 1 | keep t,v,clutch,r_load,rpm >"$work/oneway-train.csv"
-staircase 2.4 1.2 0.23 0 0 | mcg-sim --encoder --seed 2 | keep t,v,clutch,r_load,rpm >"$work/oneway-validate.csv"
+staircase 2.4 1.2 0.23 0 0 | mcg-sim --encoder --seed 2 |
+  keep t,v,clutch,r_load,rpm >"$work/oneway-validate.csv"
 mcg-fit gap --budget 300 --format text --config "$work/no-coulomb.ini" --train "$work/oneway-train.csv" \
   --validate "$work/oneway-validate.csv" >"$work/oneway.txt" 2>"$work/oneway.err" ||
   fail "one way: exit $?: $(tail -1 "$work/oneway.err")"
