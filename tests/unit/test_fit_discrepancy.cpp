@@ -158,6 +158,38 @@ TEST(FitDiscrepancy, LoadDependentFriction) {
   expect_term(d, "|i| sign(w)", -0.002);
 }
 
+TEST(FitDiscrepancy, LoadFrictionOfTheCatalogSeedsItFromItsTerm) {
+  // friction_load withheld: the friction grows with the torque the shaft carries, |Kt i| mu.
+  model::Model truth;
+  truth.effects.push_back(model::parse_effect("friction_load:mu=0.15"));
+  const double Kt = truth.params.motor.Kt_Nm_A;
+  const DiscrepancyResult d = fit_discrepancy(model::Model{}, loaded_data_of(truth, 4.0), {}, rpm_floor());
+  expect_term(d, "|i| sign(w)", -0.15 * Kt);
+  const std::vector<model::Effect> seeds = catalog_seeds(d, model::Model{});
+  ASSERT_EQ(seeds.size(), 1U);
+  EXPECT_EQ(seeds[0].name, "friction_load");
+  EXPECT_NEAR(seeds[0].get("mu"), 0.15, 0.0075);
+  // A model that has the effect is not seeded with it again.
+  EXPECT_TRUE(catalog_seeds(d, truth).empty());
+}
+
+TEST(FitDiscrepancy, CoulombLevelSeedsFrictionLevelsOnlyAgainstTheMotion) {
+  DiscrepancyResult d;
+  DiscrepancyTerm t;
+  t.basis = "sign(w)";
+  t.shape = model::TermShape::sign;
+  t.coefficient = -0.002;
+  d.terms.push_back(t);
+  const std::vector<model::Effect> seeds = catalog_seeds(d, model::Model{});
+  ASSERT_EQ(seeds.size(), 1U);
+  EXPECT_EQ(seeds[0].name, "friction_levels");
+  EXPECT_DOUBLE_EQ(seeds[0].get("Tc_Nm"), 0.002);
+  EXPECT_GT(seeds[0].get("Ts_excess_Nm"), 0.0);  // the fit moves levels by ratios
+  // A level with the motion is no friction: nothing in the catalog starts from it.
+  d.terms[0].coefficient = 0.002;
+  EXPECT_TRUE(catalog_seeds(d, model::Model{}).empty());
+}
+
 TEST(FitDiscrepancy, FrictionFadingOverTheRun) {
   model::Model truth;
   truth.shaft_terms.push_back({"warm-up", nullptr, {0.0, 0.99, 0.0, 0.003}, fading_friction});

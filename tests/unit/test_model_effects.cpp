@@ -26,6 +26,37 @@ std::string error_of(const std::string& spec) {
   return test::error_of([&] { parse_effect(spec, "--effect"); });
 }
 
+TEST(ModelEffects, EachTermShapeStartsOneEffectWithItsOwnParameters) {
+  // One owner: the discrepancy's seeds follow the plans, so two effects claiming one shape
+  // would make the seed depend on the catalog's order.
+  std::vector<TermShape> claimed;
+  for (const auto& e : effect_catalog()) {
+    for (const TermSeed& rule : e.plan.seeded_by) {
+      EXPECT_NE(rule.shape, TermShape::none) << e.name;
+      EXPECT_EQ(std::count(claimed.begin(), claimed.end(), rule.shape), 0)
+          << e.name << " claims a claimed shape";
+      claimed.push_back(rule.shape);
+      ASSERT_NE(rule.start, nullptr) << e.name;
+      // A term of either sign (a harmonic's amplitude is positive): the effect takes one at
+      // least, and names only its own keys.
+      std::size_t taken = 0;
+      for (double c : {-0.01, 0.01}) {
+        const auto start = rule.start(TermValues{c, 3.0, 0.5}, builtin_rig());
+        taken += start.empty() ? 0U : 1U;
+        for (const auto& [key, value] : start) {
+          EXPECT_NO_THROW(default_effect(e.name).get(key)) << e.name << "." << key;
+          EXPECT_TRUE(std::isfinite(value)) << e.name << "." << key;
+        }
+      }
+      EXPECT_GE(taken, 1U) << e.name;
+    }
+  }
+  for (TermShape s : {TermShape::sign, TermShape::abs_current_sign, TermShape::angle_harmonic,
+                      TermShape::current_drop, TermShape::drive_dead_band}) {
+    EXPECT_EQ(std::count(claimed.begin(), claimed.end(), s), 1) << static_cast<int>(s);
+  }
+}
+
 TEST(ModelEffects, EveryModuleIsCompleteAndItsPlanNamesItsParameters) {
   std::vector<std::string> names;
   for (const auto& e : effect_catalog()) {

@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "common/checked.hpp"
+#include "common/demand.hpp"
 #include "common/error.hpp"
 #include "fit/discrepancy_parts.hpp"
 #include "fit/gap_parts.hpp"
@@ -156,14 +157,16 @@ std::vector<Candidate> torque_library(const model::Model& reference, double w_ma
                                       const std::vector<double>& angle_orders) {
   const double eps = 0.01 * w_max;
   const model::Machine& mm = reference.params.motor;
+  using Shape = model::TermShape;
   const auto plain = [](std::string text, std::string unit, Basis basis, std::array<double, 4> k,
-                        std::string reading) {
-    return Candidate{{std::move(text), std::move(unit), std::move(reading)}, basis, k};
+                        std::string reading, Shape shape = Shape::none) {
+    return Candidate{{std::move(text), std::move(unit), std::move(reading), 0.0, false, shape}, basis, k};
   };
   std::vector<Candidate> library = {
       plain("1", "N m", b_const, {0.0, 0.0, 0.0, 1.0},
             "a constant torque: a load, or an offset of a measured current"),
-      plain("sign(w)", "N m", b_sign, {eps, 0.0, 0.0, 1.0}, "against the motion: Coulomb friction"),
+      plain("sign(w)", "N m", b_sign, {eps, 0.0, 0.0, 1.0}, "against the motion: Coulomb friction",
+            Shape::sign),
       plain("w", "N m s/rad", b_w, {0.0, 0.0, 0.0, 1.0}, "proportional to speed: viscous friction"),
       plain("w|w|", "N m s^2/rad^2", b_w_abs_w, {0.0, 0.0, 0.0, 1.0},
             "quadratic in speed: windage, a fan or fluid drag"),
@@ -172,13 +175,15 @@ std::vector<Candidate> torque_library(const model::Model& reference, double w_ma
       plain("i", "N m/A", b_i, {0.0, 0.0, 0.0, 1.0},
             "scales with the current: a torque-constant error or a current-sensor gain"),
       plain("|i| sign(w)", "N m/A", b_abs_i, {eps, 0.0, 0.0, 1.0},
-            "friction that grows with the load the current carries"),
+            "friction that grows with the load the current carries", Shape::abs_current_sign),
       plain("-(Kt/R) tanh(i/0.01)", "V", b_drop, {mm.Kt_Nm_A / mm.R_ohm, 0.0, 0.0, 1.0},
-            "a voltage drop against the current in the motor circuit: brush contact drop"),
+            "a voltage drop against the current in the motor circuit: brush contact drop",
+            Shape::current_drop),
   };
   Candidate dead = plain("-(Kt/R) tanh(v/0.01 supply)", "V", nullptr,
                          {mm.Kt_Nm_A / mm.R_ohm, 0.01 * reference.params.supply_V, 0.0, 1.0},
-                         "a voltage lost from the drive's output in its direction: a dead band of the drive");
+                         "a voltage lost from the drive's output in its direction: a dead band of the drive",
+                         Shape::drive_dead_band);
   dead.dead_band = true;
   library.push_back(std::move(dead));
   // Stribeck-like drops at a twentieth and a fifth of the top speed, exponential and Gaussian.
@@ -207,10 +212,11 @@ std::vector<Candidate> torque_library(const model::Model& reference, double w_ma
   }
   const auto add_harmonic = [&](const std::string& prefix, const char* unit, Basis basis, double order,
                                 const std::string& per) {
-    library.push_back({{fmt::format("{}sin({:g} theta)", prefix, order), unit, per, order, false},
+    const Shape shape = basis == b_sin ? Shape::angle_harmonic : Shape::none;
+    library.push_back({{fmt::format("{}sin({:g} theta)", prefix, order), unit, per, order, false, shape},
                        basis,
                        {order, 0.0, 0.0, 1.0}});
-    library.push_back({{fmt::format("{}cos({:g} theta)", prefix, order), unit, per, order, true},
+    library.push_back({{fmt::format("{}cos({:g} theta)", prefix, order), unit, per, order, true, shape},
                        basis,
                        {order, std::numbers::pi / 2.0, 0.0, 1.0}});
   };
@@ -668,27 +674,28 @@ std::vector<model::Effect> catalog_seeds(const DiscrepancyResult& result, const 
     return reference.effect(name) != nullptr ||
            std::any_of(seeds.begin(), seeds.end(), [&](const model::Effect& e) { return e.name == name; });
   };
+  // Which shape starts which effect, and how, is the effect's plan's (model/effects/); each
+  // term starts at most one effect, the first of the catalog that takes its values.
   for (const DiscrepancyTerm& t : result.terms) {
-    // Cogging repeats with the slots and poles, at least twice a revolution; once per
-    // revolution is an imbalance or an eccentric load, which cogging would only imitate.
-    const bool torque_harmonic = t.place == "shaft" && t.order >= 2.0 && t.basis.rfind("sin(", 0) == 0;
-    const bool drop = t.basis == "-(Kt/R) tanh(i/0.01)" || t.basis == "tanh(i/0.01)";
-    const bool dead = t.basis == "-(Kt/R) tanh(v/0.01 supply)" || t.basis == "tanh(v/0.01 supply)";
-    if (torque_harmonic && !seeded("cogging")) {
-      model::Effect e = model::default_effect("cogging");
-      e.set("T_c_Nm", std::min(t.coefficient, 0.02));
-      e.set("N_per_rev", t.order);
-      e.set("phase_rad", t.phase_rad);
-      seeds.push_back(std::move(e));
-    } else if (drop && t.coefficient > 0.0 && !seeded("brush_drop")) {
-      model::Effect e = model::default_effect("brush_drop");
-      e.set("V_b_V", std::min(t.coefficient, 3.0));
-      seeds.push_back(std::move(e));
-    } else if (dead && t.coefficient > 0.0 && !seeded("hbridge")) {
-      // The bridge's deadband is the duty it loses: V_d / supply.
-      model::Effect e = model::default_effect("hbridge");
-      e.set("deadband", std::min(t.coefficient / reference.params.supply_V, 0.3));
-      seeds.push_back(std::move(e));
+    if (t.shape == model::TermShape::none) continue;
+    const model::TermValues values{t.coefficient, t.order, t.phase_rad};
+    bool started = false;
+    for (const model::EffectSpec& spec : model::effect_catalog()) {
+      if (started || !spec.plan.candidate || seeded(spec.name)) continue;
+      for (const model::TermSeed& rule : spec.plan.seeded_by) {
+        if (rule.shape != t.shape || started) continue;
+        const std::vector<std::pair<std::string, double>> start = rule.start(values, reference.params);
+        if (start.empty()) continue;
+        model::Effect e = model::default_effect(spec.name);
+        for (const auto& [key, value] : start) {
+          const auto p = std::find_if(spec.params.begin(), spec.params.end(),
+                                      [&](const model::EffectParamSpec& ps) { return ps.name == key; });
+          MCG_DEMAND(p != spec.params.end());
+          e.set(key, std::clamp(value, p->lower, p->upper));
+        }
+        seeds.push_back(std::move(e));
+        started = true;
+      }
     }
   }
   return seeds;

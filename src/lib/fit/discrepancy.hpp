@@ -67,11 +67,12 @@ std::string explained_text(const DiscrepancyResult& d, bool summary, const Speed
 /// speed (the circuit, the current reading), what they close in their own domain.
 std::string closing_text(const DiscrepancyResult& d);
 
-/// Catalog effects whose shape a surviving term has, started from the term's values: an
-/// angle harmonic of the torque at two or more cycles a revolution -> cogging with its order,
-/// amplitude and phase (once per revolution is an imbalance, not cogging); a drop
-/// against the current -> brush_drop; a voltage lost in the drive's direction -> hbridge with
-/// that deadband. Effects `reference` already has are left out.
+/// Catalog effects whose shape a surviving term has, started from the term's values: each
+/// effect's plan names the term shapes it starts from and how (EffectPlan::seeded_by, e.g. an
+/// angle harmonic at two or more cycles a revolution -> cogging, a level against the motion ->
+/// friction_levels, |i| sign(w) -> friction_load, a drop against the current -> brush_drop, a
+/// voltage lost in the drive's direction -> hbridge), values clamped to the parameters' ranges;
+/// each term starts at most one effect. Effects `reference` already has are left out.
 std::vector<model::Effect> catalog_seeds(const DiscrepancyResult& result, const model::Model& reference);
 
 }  // namespace mcg::fit

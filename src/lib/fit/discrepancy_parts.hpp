@@ -41,6 +41,7 @@ struct Column {
   std::string reading;
   double order = 0.0;  ///< harmonic order for sin/cos columns, else 0
   bool cos_of_pair = false;
+  model::TermShape shape = model::TermShape::none;  ///< what it does, for the catalog's seeds
 };
 
 Eigen::MatrixXd matrix_of(const std::vector<std::vector<double>>& rows, const std::vector<std::size_t>& cols);

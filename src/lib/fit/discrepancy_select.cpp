@@ -155,6 +155,7 @@ Described describe(const std::vector<Column>& library, const std::vector<std::si
     t.coefficient = coef[J];
     t.std_error = out.fit.se[J];
     t.unit = col.unit;
+    t.shape = col.shape;
     if (col.order != 0.0) {
       const double cs = coef[J];
       const double cc = coef[J + 1];

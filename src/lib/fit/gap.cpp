@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <ostream>
 
@@ -71,6 +72,79 @@ std::string shape_found(const DiscrepancyResult& d, const GapCandidate& best) {
   out += closing_text(d);
   if (!best.effects.empty()) out += fmt::format(" beside the catalog's {}", best.name);
   return out;
+}
+
+/// "; the training runs drive the shaft one way only, where ... act alike": while the shaft
+/// turns one way, a Coulomb level (against the motion), a brush drop (against the current) and
+/// a dead band of the drive (against the drive) are one constant torque, apart from where the
+/// current reverses as the shaft slows down, so the speed alone hardly tells them apart; a
+/// measured current tells the friction from the two voltages, and the voltages from each other
+/// only where it reverses. Which effect has which shape is its plan's (seeded_by). Names the
+/// diagnosis' effect and the others of its class with their scores: the verdict is the class,
+/// and the runs that would tell its members apart. Empty when none of this applies.
+std::string alike_one_way(const GapReport& report, const GapData& data) {
+  using Shape = model::TermShape;
+  bool forward = false;
+  bool reverse = false;
+  bool current = false;
+  bool i_forward = false;
+  bool i_reverse = false;
+  const std::size_t f_i = floor_index(report.floors, "i");
+  for (const Run& run : data.train) {
+    for (double v : run.inputs.v_V) {
+      forward = forward || v > 0.0;
+      reverse = reverse || v < 0.0;
+    }
+    const auto o = std::find(run.outputs.begin(), run.outputs.end(), "i");
+    if (o == run.outputs.end() || f_i == std::string::npos) continue;
+    current = true;
+    // A reversal counts when it stands clear of the reading's noise.
+    const double clear = 3.0 * report.floors[f_i].floor;
+    for (double i : run.measured[static_cast<std::size_t>(o - run.outputs.begin())]) {
+      i_forward = i_forward || i > clear;
+      i_reverse = i_reverse || i < -clear;
+    }
+  }
+  if ((forward && reverse) || (i_forward && i_reverse)) return {};
+  const auto alike = [current](Shape s) {
+    return s == Shape::current_drop || s == Shape::drive_dead_band || (!current && s == Shape::sign);
+  };
+  const auto shape_of = [&](std::string_view name) {
+    const model::EffectSpec* spec = model::find_effect(name);
+    if (spec == nullptr) return Shape::none;
+    for (const model::TermSeed& rule : spec->plan.seeded_by) {
+      if (alike(rule.shape)) return rule.shape;
+    }
+    return Shape::none;
+  };
+  const GapCandidate& diagnosis = report.candidates.front();
+  std::string mine;
+  for (const std::string& name : diagnosis.effects) {
+    if (shape_of(name) != Shape::none) mine = name;
+  }
+  if (mine.empty()) return {};
+  std::vector<std::string> others;
+  for (const model::EffectSpec& spec : model::effect_catalog()) {
+    const Shape s = shape_of(spec.name);
+    if (s == Shape::none || spec.name == mine) continue;
+    std::string score;
+    for (const GapCandidate& c : report.candidates) {
+      if (c.name == spec.name && c.evaluated && std::isfinite(c.score)) {
+        score = fmt::format(", score {:.3g}", c.score);
+      }
+    }
+    others.push_back(fmt::format("{} ({}{})", model::term_shape_text(s), spec.name, score));
+  }
+  if (others.empty()) return {};
+  std::string list;
+  for (std::size_t k = 0; k < others.size(); ++k) {
+    list += (k == 0 ? "" : k + 1 == others.size() ? " and " : ", ") + others[k];
+  }
+  return fmt::format(
+      "; the training runs drive the shaft one way only, where {} ({}) acts on the {} as {} would{}: these "
+      "runs hardly tell them apart (runs in both directions{} do)",
+      model::term_shape_text(shape_of(mine)), mine, current ? "speed and the current" : "speed", list,
+      current ? "" : " save where the current reverses", current ? "" : ", or the current measured,");
 }
 
 /// Catalog effects seeded from the discrepancy's terms (catalog_seeds): each started from
@@ -202,6 +276,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
           report.current_regimes_before, report.white_before);
   analyse(data, report.simulated_after, report.regimes_after, report.bands_after,
           report.current_regimes_after, report.white_after);
+  if (report.diagnosis != "none") report.reason += alike_one_way(report, data);
   if (report.diagnosis == "unexplained") {
     report.reason += where_left(report);
     if (report.discrepancy) report.reason += shape_found(*report.discrepancy, report.candidates.front());

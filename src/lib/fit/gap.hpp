@@ -202,6 +202,8 @@ struct DiscrepancyTerm {
   /// Where it acts: "shaft" (a torque), "circuit" (a voltage in the armature circuit), "current
   /// reading" or "speed reading" (an error of the measured channel, not of the machine).
   std::string place = "shaft";
+  /// What it does, whatever its text: the catalog effects whose plans name the shape start from it.
+  model::TermShape shape = model::TermShape::none;
 };
 
 /// A catalog effect started from a discrepancy term's values, fitted and scored.

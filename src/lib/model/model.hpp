@@ -112,6 +112,53 @@ struct DataFriction {
   bool both_directions = false;   ///< the runs move the shaft both ways
 };
 
+/// The shapes of the catalog-free discrepancy terms (fit/discrepancy.cpp's library) a catalog
+/// effect's fit can start from: what a term does, whatever its text.
+enum class TermShape {
+  none,              ///< seeds no effect
+  sign,              ///< c tanh(w / eps): a level against (c < 0) or with the motion, N m
+  abs_current_sign,  ///< c |i| sign(w): a level that grows with the current, N m/A
+  angle_harmonic,    ///< c sin(N theta + phase) on the shaft, N m
+  current_drop,      ///< a voltage c against the current in the motor circuit, V
+  drive_dead_band,   ///< a voltage c lost from the drive's output in its direction, V
+};
+
+/// What a term shape is physically, as a report names it: "a Coulomb level", ...
+inline const char* term_shape_text(TermShape shape) {
+  switch (shape) {
+    case TermShape::none:
+      return "a term";
+    case TermShape::sign:
+      return "a Coulomb level";
+    case TermShape::abs_current_sign:
+      return "friction growing with the load";
+    case TermShape::angle_harmonic:
+      return "a torque periodic in the angle";
+    case TermShape::current_drop:
+      return "a brush drop";
+    case TermShape::drive_dead_band:
+      return "a dead band of the drive";
+  }
+  return "a term";
+}
+
+/// A discrepancy term's values: its coefficient in the unit of its shape, and for a harmonic
+/// its order (cycles per revolution) and phase.
+struct TermValues {
+  double coefficient = 0.0;
+  double order = 0.0;
+  double phase_rad = 0.0;
+};
+
+/// A term shape an effect's fit starts from, and how: the effect's parameters (key, value) from
+/// the term's values and the nominal parameters, or none when the values are not the effect's
+/// (a sign or an order it cannot have). Values outside a parameter's range are clamped to it.
+struct TermSeed {
+  TermShape shape = TermShape::none;
+  std::vector<std::pair<std::string, double>> (*start)(const TermValues& term,
+                                                       const Params& nominal) = nullptr;
+};
+
 /// How `mcg-fit gap` tries an effect as a candidate: the parameters it sets free, a coarse
 /// grid of starting values for each (the best grid point on the training cost starts the
 /// fit), and what the training runs must contain to excite the effect at all.
@@ -141,6 +188,9 @@ struct EffectPlan {
   /// stick moves the response continuously in it, the exact stick-slip decides it: the search
   /// profiles it on the exact model after the fit (value and standard error).
   std::string breakaway_key;
+  /// The discrepancy term shapes this effect's fit starts from when the catalog alone leaves
+  /// the gap unexplained (the one owner of which shape is which effect's).
+  std::vector<TermSeed> seeded_by;
 
   static EffectPlan fit(std::vector<std::string> free, std::vector<std::vector<double>> grid,
                         Needs needs = Needs::nothing, std::string angle_order_key = {}) {
@@ -155,6 +205,11 @@ struct EffectPlan {
   EffectPlan as_friction(std::vector<double> (*start)(const DataFriction&, const Params&) = nullptr) && {
     friction = true;
     data_start = start;
+    return std::move(*this);
+  }
+  /// This plan, started from discrepancy terms of the shapes of `seeds` as well.
+  EffectPlan seeded_by_terms(std::vector<TermSeed> seeds) && {
+    seeded_by = std::move(seeds);
     return std::move(*this);
   }
   static EffectPlan not_a_candidate() {

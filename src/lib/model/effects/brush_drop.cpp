@@ -11,6 +11,12 @@ void compile(const Effect& e, Compiled& c) {
   c.circuit.i_sat_A = k_brush_smooth_i_A;
 }
 
+/// A voltage against the current in the motor circuit is the drop itself.
+std::vector<std::pair<std::string, double>> from_drop(const TermValues& t, const Params& /*nominal*/) {
+  if (!(t.coefficient > 0.0)) return {};
+  return {{"V_b_V", t.coefficient}};
+}
+
 }  // namespace
 
 EffectSpec brush_drop() {
@@ -19,7 +25,8 @@ EffectSpec brush_drop() {
           "L di/dt = ... - V_b tanh(i / 0.01 A) in both armature circuits",
           {{"V_b_V", 0.5, 0.0, 3.0, "V", "contact drop"}},
           compile,
-          EffectPlan::fit({"V_b_V"}, {{0.2, 0.5, 1.0, 2.0}})};
+          EffectPlan::fit({"V_b_V"}, {{0.2, 0.5, 1.0, 2.0}})
+              .seeded_by_terms({{TermShape::current_drop, from_drop}})};
 }
 
 }  // namespace mcg::model::effects

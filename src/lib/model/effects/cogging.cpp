@@ -17,6 +17,14 @@ void compile(const Effect& e, Compiled& c) {
   c.motor_torque.push_back({ripple, {e.get("T_c_Nm"), e.get("N_per_rev"), e.get("phase_rad"), 0.0}});
 }
 
+/// An angle harmonic of the shaft torque, at two or more cycles a revolution: cogging repeats
+/// with the slots and poles; once per revolution is an imbalance or an eccentric load, which
+/// cogging would only imitate.
+std::vector<std::pair<std::string, double>> from_harmonic(const TermValues& t, const Params& /*nominal*/) {
+  if (t.order < 2.0) return {};
+  return {{"T_c_Nm", t.coefficient}, {"N_per_rev", t.order}, {"phase_rad", t.phase_rad}};
+}
+
 }  // namespace
 
 EffectSpec cogging() {
@@ -30,7 +38,8 @@ EffectSpec cogging() {
       compile,
       EffectPlan::fit({"T_c_Nm", "phase_rad"},
                       {{0.0006, 0.001, 0.0016, 0.0025}, {-2.75, -1.96, -1.18, -0.39, 0.39, 1.18, 1.96, 2.75}},
-                      EffectPlan::Needs::nothing, "N_per_rev")};
+                      EffectPlan::Needs::nothing, "N_per_rev")
+          .seeded_by_terms({{TermShape::angle_harmonic, from_harmonic}})};
 }
 
 }  // namespace mcg::model::effects

@@ -36,10 +36,19 @@ std::vector<double> start_from_data(const DataFriction& seen, const Params& p) {
           std::max(seen.viscous_Nm_s_rad, 1e-4 * scale[2])};
 }
 
+/// A level against the motion, c sign(w) with c < 0, is the added Coulomb level -c; the other
+/// levels start at their floor (positive: the fit moves them by ratios).
+std::vector<std::pair<std::string, double>> from_sign(const TermValues& t, const Params& p) {
+  if (!(t.coefficient < 0.0)) return {};
+  const std::vector<double> scale = stall_scale(p);
+  return {{"Tc_Nm", -t.coefficient}, {"Ts_excess_Nm", 1e-4 * scale[1]}, {"c1_Nm_s_rad", 1e-4 * scale[2]}};
+}
+
 EffectPlan plan() {
   EffectPlan p = EffectPlan::fit({"Tc_Nm", "Ts_excess_Nm", "c1_Nm_s_rad"},
                                  {{0.002, 0.01, 0.04}, {0.001, 0.01}, {0.001, 0.01}})
-                     .as_friction(start_from_data);
+                     .as_friction(start_from_data)
+                     .seeded_by_terms({{TermShape::sign, from_sign}});
   p.grid_scale = stall_scale;
   p.supersedes = {"coulomb_scale", "static_scale", "viscous_scale"};
   p.breakaway_key = "Ts_excess_Nm";

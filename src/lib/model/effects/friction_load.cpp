@@ -19,6 +19,12 @@ void compile(const Effect& e, Compiled& c) {
   c.friction_terms.push_back({kinetic, breakaway, {e.get("mu"), 0.0, 0.0, 0.0}});
 }
 
+/// A torque c |i| sign(w) against the motion (c < 0) is mu |Kt i|: mu = -c / Kt.
+std::vector<std::pair<std::string, double>> from_current_level(const TermValues& t, const Params& nominal) {
+  if (!(t.coefficient < 0.0)) return {};
+  return {{"mu", -t.coefficient / nominal.motor.Kt_Nm_A}};
+}
+
 }  // namespace
 
 EffectSpec friction_load() {
@@ -27,7 +33,9 @@ EffectSpec friction_load() {
           "moving F = sign(w) (Tc + P(|w|) + mu |Kt i|); at rest held up to Ts + mu |Kt i|",
           {{"mu", 0.05, 0.0, 0.5, "1", "friction per newton metre of motor torque"}},
           compile,
-          EffectPlan::fit({"mu"}, {{0.01, 0.03, 0.1, 0.3}}).as_friction()};
+          EffectPlan::fit({"mu"}, {{0.01, 0.03, 0.1, 0.3}})
+              .as_friction()
+              .seeded_by_terms({{TermShape::abs_current_sign, from_current_level}})};
 }
 
 }  // namespace mcg::model::effects

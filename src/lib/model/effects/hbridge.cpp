@@ -12,6 +12,13 @@ void compile(const Effect& e, Compiled& c) {
   c.circuit.deadband = e.get("deadband");
 }
 
+/// A voltage V_d lost from the drive's output in its direction: the deadband is the duty it
+/// loses, V_d / supply.
+std::vector<std::pair<std::string, double>> from_dead_band(const TermValues& t, const Params& nominal) {
+  if (!(t.coefficient > 0.0)) return {};
+  return {{"deadband", t.coefficient / nominal.supply_V}};
+}
+
 }  // namespace
 
 EffectSpec hbridge() {
@@ -21,7 +28,8 @@ EffectSpec hbridge() {
           {{"R_on_ohm", 0.2, 0.0, 5.0, "ohm", "on-resistance of one switch"},
            {"deadband", 0.02, 0.0, 0.3, "1", "duty lost per PWM period"}},
           compile,
-          EffectPlan::fit({"R_on_ohm", "deadband"}, {{0.1, 0.5}, {0.005, 0.02, 0.06}})};
+          EffectPlan::fit({"R_on_ohm", "deadband"}, {{0.1, 0.5}, {0.005, 0.02, 0.06}})
+              .seeded_by_terms({{TermShape::drive_dead_band, from_dead_band}})};
 }
 
 }  // namespace mcg::model::effects
