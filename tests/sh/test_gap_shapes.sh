@@ -6,8 +6,9 @@
 #    the diagnosis with mu within two standard errors of 0.15, not a Kt error;
 #  - the Coulomb level withheld (Tc 0) on staircases that drive the motor one way only, speed
 #    alone: a Coulomb level, a brush drop and a dead band of the drive are one constant torque
-#    there (save where the current reverses), so whichever of them the diagnosis names, the
-#    verdict says these runs hardly tell it from the others and that runs in both directions do.
+#    there (save where the current reverses), so the verdict says these runs hardly tell them
+#    apart and that runs in both directions do; the coasts still favour the Coulomb level, whose
+#    breakaway no start from rest sets (it is pinned, not a reason to set friction aside).
 # Args: TOOL_DIR SOURCE_DIR.
 set -euo pipefail
 tools=$1
@@ -56,8 +57,10 @@ mcg-fit gap --budget 300 --format text --config "$work/no-coulomb.ini" --train "
   --validate "$work/oneway-validate.csv" >"$work/oneway.txt" 2>"$work/oneway.err" ||
   fail "one way: exit $?: $(tail -1 "$work/oneway.err")"
 diagnosis=$(sed -n 's/^diagnosis: //p' "$work/oneway.txt")
-check "one way: the diagnosis ($diagnosis) is a constant torque's" \
-  grep -qE '^(friction_levels|brush_drop|hbridge)' <<<"$diagnosis"
+check "one way: the diagnosis ($diagnosis) is the withheld Coulomb level" \
+  grep -qx friction_levels <<<"$diagnosis"
+check "one way: the breakaway no start from rest sets is pinned, not a reason to set friction aside" \
+  grep -q "^  friction_levels .*Ts_excess_Nm pinned at 0" "$work/oneway.txt"
 reason=$(sed -n 2p "$work/oneway.txt")
 told='hardly tell them apart (runs in both directions, or the current measured, do)'
 check "one way: the verdict says these runs hardly tell them apart" grep -q "one way only.*$told" <<<"$reason"

@@ -231,6 +231,15 @@ bool gauge_trade(const std::vector<FitFlag>& flags, std::string_view key) {
   });
 }
 
+/// True when `flags` say the data leave parameter `key` undetermined, too precise to believe,
+/// or traded against another.
+bool loose_flagged(const std::vector<FitFlag>& flags, std::string_view key) {
+  return std::any_of(flags.begin(), flags.end(), [&](const FitFlag& f) {
+    return f.kind != FitFlag::Kind::at_bound && f.kind != FitFlag::Kind::impossible &&
+           std::find(f.names.begin(), f.names.end(), key) != f.names.end();
+  });
+}
+
 /// Points of the breakaway profile on each side of the fitted value.
 constexpr int k_profile_half_points = 16;
 
@@ -437,6 +446,27 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     take(fit, free);
     pinned.push_back(key);
   }
+  // A breakaway the runs never excite (no start from rest near it) leaves a friction effect's
+  // static excess undetermined while its Coulomb and viscous levels are not: pin the excess at
+  // 0 (breakaway at the Coulomb level) and say so, rather than set the effect aside.
+  std::vector<std::string> unexcited;
+  for (const auto& e : job.effects) {
+    const model::EffectSpec* spec = find_plan(e);
+    if (c.determined() || spec == nullptr || spec->plan.breakaway_key.empty() ||
+        std::chrono::steady_clock::now() >= settings.deadline)
+      continue;
+    const std::string key = e + "." + spec->plan.breakaway_key;
+    if (!loose_flagged(c.flags, key)) continue;
+    std::vector<std::string> free = c.free;
+    std::erase(free, key);
+    problem.model = c.model;
+    model::set_parameter(problem.model, key, 0.0);
+    problem.free = free;
+    problem.nls.max_evaluations = budget(free.size());
+    fit = fit_model(problem);
+    take(fit, free);
+    unexcited.push_back(key);
+  }
   std::vector<std::string> profiled;
   for (const auto& e : job.effects) {
     const model::EffectSpec* spec = find_plan(e);
@@ -452,6 +482,9 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
                                  : "fitted; budget spent";
   if (!pinned.empty())
     c.status += fmt::format("; {} pinned at the given value (a gauge)", fmt::join(pinned, " "));
+  if (!unexcited.empty())
+    c.status +=
+        fmt::format("; {} pinned at 0: no start from rest in these runs sets it", fmt::join(unexcited, " "));
   for (const std::string& note : profiled) c.status += "; " + note;
   score();
   return c;
