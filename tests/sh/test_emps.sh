@@ -6,7 +6,12 @@
 # (Fc = 20.3935 N, Fv = 203.5034 N s/m), in SI units. On the validation run (the same moves
 # with force pulses) its values must lie within two standard errors of the same IDIM-LS recipe
 # run on that file (Fc = 20.90 N, Fv = 210.09 N s/m, offset -3.22 N: friction moved between
-# the runs, see PROVENANCE.md). The data ship in tests/data/real/emps (Apache-2.0).
+# the runs, see PROVENANCE.md). mcg-fit model, driven by the logged force (--torque) from the
+# axis given without friction (frictionless.ini, a start of Tc 15 N and Fv 150 N s/m), must land
+# within two of its standard errors of the published Fc and Fv; so must it on the force with the
+# offset friction estimated removed (the model has no offset term). mcg-fit gap on the same
+# model with its gap.args (the benchmark's row) must name friction and close >= 60 % of the
+# validation run's speed error. The data ship in tests/data/real/emps (Apache-2.0).
 # Args: TOOL_DIR SOURCE_DIR.
 set -euo pipefail
 tools=$1
@@ -42,4 +47,51 @@ published state0.offset_N -3.1648
 published state0.total_Tc_N 20.90 "$work/validation.ini"
 published state0.total_visc1_N_s_m 210.09 "$work/validation.ini"
 published state0.offset_N -3.22 "$work/validation.ini"
+
+# The model's own fit, from the frictionless axis: the fitted Tc_Nm and visc1_Nm_s_rad (N, N s/m
+# at a gear ratio of 1) of [motor], "KEY = value  ; fitted, +- se UNIT".
+dir="$src/tests/data/real/emps"
+printf '[motor]\nTc_Nm = 15\nvisc1_Nm_s_rad = 150\n' >"$work/start.ini"
+model_fit() {
+  mcg-fit model --config "$dir/frictionless.ini" --config "$work/start.ini" --torque force_N --position qm_m "$1"
+}
+fitted() {
+  local key=$1 published=$2 ini=$3 line value se
+  line=$(grep -m1 "^$key = .*; fitted" "$ini") || { fail "$key: not fitted in $(basename "$ini")"; return; }
+  value=$(awk '{ print $3 }' <<<"$line")
+  se=$(awk '{ print $7 }' <<<"$line")
+  if awk -v v="$value" -v s="$se" -v p="$published" 'BEGIN { d = v - p; if (d < 0) d = -d; exit !(s > 0 && d <= 2 * s) }'; then
+    pass
+    echo "ok   model $key = $value +- $se (published $published, $(basename "$ini"))"
+  else
+    fail "model $key = $value +- $se: published $published is not within two standard errors"
+  fi
+}
+model_fit "$data" >"$work/model.ini"
+fitted Tc_Nm 20.3935 "$work/model.ini"
+fitted visc1_Nm_s_rad 203.5034 "$work/model.ini"
+offset=$(awk '/^state0.offset_N = / { print $3 }' "$work/fit.ini")
+awk -F, -v o="$offset" '/^#/ { print; next } $1 == "t" { print; next } { printf "%s,%s,%.10g\n", $1, $2, $3 - o }' \
+  "$data" >"$work/estimation_no_offset.csv"
+model_fit "$work/estimation_no_offset.csv" >"$work/model_no_offset.ini"
+fitted Tc_Nm 20.3935 "$work/model_no_offset.ini"
+fitted visc1_Nm_s_rad 203.5034 "$work/model_no_offset.ini"
+
+# gap on the frictionless axis, as the benchmark row runs it.
+read -ra gap_args <<<"$(grep -v '^[[:space:]]*#' "$dir/gap.args" | tr '\n' ' ')"
+(cd "$dir" && mcg-fit gap "${gap_args[@]}" --format text) >"$work/gap.txt" 2>"$work/gap.err" || true
+diagnosis=$(sed -n 's/^diagnosis: //p' "$work/gap.txt")
+if [[ $diagnosis == *friction* ]]; then
+  pass
+  echo "ok   gap names $diagnosis"
+else
+  fail "gap on the frictionless axis: diagnosis '${diagnosis:-none}' does not name friction: $(tail -1 "$work/gap.err")"
+fi
+shrink=$(sed -n 's/^validation omega RMS: .*(\([0-9]*\) % less).*/\1/p' "$work/gap.txt")
+if [[ -n $shrink ]] && ((shrink >= 60)); then
+  pass
+  echo "ok   gap closes $shrink % of the validation speed error"
+else
+  fail "gap closes '${shrink:-?}' % of the validation speed error (>= 60 % expected)"
+fi
 finish emps

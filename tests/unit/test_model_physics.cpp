@@ -239,5 +239,32 @@ TEST(ModelPhysics, OutputsAreInRadPerSecondAndRpm) {
   EXPECT_NEAR(out.rpm.back(), out.omega_rad_s.back() * k_rpm_per_rad_s, 1e-9);
 }
 
+TEST(ModelPhysics, CurrentDrivenMotorFollowsTheMechanicalClosedForm) {
+  // An ideal current loop holds i = i_cmd: J dw/dt = Kt i - Tc - c1 w, so from rest (once the
+  // drive exceeds the breakaway) w(t) = w_inf (1 - exp(-t c1 / J)), w_inf = (Kt i - Tc) / c1,
+  // with no electrical lag; the voltage the loop applies is R i + Ke w.
+  Model m;
+  Friction& f = m.params.motor.friction;
+  f.viscous = {2e-5, 0.0, 0.0};
+  const double i_cmd = 0.5;
+  const Machine& mm = m.params.motor;
+  const double w_inf = (mm.Kt_Nm_A * i_cmd - f.Tc_Nm) / f.viscous[0];
+  const double tau = mm.J_kg_m2 / f.viscous[0];
+  Inputs in = constant(0.0, 0.5, 1e-3, 0);
+  in.i_cmd_A.assign(in.t_s.size(), i_cmd);
+  const Outputs out = simulate(m, in);
+  for (std::size_t k : {std::size_t{1}, std::size_t{50}, std::size_t{500}}) {
+    const double w = w_inf * (1.0 - std::exp(-in.t_s[k] / tau));
+    EXPECT_NEAR(out.omega_rad_s[k], w, 1e-6 * w_inf) << "row " << k;
+    EXPECT_EQ(out.i_A[k], i_cmd) << "row " << k;
+    EXPECT_NEAR(out.v_applied_V[k], mm.R_ohm * i_cmd + mm.Ke_V_s_rad * out.omega_rad_s[k], 1e-9) << "row " << k;
+  }
+  // A torque-driven run is the same drive through T = Kt i.
+  Inputs torque = in;
+  torque.i_cmd_A.clear();
+  torque.T_cmd_Nm.assign(in.t_s.size(), mm.Kt_Nm_A * i_cmd);
+  EXPECT_NEAR(simulate(m, torque).omega_rad_s[500], out.omega_rad_s[500], 1e-9 * w_inf);
+}
+
 }  // namespace
 }  // namespace mcg::model

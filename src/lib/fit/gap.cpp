@@ -308,13 +308,16 @@ int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
   auto load = [&](const std::vector<std::string>& paths) {
     std::vector<table::Table> tables;
     for (const auto& p : paths) {
-      tables.push_back(select_time(table::read(open_input(p), input_name(p)), options.from_s, options.to_s));
+      tables.push_back(select_time(
+          with_speed_from_position(table::read(open_input(p), input_name(p)), options.position_column),
+          options.from_s, options.to_s));
     }
     return tables;
   };
   const std::vector<table::Table> train = load(options.train);
   const std::vector<table::Table> validate = load(options.validate);
-  GapData data = prepare_gap_data(train, validate, model.params, options.split_fraction, options.split_given);
+  GapData data = prepare_gap_data(train, validate, model.params, options.split_fraction, options.split_given,
+                                  options.drive);
   if (options.linear) {
     if (data.speed_unit.column != "omega")
       fail("--linear: the runs must measure the axis' speed as omega, m/s");

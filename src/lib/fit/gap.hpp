@@ -143,7 +143,8 @@ inline constexpr double k_split_level_share = 0.5;
 /// Outputs compared: rpm and i where measured. Current samples at the ADC rails (from
 /// `# i_measurement: ... range A..B A`) are dropped as not measured.
 GapData prepare_gap_data(const std::vector<table::Table>& train, const std::vector<table::Table>& validate,
-                         const model::Params& params, double split_fraction, bool split_given = false);
+                         const model::Params& params, double split_fraction, bool split_given = false,
+                         const DriveInput& drive = {});
 
 /// Per validation output: the measured series (scored rows only, NaN elsewhere) and the
 /// noise floor of its measurement chain.
@@ -307,6 +308,8 @@ struct GapOptions {
   /// The measured omega is a linear axis' speed, m/s (the gear ratio then the motor's rad per m
   /// of travel, 2 pi / lead): the reports say m/s.
   bool linear = false;
+  DriveInput drive;  ///< --current, --torque: what drives the rig (voltage by default)
+  std::string position_column;  ///< --position: speed from this position column (with_speed_from_position)
   double budget_s = 120.0;       ///< wall-clock budget of the diagnosis (partial results after it)
   bool progress = false;         ///< progress report lines on the diagnostics
   bool discrepancy = false;      ///< the catalog-free discrepancy fit whatever the verdict

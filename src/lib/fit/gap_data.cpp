@@ -18,10 +18,10 @@ namespace mcg::fit {
 
 namespace {
 
-std::vector<std::string> compared_outputs(const table::Table& t) {
+std::vector<std::string> compared_outputs(const table::Table& t, const DriveInput& drive) {
   std::vector<std::string> out;
   for (const char* name : {"rpm", "i"}) {
-    if (t.has(name)) out.emplace_back(name);
+    if (t.has(name) && !(drive.current && std::string_view(name) == "i")) out.emplace_back(name);
   }
   if (out.empty()) fail("{}: no measured column to compare with the model (rpm or i)", t.source);
   return out;
@@ -50,12 +50,15 @@ std::size_t split_row(const model::Inputs& in, double fraction, bool& at_event) 
 /// run's largest speed, so that noise around standstill does not count).
 struct Coverage {
   std::array<double, 2> level{0.0, 0.0};
+  const char* unit = "V";
   std::array<bool, 2> turns{false, false};
 };
 
 Coverage coverage(const Run& run, std::size_t first, std::size_t last) {
   Coverage c;
-  const auto& v = run.inputs.v_V;
+  // The drive's own command: the voltage, a current loop's current or the drive torque.
+  const auto& v = drive_command(run);
+  c.unit = !run.inputs.i_cmd_A.empty() ? "A" : !run.drive_torque.empty() ? "(drive torque)" : "V";
   double v_max = 0.0;
   for (double x : v) v_max = std::max(v_max, std::abs(x));
   for (std::size_t n = first; n < last; ++n) {
@@ -88,8 +91,8 @@ std::string split_lacks(const Run& run, std::size_t split) {
     if (scored.level[d] > 0.0 && train.level[d] == 0.0) return fmt::format("training never drives {}", way);
     if (scored.turns[d] && !train.turns[d]) return fmt::format("the motor never turns {} in training", way);
     if (train.level[d] < k_split_level_share * scored.level[d]) {
-      return fmt::format("training's largest {} drive {:.3g} V is below {:.0f} % of the {:.3g} V scored", way,
-                         train.level[d], 100.0 * k_split_level_share, scored.level[d]);
+      return fmt::format("training's largest {} drive {:.3g} {} is below {:.0f} % of the {:.3g} {} scored", way,
+                         train.level[d], train.unit, 100.0 * k_split_level_share, scored.level[d], train.unit);
     }
   }
   return {};
@@ -145,6 +148,9 @@ std::size_t covering_split(const Run& run, const std::string& source, double fra
 Run truncate(const Run& run, std::size_t rows) {
   Run out = run;
   for (auto* v : {&out.inputs.t_s, &out.inputs.v_V, &out.inputs.clutch, &out.inputs.r_load_ohm}) v->resize(rows);
+  for (auto* v : {&out.inputs.i_cmd_A, &out.inputs.T_cmd_Nm, &out.drive_torque}) {
+    if (!v->empty()) v->resize(rows);
+  }
   for (auto& y : out.measured) y.resize(rows);
   return out;
 }
@@ -262,7 +268,8 @@ std::vector<OutputFloor> noise_floors(const GapData& data) {
 }  // namespace gap_detail
 
 GapData prepare_gap_data(const std::vector<table::Table>& train, const std::vector<table::Table>& validate,
-                         const model::Params& params, double split_fraction, bool split_given) {
+                         const model::Params& params, double split_fraction, bool split_given,
+                         const DriveInput& drive) {
   if (train.empty()) fail("--train: no training file");
   GapData data;
   // The reports speak the data's unit: rad/s when every file measures omega and none rpm.
@@ -274,7 +281,7 @@ GapData prepare_gap_data(const std::vector<table::Table>& train, const std::vect
   // make_run() drops the current samples at the rails of the run's stated chain.
   auto make = [&](const table::Table& measured) {
     const table::Table t = with_rpm(measured);
-    return make_run(t, compared_outputs(t), params);
+    return make_run(t, compared_outputs(t, drive), params, 50, drive);
   };
   auto scored = [&](const table::Table& t, Run run, std::size_t first) {
     ScoredRun sr{std::move(run), first};

@@ -67,11 +67,12 @@ std::string not_excited(const model::EffectPlan& plan, const std::vector<Run>& r
   bool reverse = false;
   for (const Run& run : runs) {
     const auto& c = run.inputs.clutch;
+    const auto& drive = drive_command(run);
     for (std::size_t n = 0; n < c.size(); ++n) {
       if (c[n] == 2.0) engaged = true;
       if (n > 0 && c[n] == 2.0 && c[n - 1] != 2.0) engages = true;
-      forward = forward || run.inputs.v_V[n] > 0.0;
-      reverse = reverse || run.inputs.v_V[n] < 0.0;
+      forward = forward || drive[n] > 0.0;
+      reverse = reverse || drive[n] < 0.0;
     }
   }
   using Needs = model::EffectPlan::Needs;

@@ -69,21 +69,29 @@ const std::vector<std::string>& measurable_columns() {
 }
 
 Run make_run(const table::Table& table, const std::vector<std::string>& outputs, const model::Params& params,
-             std::size_t min_rows) {
+             std::size_t min_rows, const DriveInput& drive) {
   Run run;
   run.source = table.source;
   run.first_line = table.first_line;
   table::require_increasing(table, "t");
   run.inputs.t_s = table.col("t");
+  const std::size_t rows = table.rows();
+  if (drive.current && !drive.torque_column.empty()) fail("a drive is current- or torque-driven, not both");
   if (!table.has("v") && table.has("duty")) {
     run.inputs.v_V = table.col("duty");
     for (double& v : run.inputs.v_V) v *= params.supply_V;
+  } else if (!drive.voltage() && !table.has("v")) {
+    run.inputs.v_V.assign(rows, 0.0);
   } else {
     run.inputs.v_V = table.col("v");
   }
+  if (drive.current) run.inputs.i_cmd_A = table.col("i");
+  if (!drive.torque_column.empty()) {
+    run.drive_torque = table.col(drive.torque_column);
+    run.inputs.T_cmd_Nm = run.drive_torque;
+  }
   // A motor alone has no clutch and no load relay to log: without those columns the run is the
   // motor alone (clutch 0, relay open), as mcg-fit friction reads it.
-  const std::size_t rows = table.rows();
   run.inputs.clutch = table.has("clutch") ? table.col("clutch") : std::vector<double>(rows, 0.0);
   run.inputs.r_load_ohm =
       table.has("r_load") ? table.col("r_load") : std::vector<double>(rows, model::k_open_circuit);
@@ -107,6 +115,7 @@ Run make_run(const table::Table& table, const std::vector<std::string>& outputs,
     const bool generator = std::any_of(run.inputs.clutch.begin(), run.inputs.clutch.end(), [](double c) { return c != 0.0; });
     for (const char* name : {"i", "i_gen", "v_gen"}) {
       const bool of_generator = std::string_view(name) != "i";
+      if (drive.current && !of_generator) continue;  // the drive's command, not a measurement
       if (table.has(name) && varies(name) && (generator || !of_generator)) run.outputs.push_back(name);
     }
     if (run.outputs.empty()) {
@@ -116,6 +125,9 @@ Run make_run(const table::Table& table, const std::vector<std::string>& outputs,
     for (const auto& name : outputs) {
       if (std::find(measurable_columns().begin(), measurable_columns().end(), name) == measurable_columns().end()) {
         fail("unknown output {} (one of rpm, i, i_gen, v_gen, omega)", quote(name));
+      }
+      if (drive.current && name == "i") {
+        fail("{}: output 'i': on a current-driven run the current is the input", table.source);
       }
       run.outputs.push_back(name);
     }
@@ -147,6 +159,7 @@ void apply_speed_path(Run& run, const measurement::SpeedPath& ini, std::optional
       measurement::settle_speed_path(run.stated, ini, gear_override, run.source);
   run.gear_ratio = *settled.gear_ratio;
   run.speed_filter = *settled.filter;
+  for (std::size_t k = 0; k < run.drive_torque.size(); ++k) run.inputs.T_cmd_Nm[k] = run.drive_torque[k] / run.gear_ratio;
 }
 
 table::Table select_time(const table::Table& table, double from_s, double to_s) {
@@ -165,6 +178,32 @@ table::Table select_time(const table::Table& table, double from_s, double to_s) 
     out.columns.emplace_back(c.begin() + static_cast<std::ptrdiff_t>(first), c.begin() + static_cast<std::ptrdiff_t>(last));
   }
   return out;
+}
+
+table::Table with_speed_from_position(table::Table table, const std::string& column) {
+  if (column.empty()) return table;
+  if (table.has("omega") || table.has("rpm")) {
+    fail("{}: --position {}: the run already has a speed column", table.source, quote(column));
+  }
+  table::require_finite(table, column);
+  table::require_increasing(table, "t");
+  const auto& x = table.col(column);
+  const auto& t = table.col("t");
+  const std::size_t n = x.size();
+  std::vector<double> omega(n, 0.0);
+  for (std::size_t k = 0; n > 1 && k < n; ++k) {
+    const std::size_t a = k > 0 ? k - 1 : 0;
+    const std::size_t b = k + 1 < n ? k + 1 : n - 1;
+    omega[k] = (x[b] - x[a]) / (t[b] - t[a]);
+  }
+  table.set("omega", std::move(omega));
+  return table;
+}
+
+const std::vector<double>& drive_command(const Run& run) {
+  if (!run.inputs.i_cmd_A.empty()) return run.inputs.i_cmd_A;
+  if (!run.drive_torque.empty()) return run.drive_torque;
+  return run.inputs.v_V;
 }
 
 table::Table with_rpm(table::Table table) {
@@ -274,8 +313,15 @@ std::vector<std::string> default_free(const std::vector<Run>& runs, const std::v
   const bool current = std::any_of(runs.begin(), runs.end(), [](const Run& r) {
     return std::find(r.outputs.begin(), r.outputs.end(), "i") != r.outputs.end();
   });
+  const bool driven = std::any_of(runs.begin(), runs.end(), [](const Run& r) {
+    return !r.inputs.i_cmd_A.empty() || !r.inputs.T_cmd_Nm.empty();
+  });
   std::vector<std::string> wanted;
-  if (current) {
+  if (driven) {
+    // The drive sets the torque: Kt only scales J and the friction (or, torque-driven, drops
+    // out), and no back-EMF damps the shaft, so the viscous friction is fitted instead.
+    wanted = {"motor.J_kg_m2", "motor.Tc_Nm", "motor.visc1_Nm_s_rad"};
+  } else if (current) {
     wanted = {"motor.J_kg_m2", "motor.R_ohm", "motor.Kt_Nm_A", "motor.Ke_V_s_rad", "motor.Tc_Nm"};
   } else {
     wanted = {"motor.J_kg_m2", "motor.Kt_Nm_A", "motor.Tc_Nm"};
@@ -286,7 +332,7 @@ std::vector<std::string> default_free(const std::vector<Run>& runs, const std::v
     if (!is_fixed(n)) free.push_back(n);
   }
   const bool kt_free = std::find(free.begin(), free.end(), "motor.Kt_Nm_A") != free.end();
-  if (!current && kt_free && !is_fixed("motor.Ke_V_s_rad")) ties.emplace_back("motor.Ke_V_s_rad", "motor.Kt_Nm_A");
+  if (!current && !driven && kt_free && !is_fixed("motor.Ke_V_s_rad")) ties.emplace_back("motor.Ke_V_s_rad", "motor.Kt_Nm_A");
   return free;
 }
 

@@ -35,6 +35,17 @@ std::vector<double> window_average_rpm(const std::vector<double>& t_s, const std
 /// rpm (rev/min), i (A), i_gen (A), v_gen (V), omega (rad/s).
 const std::vector<std::string>& measurable_columns();
 
+/// What drives the rig in a run, as `mcg-fit model`, `gap` and `friction` read it (--current,
+/// --torque): the bridge voltage (v, or duty * supply_V) by default; else an ideal current
+/// loop whose command is the run's `i` column, A (i_A = i, the circuit's drop not integrated);
+/// else the drive torque itself from a column: N m at the measured shaft (N of force on a
+/// linear axis), the motor's torque T = column / gear_ratio (rad per m on a linear axis).
+struct DriveInput {
+  bool current = false;       ///< `i` is the current loop's command, not a measured output
+  std::string torque_column;  ///< the drive torque (force) column; empty: not torque-driven
+  bool voltage() const { return !current && torque_column.empty(); }
+};
+
 /// One measured run: the inputs that drive the model and the measured outputs.
 struct Run {
   std::string source;
@@ -51,6 +62,9 @@ struct Run {
   /// What the capture's own metadata states (`# gear_ratio:`, `# speed_filter:`), so that
   /// apply_speed_path() can tell a capture's statement from the default.
   measurement::SpeedPath stated;
+  /// A torque-driven run's torque column as logged (DriveInput): inputs.T_cmd_Nm is it over
+  /// the gear ratio, set again whenever the ratio is settled.
+  std::vector<double> drive_torque;
 };
 
 /// Settles how the run's speed was measured: `gear_override` (a command's --gear-ratio) wins;
@@ -59,7 +73,8 @@ struct Run {
 /// file and both values.
 void apply_speed_path(Run& run, const measurement::SpeedPath& ini, std::optional<double> gear_override = {});
 
-/// Builds a run from a table with columns t, v (or duty, then v = duty * supply_V), clutch,
+/// Builds a run from a table with columns t, v (or duty, then v = duty * supply_V; neither for a
+/// current- or torque-driven `drive`, whose inputs are `i` or the torque column), clutch,
 /// r_load (both optional: without them the run is the motor alone, clutch 0 and relay open)
 /// and the measured `outputs` (empty: rpm, or omega when there is no rpm, and each of
 /// i, i_gen, v_gen that is present and not constant, the generator's two only when the
@@ -69,7 +84,7 @@ void apply_speed_path(Run& run, const measurement::SpeedPath& ini, std::optional
 /// at its rails (CurrentChain::at_rail) are saturated and count as not measured. Throws mcg::Error naming the
 /// file (and line) for a missing column, a bad input value, or fewer than `min_rows` rows ("too short").
 Run make_run(const table::Table& table, const std::vector<std::string>& outputs, const model::Params& params,
-             std::size_t min_rows = 50);
+             std::size_t min_rows = 50, const DriveInput& drive = {});
 
 /// The rows of `table` with from_s <= t <= to_s (a time range of a run: start-up rows
 /// skipped, a window taken). Throws mcg::Error naming the file when no row is left.
@@ -78,6 +93,16 @@ table::Table select_time(const table::Table& table, double from_s, double to_s);
 /// A table with a speed column `rpm`: as it is, or converted from `omega` (rad/s) when it has
 /// no rpm, so that every consumer of measured speed accepts either.
 table::Table with_rpm(table::Table table);
+
+/// A table whose speed is measured as a position (`column`: rad, or m on a linear axis): its
+/// central difference (one-sided at the ends) added as `omega` (rad/s; m/s), as mcg-fit friction,
+/// model and gap read --position. `column` empty: the table as it is. Throws mcg::Error naming
+/// the file for a missing or non-finite column, or a table that already has omega or rpm.
+table::Table with_speed_from_position(table::Table table, const std::string& column);
+
+/// The command that drives a run (DriveInput): the current loop's current (A), else the drive
+/// torque as logged, else the bridge voltage (V); what a direction or a drive level is read from.
+const std::vector<double>& drive_command(const Run& run);
 
 /// Pins parameters at measured values: each "NAME=VALUE" (names as model::parameters()
 /// spells them) is set in `model`; returns the names. Throws mcg::Error "--fix: ..." for a
@@ -129,7 +154,9 @@ std::map<std::string, std::pair<double, double>> read_bounds(const config::Ini& 
 /// The parameters a fit frees by default, chosen from what the runs excite:
 ///   a measured current: J, R, Kt, Ke and Tc of the motor (the current separates R from Kt);
 ///   speed only: J, Kt and Tc with Ke tied to Kt (speed alone fixes only the ratios R/Kt and
-///   J R/(Kt Ke): freeing R and Kt together is degenerate, so R stays at its given value).
+///   J R/(Kt Ke): freeing R and Kt together is degenerate, so R stays at its given value);
+///   a current- or torque-driven run (DriveInput): J, Tc and the viscous visc1 (Kt would
+///   only scale J and the friction, and no back-EMF damps the shaft).
 /// Names in `fixed` are left out. `ties` receives the ties the set needs.
 std::vector<std::string> default_free(const std::vector<Run>& runs, const std::vector<std::string>& fixed,
                                       std::vector<std::pair<std::string, std::string>>& ties);

@@ -306,12 +306,16 @@ double get_parameter(const Model& model, std::string_view name);
 /// Open circuit on the generator terminals.
 inline constexpr double k_open_circuit = std::numeric_limits<double>::infinity();
 
-/// What drives the plant over one step: the commanded average bridge voltage, the clutch
-/// state and the generator load.
+/// What drives the plant over one step: the commanded average bridge voltage (or an ideal
+/// current loop's command), the clutch state and the generator load.
 struct Drive {
   double v_V = 0.0;                       ///< commanded average voltage, duty * supply_V
   int clutch = 2;                         ///< 0, 1 or 2
   double r_load_ohm = k_open_circuit;     ///< >= 0, inf = relay open
+  /// A current-driven drive's command, A: an ideal current loop holds i_A = i_cmd_A, so the
+  /// motor circuit is not integrated and v_V is ignored (NaN: a voltage drive). The state's
+  /// v_applied_V is then the circuit's drop R i + drop(i) + Ke w (L di/dt not modelled).
+  double i_cmd_A = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// The plant's state at one instant.
@@ -382,6 +386,11 @@ struct Inputs {
   std::vector<double> v_V;
   std::vector<double> clutch;       ///< 0, 1, 2
   std::vector<double> r_load_ohm;   ///< >= 0 or inf
+  /// A current-driven drive (Drive::i_cmd_A), A; empty: a voltage drive.
+  std::vector<double> i_cmd_A;
+  /// A torque-driven drive: the drive torque at the motor shaft, N m, commanded as the current
+  /// T / Kt of the simulated model; empty: not torque-driven. At most one of the two is set.
+  std::vector<double> T_cmd_Nm;
 };
 
 /// Outputs, one entry per row: the state at t_s[n] (before row n's inputs act).

@@ -82,24 +82,24 @@ class PlantImpl {
     set_load(drive.r_load_ohm);
     const double t_end = m_t + dt;
     if (m_c.delay_s > 0.0) {
-      m_queue.emplace_back(m_t + m_c.delay_s, drive.v_V);
+      m_queue.push_back({m_t + m_c.delay_s, drive.v_V, drive.i_cmd_A});
     } else {
-      m_v = drive.v_V;
+      command(drive.v_V, drive.i_cmd_A);
     }
     constexpr double k_time_eps = 1e-12;
     while (m_t < t_end - k_time_eps) {
-      while (!m_queue.empty() && m_queue.front().first <= m_t + k_time_eps) {
-        m_v = m_queue.front().second;
+      while (!m_queue.empty() && m_queue.front().t_s <= m_t + k_time_eps) {
+        command(m_queue.front().v_V, m_queue.front().i_cmd_A);
         m_queue.pop_front();
       }
       double seg_end = t_end;
-      if (!m_queue.empty() && m_queue.front().first < t_end - k_time_eps) seg_end = m_queue.front().first;
+      if (!m_queue.empty() && m_queue.front().t_s < t_end - k_time_eps) seg_end = m_queue.front().t_s;
       integrate(seg_end - m_t);
       m_t = seg_end;
     }
     m_t = t_end;
-    while (!m_queue.empty() && m_queue.front().first <= m_t + k_time_eps) {
-      m_v = m_queue.front().second;
+    while (!m_queue.empty() && m_queue.front().t_s <= m_t + k_time_eps) {
+      command(m_queue.front().v_V, m_queue.front().i_cmd_A);
       m_queue.pop_front();
     }
   }
@@ -135,7 +135,12 @@ class PlantImpl {
     }
     double d = 0.0;
     const double v_b = bridge(d);
-    s.v_applied_V = v_b - (m_c.circuit.R_series_ohm + std::abs(d) * m_c.circuit.R_duty_ohm) * s.i_A;
+    if (current_driven()) {
+      s.v_applied_V = motor_resistance(m_y, d) * s.i_A + m_c.p.motor.Ke_V_s_rad * m_y[W_M];
+      if (m_c.circuit.V_sat_V > 0.0) s.v_applied_V += m_c.circuit.drop(s.i_A);
+    } else {
+      s.v_applied_V = v_b - (m_c.circuit.R_series_ohm + std::abs(d) * m_c.circuit.R_duty_ohm) * s.i_A;
+    }
     s.temp_rise_K = m_y[X_M];
     s.clutch = m_clutch;
     s.stuck = m_stuck_m;
@@ -158,6 +163,14 @@ class PlantImpl {
   bool rigid() const { return m_coupling == Coupling::rigid; }
   bool spring() const { return m_c.coupling.spring_k_Nm_rad > 0.0; }
   bool winding_states() const { return m_c.winding.rate != nullptr; }
+  /// An ideal current loop holds the motor current (Drive::i_cmd_A): no circuit to integrate.
+  bool current_driven() const { return !std::isnan(m_i_cmd); }
+  /// Takes a drive's command; the motor current state follows a current loop's command.
+  void command(double v_V, double i_cmd_A) {
+    m_v = v_V;
+    m_i_cmd = i_cmd_A;
+    if (current_driven()) m_y[I_M] = m_i_cmd;
+  }
 
   /// Bridge output before the current-dependent drops: d' supply_V; d' is returned.
   double bridge(double& d_out) const {
@@ -216,6 +229,7 @@ class PlantImpl {
   /// below the steps (a low-inductance gearmotor: L/R under 50 us) the algebraic solution of
   /// v_b - Ke w = R i + drop(i), so that no step has to resolve it.
   double motor_current(const Vec& y) const {
+    if (current_driven()) return m_i_cmd;
     if (!m_motor_quasi) return y[I_M];
     double d = 0.0;
     const double v_b = bridge(d);
@@ -276,7 +290,7 @@ class PlantImpl {
     const double Rm = motor_resistance(y, d);
     const double i_m = motor_current(y);
     const double load_Nm = std::abs(mm.Kt_Nm_A * i_m);
-    if (m_motor_quasi) {
+    if (m_motor_quasi || current_driven()) {
       dy[I_M] = 0.0;
     } else {
       double vm = v_b - Rm * i_m - mm.Ke_V_s_rad * y[W_M];
@@ -340,7 +354,7 @@ class PlantImpl {
   Vec linear_rates() const {
     Vec lam{};
     if (!m_exp_circuits) return lam;
-    if (!m_motor_quasi) {
+    if (!m_motor_quasi && !current_driven()) {
       double d = 0.0;
       bridge(d);
       lam[I_M] = -(m_c.p.motor.R_ohm + m_c.circuit.R_series_ohm + std::abs(d) * m_c.circuit.R_duty_ohm) /
@@ -443,7 +457,7 @@ class PlantImpl {
     // A torque of the shaft angle (a ripple, a discrepancy term) varies within a millisecond at
     // speed: its model keeps the electrical bound, which resolves the angle as it always did.
     const bool electrical_bound = m_opt.circuit_bound || !m_exp_circuits || !m_c.motor_torque.empty();
-    if (electrical_bound && !m_motor_quasi)
+    if (electrical_bound && !m_motor_quasi && !current_driven())
       h = std::min(h, 0.5 * mm.L_H / (mm.R_ohm + m_c.circuit.R_series_ohm + m_c.circuit.R_duty_ohm));
     if (electrical_bound && gen_circuit() && !gen_quasi_static()) {
       h = std::min(h, 0.5 * m_c.p.generator.L_H / (m_c.p.generator.R_ohm + m_r_load));
@@ -458,7 +472,8 @@ class PlantImpl {
 
   void integrate(double len) {
     const double h_lim = step_limit();
-    if (m_c.circuit.V_sat_V <= 0.0 || (m_motor_quasi && !(gen_circuit() && !gen_quasi_static()))) {
+    if (m_c.circuit.V_sat_V <= 0.0 ||
+        ((m_motor_quasi || current_driven()) && !(gen_circuit() && !gen_quasi_static()))) {
       const std::optional<long> steps =
           to_integer(std::ceil(len / h_lim - 1e-9), 0L, std::numeric_limits<long>::max());
       if (!steps)
@@ -507,7 +522,7 @@ class PlantImpl {
       return 0.5 * L / (R + m_c.circuit.V_sat_V / m_c.circuit.i_sat_A / (c * c));
     };
     const Machine& mm = m_c.p.motor;
-    double h = m_motor_quasi ? h_max : limit(m_y[I_M], k[I_M], mm.R_ohm + m_c.circuit.R_series_ohm, mm.L_H);
+    double h = m_motor_quasi || current_driven() ? h_max : limit(m_y[I_M], k[I_M], mm.R_ohm + m_c.circuit.R_series_ohm, mm.L_H);
     if (gen_circuit() && !gen_quasi_static()) {
       const Machine& mg = m_c.p.generator;
       h = std::min(h, limit(m_y[I_G], k[I_G], mg.R_ohm + m_r_load, mg.L_H));
@@ -862,7 +877,12 @@ class PlantImpl {
   bool m_exp_circuits = true;  ///< the circuits stepped exponentially (linear_rates)
   mutable std::array<ExpCoef, 2> m_coef{};  ///< per circuit, the coefficients of the last step
   double m_v = 0.0;
-  std::deque<std::pair<double, double>> m_queue;
+  double m_i_cmd = std::numeric_limits<double>::quiet_NaN();  ///< Drive::i_cmd_A in force
+  /// Commands waiting out the drive's dead time: when each acts, and what it commands.
+  struct Queued {
+    double t_s, v_V, i_cmd_A;
+  };
+  std::deque<Queued> m_queue;
 };
 
 Plant::Plant(const Model& model, const SimOptions& options, int initial_clutch)

@@ -29,12 +29,16 @@ void Outputs::store(std::size_t row, const State& s) {
 Outputs simulate(const Model& model, const Inputs& in, const SimOptions& options) {
   const std::size_t n = in.t_s.size();
   MCG_DEMAND(in.v_V.size() == n && in.clutch.size() == n && in.r_load_ohm.size() == n);
+  MCG_DEMAND((in.i_cmd_A.empty() || in.i_cmd_A.size() == n) && (in.T_cmd_Nm.empty() || in.T_cmd_Nm.size() == n));
+  MCG_DEMAND(in.i_cmd_A.empty() || in.T_cmd_Nm.empty());
   Outputs out;
   out.resize(n);
   if (n == 0) return out;
   Plant plant(model, options, static_cast<int>(in.clutch[0]));
   for (std::size_t k = 0; k < n; ++k) {
-    const Drive drive{in.v_V[k], static_cast<int>(in.clutch[k]), in.r_load_ohm[k]};
+    Drive drive{in.v_V[k], static_cast<int>(in.clutch[k]), in.r_load_ohm[k]};
+    if (!in.i_cmd_A.empty()) drive.i_cmd_A = in.i_cmd_A[k];
+    if (!in.T_cmd_Nm.empty()) drive.i_cmd_A = in.T_cmd_Nm[k] / model.params.motor.Kt_Nm_A;
     // Row k's output is the state at t_k, just before row k's inputs (and a clutch or relay
     // switch at t_k) act.
     out.store(k, plant.state());
@@ -57,6 +61,12 @@ void validate_inputs(const Inputs& in, std::string_view source, std::size_t firs
            config::format_number(in.t_s[k]), config::format_number(in.t_s[k - 1]));
     }
     if (!std::isfinite(in.v_V[k])) fail("{}:{}: column 'v': {}", source, line, not_finite(in.v_V[k]));
+    if (!in.i_cmd_A.empty() && !std::isfinite(in.i_cmd_A[k])) {
+      fail("{}:{}: column 'i' (the drive's current): {}", source, line, not_finite(in.i_cmd_A[k]));
+    }
+    if (!in.T_cmd_Nm.empty() && !std::isfinite(in.T_cmd_Nm[k])) {
+      fail("{}:{}: the drive torque: {}", source, line, not_finite(in.T_cmd_Nm[k]));
+    }
     const double c = in.clutch[k];
     if (!(c == 0.0 || c == 1.0 || c == 2.0)) {
       fail("{}:{}: column 'clutch': {} is not a clutch state (0, 1 or 2)", source, line, config::format_number(c));

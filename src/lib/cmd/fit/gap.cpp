@@ -34,6 +34,14 @@ void FitGap::define(CLI::App& app) {
       ->check(mcg::Range(1e-6, 1e6));
   gp->add_flag("--linear", gap.linear,
                "omega is a linear axis' speed, m/s; the gear ratio is then the motor's rad per m of travel");
+  gp->add_flag("--current", gap.drive.current,
+               "current-driven drive: the i column is the current loop's command, A (not compared)");
+  gp->add_option("--torque", gap.drive.torque_column,
+                 "torque-driven drive: this column is the drive torque, N m at the measured shaft (N with "
+                 "--linear, the gear ratio in rad/m)")
+      ->excludes("--current");
+  gp->add_option("--position", gap.position_column,
+                 "column holding the position (rad; m with --linear): speed by central differences");
   gp->add_flag("--discrepancy", gap.discrepancy,
                "fit the catalog-free discrepancy terms whatever the verdict (always for an unexplained gap)");
   gp->add_option("--budget", gap.budget_s,

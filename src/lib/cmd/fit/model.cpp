@@ -114,7 +114,9 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, const measur
 Run load_model_run(const std::string& path, const FitModelOptions& options, const model::Params& params,
                    const measurement::SpeedPath& speed) {
   Run run =
-      make_run(select_time(table::read_path(path), options.from_s, options.to_s), options.outputs, params);
+      make_run(select_time(with_speed_from_position(table::read_path(path), options.position_column),
+                           options.from_s, options.to_s),
+               options.outputs, params, 50, options.drive);
   apply_speed_path(run, speed, options.gear_ratio);
   return run;
 }
@@ -329,6 +331,14 @@ void FitModel::define(CLI::App& app) {
                  "motor turns per turn of the shaft whose speed was measured (default: the captures' "
                  "gear_ratio, else the INI's [measurement], else 1)")
       ->check(mcg::Range(1e-6, 1e6));
+  md->add_flag("--current", model.drive.current,
+               "current-driven drive: the i column is the current loop's command, A (not compared)");
+  md->add_option("--torque", model.drive.torque_column,
+                 "torque-driven drive: this column is the drive torque, N m at the measured shaft (N with a "
+                 "linear axis' gear ratio in rad/m)")
+      ->excludes("--current");
+  md->add_option("--position", model.position_column,
+                 "column holding the position (rad; m on a linear axis): speed by central differences");
   md->add_option("--outputs", model.outputs,
                  "measured columns compared (default: rpm and each varying i, i_gen, v_gen)")
       ->allow_extra_args(false)
