@@ -257,7 +257,8 @@ TEST(ModelPhysics, CurrentDrivenMotorFollowsTheMechanicalClosedForm) {
     const double w = w_inf * (1.0 - std::exp(-in.t_s[k] / tau));
     EXPECT_NEAR(out.omega_rad_s[k], w, 1e-6 * w_inf) << "row " << k;
     EXPECT_EQ(out.i_A[k], i_cmd) << "row " << k;
-    EXPECT_NEAR(out.v_applied_V[k], mm.R_ohm * i_cmd + mm.Ke_V_s_rad * out.omega_rad_s[k], 1e-9) << "row " << k;
+    EXPECT_NEAR(out.v_applied_V[k], mm.R_ohm * i_cmd + mm.Ke_V_s_rad * out.omega_rad_s[k], 1e-9)
+        << "row " << k;
   }
   // A torque-driven run is the same drive through T = Kt i.
   Inputs torque = in;

@@ -308,8 +308,8 @@ struct GapOptions {
   /// The measured omega is a linear axis' speed, m/s (the gear ratio then the motor's rad per m
   /// of travel, 2 pi / lead): the reports say m/s.
   bool linear = false;
-  DriveInput drive;  ///< --current, --torque: what drives the rig (voltage by default)
-  std::string position_column;  ///< --position: speed from this position column (with_speed_from_position)
+  DriveInput drive;              ///< --current, --torque: what drives the rig (voltage by default)
+  std::string position_column;   ///< --position: speed from this position column (with_speed_from_position)
   double budget_s = 120.0;       ///< wall-clock budget of the diagnosis (partial results after it)
   bool progress = false;         ///< progress report lines on the diagnostics
   bool discrepancy = false;      ///< the catalog-free discrepancy fit whatever the verdict

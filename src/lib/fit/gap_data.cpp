@@ -91,8 +91,9 @@ std::string split_lacks(const Run& run, std::size_t split) {
     if (scored.level[d] > 0.0 && train.level[d] == 0.0) return fmt::format("training never drives {}", way);
     if (scored.turns[d] && !train.turns[d]) return fmt::format("the motor never turns {} in training", way);
     if (train.level[d] < k_split_level_share * scored.level[d]) {
-      return fmt::format("training's largest {} drive {:.3g} {} is below {:.0f} % of the {:.3g} {} scored", way,
-                         train.level[d], train.unit, 100.0 * k_split_level_share, scored.level[d], train.unit);
+      return fmt::format("training's largest {} drive {:.3g} {} is below {:.0f} % of the {:.3g} {} scored",
+                         way, train.level[d], train.unit, 100.0 * k_split_level_share, scored.level[d],
+                         train.unit);
     }
   }
   return {};

@@ -159,7 +159,8 @@ void apply_speed_path(Run& run, const measurement::SpeedPath& ini, std::optional
       measurement::settle_speed_path(run.stated, ini, gear_override, run.source);
   run.gear_ratio = *settled.gear_ratio;
   run.speed_filter = *settled.filter;
-  for (std::size_t k = 0; k < run.drive_torque.size(); ++k) run.inputs.T_cmd_Nm[k] = run.drive_torque[k] / run.gear_ratio;
+  for (std::size_t k = 0; k < run.drive_torque.size(); ++k)
+    run.inputs.T_cmd_Nm[k] = run.drive_torque[k] / run.gear_ratio;
 }
 
 table::Table select_time(const table::Table& table, double from_s, double to_s) {
@@ -332,7 +333,8 @@ std::vector<std::string> default_free(const std::vector<Run>& runs, const std::v
     if (!is_fixed(n)) free.push_back(n);
   }
   const bool kt_free = std::find(free.begin(), free.end(), "motor.Kt_Nm_A") != free.end();
-  if (!current && !driven && kt_free && !is_fixed("motor.Ke_V_s_rad")) ties.emplace_back("motor.Ke_V_s_rad", "motor.Kt_Nm_A");
+  if (!current && !driven && kt_free && !is_fixed("motor.Ke_V_s_rad"))
+    ties.emplace_back("motor.Ke_V_s_rad", "motor.Kt_Nm_A");
   return free;
 }
 

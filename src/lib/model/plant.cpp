@@ -522,7 +522,9 @@ class PlantImpl {
       return 0.5 * L / (R + m_c.circuit.V_sat_V / m_c.circuit.i_sat_A / (c * c));
     };
     const Machine& mm = m_c.p.motor;
-    double h = m_motor_quasi || current_driven() ? h_max : limit(m_y[I_M], k[I_M], mm.R_ohm + m_c.circuit.R_series_ohm, mm.L_H);
+    double h = m_motor_quasi || current_driven()
+                   ? h_max
+                   : limit(m_y[I_M], k[I_M], mm.R_ohm + m_c.circuit.R_series_ohm, mm.L_H);
     if (gen_circuit() && !gen_quasi_static()) {
       const Machine& mg = m_c.p.generator;
       h = std::min(h, limit(m_y[I_G], k[I_G], mg.R_ohm + m_r_load, mg.L_H));

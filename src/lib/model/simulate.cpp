@@ -29,7 +29,8 @@ void Outputs::store(std::size_t row, const State& s) {
 Outputs simulate(const Model& model, const Inputs& in, const SimOptions& options) {
   const std::size_t n = in.t_s.size();
   MCG_DEMAND(in.v_V.size() == n && in.clutch.size() == n && in.r_load_ohm.size() == n);
-  MCG_DEMAND((in.i_cmd_A.empty() || in.i_cmd_A.size() == n) && (in.T_cmd_Nm.empty() || in.T_cmd_Nm.size() == n));
+  MCG_DEMAND((in.i_cmd_A.empty() || in.i_cmd_A.size() == n) &&
+             (in.T_cmd_Nm.empty() || in.T_cmd_Nm.size() == n));
   MCG_DEMAND(in.i_cmd_A.empty() || in.T_cmd_Nm.empty());
   Outputs out;
   out.resize(n);

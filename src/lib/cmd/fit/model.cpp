@@ -113,10 +113,9 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, const measur
 /// One measured run of `mcg-fit model` as the options shape it; `speed` is the INI's [measurement].
 Run load_model_run(const std::string& path, const FitModelOptions& options, const model::Params& params,
                    const measurement::SpeedPath& speed) {
-  Run run =
-      make_run(select_time(with_speed_from_position(table::read_path(path), options.position_column),
-                           options.from_s, options.to_s),
-               options.outputs, params, 50, options.drive);
+  Run run = make_run(select_time(with_speed_from_position(table::read_path(path), options.position_column),
+                                 options.from_s, options.to_s),
+                     options.outputs, params, 50, options.drive);
   apply_speed_path(run, speed, options.gear_ratio);
   return run;
 }

@@ -27,8 +27,8 @@ struct FitModelOptions {
   /// Motor turns per turn of the measured shaft, over the captures' `# gear_ratio:` and the
   /// INI's `[measurement] gear_ratio` (unset: theirs, else 1).
   std::optional<double> gear_ratio;
-  fit::DriveInput drive;  ///< --current, --torque: what drives the rig
-  std::string position_column;  ///< --position: speed from this position column
+  fit::DriveInput drive;                                     ///< --current, --torque: what drives the rig
+  std::string position_column;                               ///< --position: speed from this position column
   unsigned threads = 0;                                      ///< 0: every core
   double max_step_s = 2.5e-4;                                ///< integrator step bound during the fit
   int max_evaluations = 4000;
