@@ -14,8 +14,8 @@
 # validation run's speed error. The data ship in tests/data/real/emps (Apache-2.0).
 # Args: TOOL_DIR SOURCE_DIR.
 set -euo pipefail
-tools=$1
-src=$2
+tools=$(cd "$1" && pwd)
+src=$(cd "$2" && pwd)
 data="$src/tests/data/real/emps/emps_estimation.csv"
 validation="$src/tests/data/real/emps/emps_validation.csv"
 [[ -x "$tools/mcg-fit" ]] || { echo "skipped: mcg-fit not built"; exit 125; }
