@@ -23,10 +23,11 @@ if wanted gap_cases; then
       ms=$(((t1 - t0) / 1000000))
       total_ms=$((total_ms + ms))
       n=$((n + 1))
-      verdict=$(grep -v '^#' "$work/gap_$name.csv" | awk -F, 'NR == 2 {print $1; exit}')
-      echo "== mcg-fit gap on $name: $ms ms, exit $status, diagnosis ${verdict:-none}" >>"$raw"
+      verdict=$(awk -F, '!/^#/ && ++rows == 2 {print $1; exit}' "$work/gap_$name.csv")
+      echo "== mcg-fit gap on $name: $ms ms, exit $status, diagnosis ${verdict:-(no output)}" >>"$raw"
+      secs=$(awk -v m="$ms" 'BEGIN {printf "%.1f", m / 1000}')
       row "\`mcg-fit gap\` on the public case $name (train + validate CSV, 2 cores)" whole-process \
-        "(the eight <= 40 s together)" "$(awk -v m="$ms" 'BEGIN {printf "%.1f", m / 1000}') s, diagnosis ${verdict:-none}, exit $status" "-"
+        "(the eight <= 40 s together)" "$secs s, diagnosis ${verdict:-(no output)}, exit $status" "-"
     done
     s=$(awk -v m="$total_ms" 'BEGIN {printf "%.1f", m / 1000}')
     row "\`mcg-fit gap\` on the $n public gap cases, one after another" whole-process "<= 40 s together" \
