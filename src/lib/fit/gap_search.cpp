@@ -432,19 +432,23 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   // J and friction scale with it). The effect's shape is determined, the common scale is not:
   // pin the nominal scale a datasheet measures best (R by ohmmeter, then Kt, then J) at the
   // given value, one at a time, until the rest is determined, and say so in the status.
+  // Refits the candidate with parameter `key` held at `value` and the rest free.
+  const auto refit_pinned = [&](const std::string& key, double value) {
+    std::vector<std::string> free = c.free;
+    std::erase(free, key);
+    problem.model = c.model;
+    model::set_parameter(problem.model, key, value);
+    problem.free = free;
+    problem.nls.max_evaluations = budget(free.size());
+    fit = fit_model(problem);
+    take(fit, free);
+  };
   std::vector<std::string> pinned;
   for (const std::string_view pin : k_gauge_pins) {
     const std::string key(pin);
     if (c.determined() || !gauge_trade(c.flags, key) || std::chrono::steady_clock::now() >= settings.deadline)
       continue;
-    std::vector<std::string> free = c.free;
-    std::erase(free, key);
-    problem.model = c.model;
-    model::set_parameter(problem.model, key, 1.0);
-    problem.free = free;
-    problem.nls.max_evaluations = budget(free.size());
-    fit = fit_model(problem);
-    take(fit, free);
+    refit_pinned(key, 1.0);
     pinned.push_back(key);
   }
   // A breakaway the runs never excite (no start from rest near it) leaves a friction effect's
@@ -458,14 +462,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
       continue;
     const std::string key = e + "." + spec->plan.breakaway_key;
     if (!loose_flagged(c.flags, key)) continue;
-    std::vector<std::string> free = c.free;
-    std::erase(free, key);
-    problem.model = c.model;
-    model::set_parameter(problem.model, key, 0.0);
-    problem.free = free;
-    problem.nls.max_evaluations = budget(free.size());
-    fit = fit_model(problem);
-    take(fit, free);
+    refit_pinned(key, 0.0);
     unexcited.push_back(key);
   }
   std::vector<std::string> profiled;
