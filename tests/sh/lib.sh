@@ -63,3 +63,18 @@ expect() { check "$1" eval "$2"; }
 
 # pass: counts a check that passed without check (its failures go through fail).
 pass() { checks=$((checks + 1)); }
+
+# segments DT SEGMENTS: open-loop inputs at a sample period of DT s, clutch 0, relay open, from
+# ";"-separated "hold V SECONDS" and "ramp V0 V1 SECONDS" (sample_period in the metadata).
+segments() {
+  awk -v dt="$1" -v prog="$2" 'BEGIN {
+    t = 0; print "# sample_period: " dt; print "t,v,clutch,r_load"
+    n = split(prog, seg, ";")
+    for (s = 1; s <= n; ++s) {
+      split(seg[s], f, " ")
+      if (f[1] == "hold") { v0 = f[2]; v1 = f[2]; d = f[3] } else { v0 = f[2]; v1 = f[3]; d = f[4] }
+      rows = int(d / dt + 0.5)
+      for (k = 0; k < rows; ++k) { printf "%.10g,%.10g,0,inf\n", t, v0 + (v1 - v0) * k / rows; t += dt }
+    }
+  }'
+}

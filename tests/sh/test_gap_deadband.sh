@@ -27,19 +27,8 @@ motor_ini 0.0051 0.0036 2e-6 >"$work/truth.ini"
 printf '[effect.hbridge]\nR_on_ohm = 0\ndeadband = 0.05\n' >>"$work/truth.ini"
 motor_ini 0 0 0 >"$work/given.ini"
 
-# program SEGMENTS: the inputs at 2 kHz, clutch 0, from "hold V SECONDS" and "ramp V0 V1 SECONDS"
-program() {
-  awk -v prog="$1" 'BEGIN {
-    dt = 0.0005; t = 0; print "# sample_period: 0.0005"; print "t,v,clutch,r_load"
-    n = split(prog, seg, ";")
-    for (s = 1; s <= n; ++s) {
-      split(seg[s], f, " ")
-      if (f[1] == "hold") { v0 = f[2]; v1 = f[2]; d = f[3] } else { v0 = f[2]; v1 = f[3]; d = f[4] }
-      rows = int(d / dt + 0.5)
-      for (k = 0; k < rows; ++k) { printf "%.10g,%.10g,0,inf\n", t, v0 + (v1 - v0) * k / rows; t += dt }
-    }
-  }'
-}
+# program SEGMENTS: the inputs at 2 kHz (segments in lib.sh)
+program() { segments 0.0005 "$1"; }
 # measure SEED: the truth's run of the inputs on stdin, measured by the encoder, speed only
 measure() {
   mcg-sim --config "$work/truth.ini" --encoder --window 0.0005 --counts-per-rev 16384 --seed "$1" |

@@ -26,19 +26,8 @@ motor_ini() {
 motor_ini 0.00889 0.00784 1e-6 >"$work/truth.ini"
 motor_ini 0 0 0 >"$work/given.ini"
 
-# program SEGMENTS: the inputs at 100 Hz, clutch 0, from "hold V SECONDS" and "ramp V0 V1 SECONDS"
-program() {
-  awk -v prog="$1" 'BEGIN {
-    dt = 0.01; t = 0; print "# sample_period: 0.01"; print "t,v,clutch,r_load"
-    n = split(prog, seg, ";")
-    for (s = 1; s <= n; ++s) {
-      split(seg[s], f, " ")
-      if (f[1] == "hold") { v0 = f[2]; v1 = f[2]; d = f[3] } else { v0 = f[2]; v1 = f[3]; d = f[4] }
-      rows = int(d / dt + 0.5)
-      for (k = 0; k < rows; ++k) { printf "%.10g,%.10g,0,inf\n", t, v0 + (v1 - v0) * k / rows; t += dt }
-    }
-  }'
-}
+# program SEGMENTS: the inputs at 100 Hz (segments in lib.sh)
+program() { segments 0.01 "$1"; }
 # measure SEED: the truth's run of the inputs on stdin, the output shaft's rpm by the encoder
 measure() {
   mcg-sim --config "$work/truth.ini" --encoder --window 0.01 --counts-per-rev 3840 --seed "$1" |
