@@ -243,6 +243,9 @@ bool loose_flagged(const std::vector<FitFlag>& flags, std::string_view key) {
 
 /// Points of the breakaway profile on each side of the fitted value.
 constexpr int k_profile_half_points = 16;
+/// Scans of the breakaway profile at most: one around the fit, then, while the least cost lies
+/// at the scan's edge, again around that edge.
+constexpr int k_profile_scans = 3;
 
 /// The breakaway level `key` of a friction effect, fitted on the regularised stick, profiled on
 /// the exact stick-slip the final score uses: the training cost at values around the fit, the
@@ -251,7 +254,10 @@ constexpr int k_profile_half_points = 16;
 /// (a likelihood ratio of 1: cost_min / M for M residuals, times the AR(1) widening squared,
 /// since a simulation error is autocorrelated), when that is wider than the Jacobian's. A
 /// staircase whose steps bracket the breakaway coarsely gives a flat profile between the
-/// steps: the error then says how little the data tell. Returns the note for the status.
+/// steps: the error then says how little the data tell. A fit that left the level at its
+/// bound, or without a finite error, gives no scale to scan by: the scan then starts over the
+/// motor's whole Coulomb level above the bound (a breakaway is seldom more than twice the
+/// Coulomb level). Returns the note for the status.
 std::string profile_breakaway(GapCandidate& c, const std::string& key, const FitResult& fit,
                               const std::vector<Run>& runs, std::chrono::steady_clock::time_point deadline) {
   const auto it = std::find(c.free.begin(), c.free.end(), key);
@@ -266,31 +272,50 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
   for (const model::ParamInfo& info : model::parameters(c.model)) {
     if (info.name == key) lower = info.lower;
   }
-  const double half = std::max(0.3 * std::abs(value), 5.0 * (std::isfinite(jacobian_se) ? jacobian_se : 0.0));
+  const double coulomb_Nm = model::Compiled(c.model).p.motor.friction.Tc_Nm;
+  const bool collapsed = !std::isfinite(jacobian_se) || !(value - lower > 0.05 * coulomb_Nm);
+  double centre_value = collapsed ? lower + 0.5 * coulomb_Nm : value;
+  double half = collapsed
+                    ? 0.5 * coulomb_Nm
+                    : std::max(0.3 * std::abs(value), 5.0 * (std::isfinite(jacobian_se) ? jacobian_se : 0.0));
   if (!(half > 0.0)) return {};
-  const double step = half / k_profile_half_points;
   std::vector<double> points;
-  for (int n = -k_profile_half_points; n <= k_profile_half_points; ++n) {
-    const double x = value + step * n;
-    if (x >= lower) points.push_back(x);
-  }
-  std::vector<double> costs(points.size(), std::numeric_limits<double>::infinity());
-  parallel::for_each(points.size(), 0, [&](std::size_t n) {
-    if (std::chrono::steady_clock::now() >= deadline) return;
-    model::Model m = c.model;
-    model::set_parameter(m, key, points[n]);
-    costs[n] = training_cost(m, runs);
-  });
-  const auto centre =
-      static_cast<std::size_t>(std::find(points.begin(), points.end(), value) - points.begin());
-  if (centre >= points.size() ||
-      !std::all_of(costs.begin(), costs.end(), [](double x) { return std::isfinite(x); }))
-    return {};
-  // The least cost, ties to the fitted value.
-  std::size_t best = centre;
-  for (std::size_t n = 0; n < points.size(); ++n) {
-    const auto far = [&](std::size_t a) { return a > centre ? a - centre : centre - a; };
-    if (costs[n] < costs[best] || (costs[n] == costs[best] && far(n) < far(best))) best = n;
+  std::vector<double> costs;
+  std::size_t best = 0;
+  double step = 0.0;
+  bool open = true;
+  for (int scan = 0; scan < k_profile_scans && open; ++scan) {
+    step = half / k_profile_half_points;
+    points.clear();
+    for (int n = -k_profile_half_points; n <= k_profile_half_points; ++n) {
+      const double x = centre_value + step * n;
+      if (x >= lower) points.push_back(x);
+    }
+    costs.assign(points.size(), std::numeric_limits<double>::infinity());
+    parallel::for_each(points.size(), 0, [&](std::size_t n) {
+      if (std::chrono::steady_clock::now() >= deadline) return;
+      model::Model m = c.model;
+      model::set_parameter(m, key, points[n]);
+      costs[n] = training_cost(m, runs);
+    });
+    const auto centre =
+        static_cast<std::size_t>(std::find(points.begin(), points.end(), centre_value) - points.begin());
+    if (centre >= points.size() ||
+        !std::all_of(costs.begin(), costs.end(), [](double x) { return std::isfinite(x); }))
+      return {};
+    // The least cost, ties to the centre.
+    best = centre;
+    for (std::size_t n = 0; n < points.size(); ++n) {
+      const auto far = [&](std::size_t a) { return a > centre ? a - centre : centre - a; };
+      if (costs[n] < costs[best] || (costs[n] == costs[best] && far(n) < far(best))) best = n;
+    }
+    open = (best == 0 && points[0] > lower) || best + 1 == points.size();
+    centre_value = points[best];
+    // After a scan over the whole Coulomb level, a finer one around its least cost.
+    if (collapsed && scan == 0) {
+      open = true;
+      half = std::max(0.3 * centre_value, 2.0 * step);
+    }
   }
   const double threshold = costs[best] / residuals * fit.se_widening * fit.se_widening;
   std::size_t lo = best;
@@ -298,10 +323,28 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
   while (lo > 0 && costs[lo - 1] <= costs[best] + threshold) --lo;
   while (hi + 1 < points.size() && costs[hi + 1] <= costs[best] + threshold) ++hi;
   const double profile_se = 0.5 * (points[hi] - points[lo]) + 0.5 * step;
-  const bool open = (lo == 0 && points[0] > lower) || hi + 1 == points.size();
+  open = (lo == 0 && points[0] > lower) || hi + 1 == points.size();
   model::set_parameter(c.model, key, points[best]);
   c.values[k] = points[best];
-  c.std_errors[k] = open ? std::numeric_limits<double>::infinity() : std::max(jacobian_se, profile_se);
+  c.std_errors[k] = open                         ? std::numeric_limits<double>::infinity()
+                    : std::isfinite(jacobian_se) ? std::max(jacobian_se, profile_se)
+                                                 : profile_se;
+  // The profile's word on this one level replaces the fit's: off its bound it is no longer at
+  // it, and a closed profile determines it.
+  std::erase_if(c.flags, [&](const FitFlag& f) {
+    if (f.names != std::vector<std::string>{key}) return false;
+    switch (f.kind) {
+      case FitFlag::Kind::at_bound:
+        return points[best] > lower;
+      case FitFlag::Kind::undetermined:
+      case FitFlag::Kind::too_precise:
+        return !open;
+      case FitFlag::Kind::correlated:
+      case FitFlag::Kind::impossible:
+        return false;
+    }
+    return false;
+  });
   return fmt::format("{} profiled on the exact stick: {:.4g} +- {}{:.2g} (regularised fit {:.4g} +- {:.2g})",
                      key, points[best], open ? "more than " : "", open ? half : profile_se, value,
                      jacobian_se);
@@ -469,9 +512,30 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   for (const auto& e : job.effects) {
     const model::EffectSpec* spec = find_plan(e);
     if (spec == nullptr || spec->plan.breakaway_key.empty()) continue;
-    std::string note =
-        profile_breakaway(c, e + "." + spec->plan.breakaway_key, fit, data.train, settings.deadline);
-    if (!note.empty()) profiled.push_back(std::move(note));
+    const std::string key = e + "." + spec->plan.breakaway_key;
+    const auto k = static_cast<std::size_t>(std::find(c.free.begin(), c.free.end(), key) - c.free.begin());
+    const double fitted = k < c.values.size() ? c.values[k] : k_nan;
+    const double fitted_se = k < c.std_errors.size() ? c.std_errors[k] : k_nan;
+    std::string note = profile_breakaway(c, key, fit, data.train, settings.deadline);
+    if (note.empty()) continue;
+    profiled.push_back(std::move(note));
+    // A breakaway the regularised fit left at its bound, or that the profile moved beyond two
+    // of its errors, had the other levels fitted around the wrong value: refit them with it
+    // held at the profile's, which keeps its place and its profile error.
+    const double value = c.values[k];
+    const double se = c.std_errors[k];
+    const bool moved =
+        !std::isfinite(fitted_se) || !(std::abs(value - fitted) <= 2.0 * std::max(fitted_se, se));
+    if (!moved || !std::isfinite(se) || std::chrono::steady_clock::now() >= settings.deadline) continue;
+    std::vector<FitFlag> own;
+    for (const FitFlag& f : c.flags) {
+      if (f.names == std::vector<std::string>{key}) own.push_back(f);
+    }
+    refit_pinned(key, value);
+    c.free.insert(c.free.begin() + static_cast<std::ptrdiff_t>(k), key);
+    c.values.insert(c.values.begin() + static_cast<std::ptrdiff_t>(k), value);
+    c.std_errors.insert(c.std_errors.begin() + static_cast<std::ptrdiff_t>(k), se);
+    c.flags.insert(c.flags.end(), own.begin(), own.end());
   }
   const bool out_of_time = settings.deadline != std::chrono::steady_clock::time_point::max() &&
                            std::chrono::steady_clock::now() >= settings.deadline;
@@ -832,10 +896,13 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   // up to k_gap_max_mixture effects; an extension whose added effect alone removes almost
   // nothing of the current model's training cost is rejected before its joint refit. Every
   // extension tried is reported.
+  // Every friction effect fitted joins the pool whatever its rank: alone, a friction effect that
+  // shapes another's levels (an asymmetry, a load-dependent share) has no Coulomb level beneath
+  // it and fits worse than the unrelated effects that happen to rank above it.
   std::vector<const GapCandidate*> pool;
   for (const auto& c : singles) {
     if (c.evaluated && std::isfinite(c.score) && c.score < before.score &&
-        pool.size() < settings.pool_effects) {
+        (pool.size() < settings.pool_effects || is_friction(c.name))) {
       pool.push_back(&c);
     }
   }
