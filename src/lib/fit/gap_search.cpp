@@ -514,24 +514,29 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     if (spec == nullptr || spec->plan.breakaway_key.empty()) continue;
     const std::string key = e + "." + spec->plan.breakaway_key;
     const auto k = static_cast<std::size_t>(std::find(c.free.begin(), c.free.end(), key) - c.free.begin());
-    const double fitted = k < c.values.size() ? c.values[k] : k_nan;
-    const double fitted_se = k < c.std_errors.size() ? c.std_errors[k] : k_nan;
+    // A breakaway the regularised fit left at its bound or without a finite error had the other
+    // levels fitted around the wrong value: once the profile has found it, they are refitted
+    // with it held there, on the exact stick-slip the profile used, and it keeps its place and
+    // its profile error.
+    const bool collapsed =
+        k >= c.std_errors.size() || !std::isfinite(c.std_errors[k]) ||
+        std::any_of(c.flags.begin(), c.flags.end(), [&](const FitFlag& f) {
+          return f.kind == FitFlag::Kind::at_bound && f.names == std::vector<std::string>{key};
+        });
     std::string note = profile_breakaway(c, key, fit, data.train, settings.deadline);
     if (note.empty()) continue;
     profiled.push_back(std::move(note));
-    // A breakaway the regularised fit left at its bound, or that the profile moved beyond two
-    // of its errors, had the other levels fitted around the wrong value: refit them with it
-    // held at the profile's, which keeps its place and its profile error.
     const double value = c.values[k];
     const double se = c.std_errors[k];
-    const bool moved =
-        !std::isfinite(fitted_se) || !(std::abs(value - fitted) <= 2.0 * std::max(fitted_se, se));
-    if (!moved || !std::isfinite(se) || std::chrono::steady_clock::now() >= settings.deadline) continue;
+    if (!collapsed || !std::isfinite(se) || std::chrono::steady_clock::now() >= settings.deadline) continue;
     std::vector<FitFlag> own;
     for (const FitFlag& f : c.flags) {
       if (f.names == std::vector<std::string>{key}) own.push_back(f);
     }
+    const bool smooth = problem.sim.smooth_stick;
+    problem.sim.smooth_stick = false;
     refit_pinned(key, value);
+    problem.sim.smooth_stick = smooth;
     c.free.insert(c.free.begin() + static_cast<std::ptrdiff_t>(k), key);
     c.values.insert(c.values.begin() + static_cast<std::ptrdiff_t>(k), value);
     c.std_errors.insert(c.std_errors.begin() + static_cast<std::ptrdiff_t>(k), se);
