@@ -147,6 +147,56 @@ std::string alike_one_way(const GapReport& report, const GapData& data) {
       current ? "" : " save where the current reverses", current ? "" : ", or the current measured,");
 }
 
+/// "; hbridge (a dead band of the drive) explains these runs too ...": in both directions a
+/// Coulomb level and a dead band of the drive still act alike wherever the shaft turns, and a
+/// drive that brakes at zero leaves only the coasts and reversals to tell them apart, which
+/// measurement noise can hide. When an effect of that class outside the diagnosis explains the
+/// gap alone by the verdict's own rule (near the noise, or most of the excess removed), the
+/// verdict says so: the diagnosis' levels may hold the other's. Empty when that is not so.
+std::string alike_both_ways(const GapReport& report) {
+  using Shape = model::TermShape;
+  const bool current = floor_index(report.floors, "i") != std::string::npos;
+  const auto shape_of = [&](std::string_view name) {
+    const model::EffectSpec* spec = model::find_effect(name);
+    if (spec == nullptr) return Shape::none;
+    for (const model::TermSeed& rule : spec->plan.seeded_by) {
+      if (rule.shape == Shape::drive_dead_band || rule.shape == Shape::current_drop ||
+          (!current && rule.shape == Shape::sign))
+        return rule.shape;
+    }
+    return Shape::none;
+  };
+  const GapCandidate& diagnosis = report.candidates.front();
+  const auto none = std::find_if(report.candidates.begin(), report.candidates.end(),
+                                 [](const GapCandidate& c) { return c.name == "none"; });
+  if (none == report.candidates.end() || !std::isfinite(none->score)) return {};
+  const auto outputs = static_cast<double>(report.floors.size());
+  const auto explains = [&](const GapCandidate& c) {
+    return c.evaluated && std::isfinite(c.score) &&
+           (c.score <= (1.0 + k_gap_near_noise) * outputs ||
+            none->score - c.score >= k_gap_explained_share * (none->score - outputs));
+  };
+  std::string mine;
+  for (const std::string& name : diagnosis.effects) {
+    if (shape_of(name) != Shape::none) mine = name;
+  }
+  if (mine.empty()) return {};
+  for (const GapCandidate& c : report.candidates) {
+    if (c.effects.size() != 1 || shape_of(c.name) == Shape::none || shape_of(c.name) == shape_of(mine) ||
+        std::find(diagnosis.effects.begin(), diagnosis.effects.end(), c.name) != diagnosis.effects.end() ||
+        !explains(c)) {
+      continue;
+    }
+    return fmt::format(
+        "; {} ({}) alone explains these runs too (score {:.3g} against {:.3g}): they hardly tell it from {} "
+        "({}), whose levels may hold it (coasts at zero drive and slow reversals with less noise tell them "
+        "apart)",
+        model::term_shape_text(shape_of(c.name)), c.name, c.score, diagnosis.score,
+        model::term_shape_text(shape_of(mine)), mine);
+  }
+  return {};
+}
+
 /// Catalog effects seeded from the discrepancy's terms (catalog_seeds): each started from
 /// its term's values and fitted on the training runs; one that then closes the gap by the
 /// decision's rule (near the noise, or k_gap_explained_share of the excess removed) with
@@ -276,7 +326,10 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
           report.current_regimes_before, report.white_before);
   analyse(data, report.simulated_after, report.regimes_after, report.bands_after,
           report.current_regimes_after, report.white_after);
-  if (report.diagnosis != "none") report.reason += alike_one_way(report, data);
+  if (report.diagnosis != "none") {
+    const std::string one_way = alike_one_way(report, data);
+    report.reason += one_way.empty() ? alike_both_ways(report) : one_way;
+  }
   if (report.diagnosis == "unexplained") {
     report.reason += where_left(report);
     if (report.discrepancy) report.reason += shape_found(*report.discrepancy, report.candidates.front());

@@ -2,7 +2,8 @@
 # mcg-fit gap on varied self-made rigs (tests/sh/rigs_lib.sh): one row per rig with what gap
 # named against the withheld truth, its shrink, each withheld parameter against its truth in
 # standard errors, and the wall time. One run at a time, one thread each.
-# Args: TOOL_DIR [BUDGET_S] KIND:SEED... (e.g. deadband:1 gearmotor:2 current:3)
+# Args: TOOL_DIR BUDGET_S KIND:SEED... (e.g. deadband:1 gearmotor:2 current:3); GAP_RIGS_KEEP=DIR keeps
+# each rig's files and gap output there.
 set -euo pipefail
 tools=$1
 budget=$2
