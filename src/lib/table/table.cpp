@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -67,19 +68,22 @@ char* format_general(char* p, double v, int digits) {
   }
   if (digits <= 15 && a >= 1e-4 && a < 1e15) {
     // x = floor(log10(a)), maybe one off at a power of ten: the range checks below catch that.
-    int x = 0;
-    if (a >= 1.0) {
-      while (x < 14 && a >= k_pow10[static_cast<std::size_t>(x + 1)]) ++x;
+    // From the binary exponent e (2^e <= a < 2^(e+1)): floor(e log10(2)) is x or x - 1.
+    const int e = static_cast<int>((std::bit_cast<std::uint64_t>(a) >> 52) & 0x7ffU) - 1023;
+    int x = (e * 1233) >> 12;
+    if (x >= 0) {
+      if (x < 14 && a >= k_pow10[static_cast<std::size_t>(x + 1)]) ++x;
     } else {
-      x = -1;
-      while (x > -4 && a * k_pow10[static_cast<std::size_t>(-x)] < 1.0) --x;
+      if (x < -4) x = -4;
+      if (x < -1 && a * k_pow10[static_cast<std::size_t>(-x - 1)] >= 1.0) ++x;
     }
     const int k = digits - 1 - x;
     const double s = k >= 0 ? a * k_pow10[static_cast<std::size_t>(k)] : a / k_pow10[static_cast<std::size_t>(-k)];
-    const double whole = std::floor(s);
-    const double frac = s - whole;
+    // s < 10^15 < 2^53: the conversion truncates, the floor of a positive s, and is exact.
+    const auto whole = static_cast<std::uint64_t>(s);
+    const double frac = s - static_cast<double>(whole);
     if (frac != 0.5) {
-      auto n = static_cast<std::uint64_t>(whole) + (frac > 0.5 ? 1U : 0U);
+      auto n = whole + (frac > 0.5 ? 1U : 0U);
       const auto top = static_cast<std::uint64_t>(k_pow10[static_cast<std::size_t>(digits)]);
       if (n == top) {  // 9.99...95 rounded up to the next power of ten
         n /= 10;
@@ -171,6 +175,38 @@ std::string Metadata::where(std::string_view source, std::string_view key) const
   return it == m_lines.end() ? std::string(source) : fmt::format("{}:{}", source, it->second);
 }
 
+namespace {
+
+/// Reads [first, last) when it is a plain decimal, -?[0-9]+(.[0-9]+)?, of at most 19 digits
+/// whose integer m (the digits without the point) is at most 2^53 and whose fraction has at
+/// most 22 digits: then m and 10^f are exact doubles and m / 10^f, one rounding, is the correctly
+/// rounded value (Clinger's fast path), the value std::from_chars gives. False for anything
+/// else, which from_chars reads. Three times as fast on a simulator's columns.
+bool plain_decimal(const char* first, const char* last, double& value) {
+  const bool negative = *first == '-';
+  const char* p = first + (negative ? 1 : 0);
+  std::uint64_t m = 0;
+  int digits = 0;
+  const char* int_start = p;
+  for (; p < last && *p >= '0' && *p <= '9'; ++p, ++digits)
+    m = m * 10U + static_cast<std::uint64_t>(*p - '0');
+  if (p == int_start) return false;
+  int frac = 0;
+  if (p < last && *p == '.') {
+    const char* frac_start = ++p;
+    for (; p < last && *p >= '0' && *p <= '9'; ++p, ++digits)
+      m = m * 10U + static_cast<std::uint64_t>(*p - '0');
+    frac = static_cast<int>(p - frac_start);
+    if (frac == 0) return false;
+  }
+  if (p != last || digits > 19 || frac > 22 || m > (std::uint64_t{1} << 53)) return false;
+  const double x = static_cast<double>(m) / k_pow10[static_cast<std::size_t>(frac)];
+  value = negative ? -x : x;
+  return true;
+}
+
+}  // namespace
+
 bool parse_number(std::string_view text, double& value) {
   text = trim_line(text);
   if (text.empty()) {
@@ -179,6 +215,7 @@ bool parse_number(std::string_view text, double& value) {
   }
   const char* first = text.data();
   const char* last = text.data() + text.size();
+  if (plain_decimal(first, last, value)) return true;
   if (*first == '+') ++first;
   const auto [ptr, ec] = std::from_chars(first, last, value);
   if (ec == std::errc() && ptr == last) return true;
@@ -458,11 +495,21 @@ void require_increasing(const Table& table, std::string_view name) {
 }
 
 Writer::Writer(std::ostream& out, std::string dest) : m_out(out), m_dest(std::move(dest)) {
-  m_buffer.reserve(k_write_block + 4096);
+  m_buffer.resize(k_write_block + 4096);
 }
 
 Writer::~Writer() {
-  if (!m_buffer.empty() && m_out) m_out.write(m_buffer.data(), static_cast<std::streamsize>(m_buffer.size()));
+  if (m_used > 0 && m_out) m_out.write(m_buffer.data(), static_cast<std::streamsize>(m_used));
+}
+
+char* Writer::room(std::size_t bytes) {
+  if (m_buffer.size() - m_used < bytes) m_buffer.resize(m_used + bytes);
+  return m_buffer.data() + m_used;
+}
+
+void Writer::append(std::string_view text) {
+  std::copy_n(text.data(), text.size(), room(text.size()));
+  m_used += text.size();
 }
 
 void Writer::metadata(const Metadata& meta) {
@@ -472,13 +519,13 @@ void Writer::metadata(const Metadata& meta) {
 void Writer::meta(std::string_view key, std::string_view value) {
   // One line each: a value that names a file quotes it (printable()), input cannot hold a newline.
   MCG_DEMAND(key.find('\n') == std::string_view::npos && value.find('\n') == std::string_view::npos);
-  m_buffer += "# ";
-  m_buffer += key;
+  append("# ");
+  append(key);
   if (!value.empty()) {
-    m_buffer += ": ";
-    m_buffer += value;
+    append(": ");
+    append(value);
   }
-  m_buffer += '\n';
+  append("\n");
   flush_if_full();
 }
 
@@ -488,10 +535,10 @@ void Writer::header(const std::vector<std::string>& names) {
   // Every name, as it is: column_list() is the shortened form for messages.
   for (std::size_t c = 0; c < names.size(); ++c) {
     MCG_DEMAND(names[c].find_first_of(",\n\r") == std::string::npos);
-    if (c) m_buffer += ',';
-    m_buffer += names[c];
+    if (c) append(",");
+    append(names[c]);
   }
-  m_buffer += '\n';
+  append("\n");
   flush_if_full();
 }
 
@@ -510,9 +557,8 @@ void Writer::row(std::span<const double> values) {
   MCG_DEMAND(values.size() == m_names.size());
   // Formatted straight into the buffer's tail: at most 25 characters a number ("%.17g" of a
   // negative subnormal), a separator each, as printf's "%.Ng" (format_general).
-  const std::size_t used = m_buffer.size();
-  m_buffer.resize(used + values.size() * 26 + 1);
-  char* p = m_buffer.data() + used;
+  char* const start = room(values.size() * 26 + 1);
+  char* p = start;
   for (std::size_t c = 0; c < values.size(); ++c) {
     if (c) *p++ = ',';
     const double v = values[c];
@@ -527,7 +573,7 @@ void Writer::row(std::span<const double> values) {
     }
   }
   *p++ = '\n';
-  m_buffer.resize(static_cast<std::size_t>(p - m_buffer.data()));
+  m_used += static_cast<std::size_t>(p - start);
   flush_if_full();
 }
 
@@ -535,22 +581,22 @@ void Writer::text_row(const std::vector<std::string>& cells) {
   MCG_DEMAND(cells.size() == m_names.size());
   for (std::size_t c = 0; c < cells.size(); ++c) {
     MCG_DEMAND(cells[c].find_first_of("\n\r,") == std::string::npos);
-    if (c) m_buffer += ',';
-    m_buffer += cells[c];
+    if (c) append(",");
+    append(cells[c]);
   }
-  m_buffer += '\n';
+  append("\n");
   flush_if_full();
 }
 
 void Writer::flush_if_full() {
-  if (m_buffer.size() >= k_write_block) flush();
+  if (m_used >= k_write_block) flush();
 }
 
 void Writer::flush() {
-  if (m_buffer.empty()) return;
+  if (m_used == 0) return;
   errno = 0;
-  m_out.write(m_buffer.data(), static_cast<std::streamsize>(m_buffer.size()));
-  m_buffer.clear();
+  m_out.write(m_buffer.data(), static_cast<std::streamsize>(m_used));
+  m_used = 0;
   if (!m_out) {
     if (errno == EPIPE) throw BrokenPipe();
     fail("writing {}: {}", m_dest, errno ? std::strerror(errno) : "write failed");

@@ -165,10 +165,15 @@ class Writer {
  private:
   void flush_if_full();
   void flush();
+  /// Where the next `bytes` bytes go (the buffer grown if it must be; written rows are never
+  /// cleared, so no row pays for filling its room first).
+  char* room(std::size_t bytes);
+  void append(std::string_view text);
 
   std::ostream& m_out;
   std::string m_dest;
-  std::string m_buffer;
+  std::string m_buffer;  ///< its first m_used bytes wait to be written
+  std::size_t m_used = 0;
   std::vector<std::string> m_names;
   std::vector<int> m_digits;
 };
