@@ -273,7 +273,9 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
   for (const model::ParamInfo& info : model::parameters(c.model)) {
     if (info.name == key) lower = info.lower;
   }
-  const double half = std::max(0.3 * std::abs(value), 5.0 * (std::isfinite(jacobian_se) ? jacobian_se : 0.0));
+  // The profile spans five of the solver's own (unwidened) errors.
+  const double solver_se = jacobian_se / fit.se_widening;
+  const double half = std::max(0.3 * std::abs(value), 5.0 * (std::isfinite(solver_se) ? solver_se : 0.0));
   if (!(half > 0.0)) return {};
   const double step = half / k_profile_half_points;
   std::vector<double> points;
