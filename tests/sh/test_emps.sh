@@ -7,11 +7,11 @@
 # with force pulses) its values must lie within two standard errors of the same IDIM-LS recipe
 # run on that file (Fc = 20.90 N, Fv = 210.09 N s/m, offset -3.22 N: friction moved between
 # the runs, see PROVENANCE.md). mcg-fit model, driven by the logged force (--torque) from the
-# axis given without friction (frictionless.ini, a start of Tc 15 N and Fv 150 N s/m), fits the
-# force's constant offset with the friction (friction_asymmetry.dT_Nm, the same constant as
-# friction's offset) and must land within two of its jackknife standard errors of the published
-# Fc and Fv, with the offset within 0.5 N of friction's; so must it on the force with that
-# offset removed. mcg-fit gap on the same model with its gap.args (the benchmark's row) must
+# axis given without friction (frictionless.ini, a start of Tc 15 N and Fv 150 N s/m), freed
+# the force's constant offset beside the friction (friction_asymmetry.dT_Nm, the same constant
+# as friction's offset), must land within two of its standard errors of the published Fc and
+# Fv, with the offset within 0.5 N of friction's; so must it on the force with that offset
+# removed. mcg-fit gap on the same model with its gap.args (the benchmark's row) must
 # name friction with the drive's offset (friction_levels+friction_asymmetry), close >= 60 % of
 # the validation run's speed error, and give the published Fc and Fv within two of its
 # standard errors, J within 5 % of the published mass. The data ship in tests/data/real/emps
@@ -57,7 +57,8 @@ published state0.offset_N -3.22 "$work/validation.ini"
 dir="$src/tests/data/real/emps"
 printf '[motor]\nTc_Nm = 15\nvisc1_Nm_s_rad = 150\n' >"$work/start.ini"
 model_fit() {
-  mcg-fit model --config "$dir/frictionless.ini" --config "$work/start.ini" --torque force_N --position qm_m "$1"
+  mcg-fit model --config "$dir/frictionless.ini" --config "$work/start.ini" --torque force_N --position qm_m \
+    --free motor.J_kg_m2,motor.Tc_Nm,motor.visc1_Nm_s_rad,friction_asymmetry.dT_Nm "$1"
 }
 fitted() {
   local key=$1 published=$2 ini=$3 line value se
@@ -83,7 +84,7 @@ if [[ -n $dT ]] && awk -v a="$dT" -v b="$offset" 'BEGIN { d = a - b; if (d < 0) 
 else
   fail "model's drive offset dT_Nm = '${dT:-not fitted}' is not within 0.5 N of friction's offset $offset"
 fi
-grep -q "^se_jackknife_stretches = " "$work/model.ini" && grep -q "^motor.Tc_Nm.se_jacobian = " "$work/model.ini" &&
+grep -q "^se_jackknife_stretches = " "$work/model.ini" && grep -q "^motor.Tc_Nm.se_jackknife = " "$work/model.ini" &&
   pass || fail "model: the jackknife's standard errors are not reported beside the Jacobian's"
 awk -F, -v o="$offset" '/^#/ { print; next } $1 == "t" { print; next } { printf "%s,%s,%.10g\n", $1, $2, $3 - o }' \
   "$data" >"$work/estimation_no_offset.csv"

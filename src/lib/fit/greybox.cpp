@@ -317,26 +317,13 @@ std::vector<std::string> default_free(const std::vector<Run>& runs, const std::v
   const bool driven = std::any_of(runs.begin(), runs.end(), [](const Run& r) {
     return !r.inputs.i_cmd_A.empty() || !r.inputs.T_cmd_Nm.empty();
   });
-  // The measured speed goes both ways: a constant drive bias then differs from a Coulomb level.
-  bool forward = false;
-  bool reverse = false;
-  for (const Run& run : runs) {
-    for (std::size_t o = 0; o < run.outputs.size(); ++o) {
-      if (run.outputs[o] != "rpm" && run.outputs[o] != "omega") continue;
-      for (double w : run.measured[o]) {
-        forward = forward || w > 0.0;
-        reverse = reverse || w < 0.0;
-      }
-    }
-  }
   std::vector<std::string> wanted;
   if (driven) {
     // The drive sets the torque: Kt only scales J and the friction (or, torque-driven, drops
-    // out), and no back-EMF damps the shaft, so the viscous friction is fitted instead. A
-    // logged force or current carries the amplifier's or sensor's offset, which a fit without
-    // it takes up into the friction per direction.
+    // out), and no back-EMF damps the shaft, so the viscous friction is fitted instead. The
+    // drive's bias (k_drive_offset) is not: where the model misses more than an offset (a
+    // current loop taken as ideal), the bias trades with the Coulomb level and drives it to 0.
     wanted = {"motor.J_kg_m2", "motor.Tc_Nm", "motor.visc1_Nm_s_rad"};
-    if (forward && reverse) wanted.emplace_back(k_drive_offset);
   } else if (current) {
     wanted = {"motor.J_kg_m2", "motor.R_ohm", "motor.Kt_Nm_A", "motor.Ke_V_s_rad", "motor.Tc_Nm"};
   } else {

@@ -9,6 +9,7 @@
 #include "model/model.hpp"
 #include "table/table.hpp"
 
+#include <algorithm>
 #include <cstddef>
 #include <map>
 #include <utility>
@@ -172,9 +173,8 @@ std::map<std::string, std::pair<double, double>> read_bounds(const config::Ini& 
 ///   speed only: J, Kt and Tc with Ke tied to Kt (speed alone fixes only the ratios R/Kt and
 ///   J R/(Kt Ke): freeing R and Kt together is degenerate, so R stays at its given value);
 ///   a current- or torque-driven run (DriveInput): J, Tc and the viscous visc1 (Kt would
-///   only scale J and the friction, and no back-EMF damps the shaft), and the drive's constant
-///   bias k_drive_offset when the measured speed goes both ways (one way only, a bias and the
-///   Coulomb level act alike; add_free_effects() brings its effect in).
+///   only scale J and the friction, and no back-EMF damps the shaft); the drive's constant
+///   bias k_drive_offset only when asked for (add_free_effects() brings its effect in).
 /// Names in `fixed` are left out. `ties` receives the ties the set needs.
 std::vector<std::string> default_free(const std::vector<Run>& runs, const std::vector<std::string>& fixed,
                                       std::vector<std::pair<std::string, std::string>>& ties);
@@ -234,10 +234,11 @@ struct FitResult {
   /// does not see; leaving out whole stretches does, and it needs no model of the correlation.
   std::vector<double> se_jackknife;
   std::size_t jackknife_stretches = 0;  ///< g, the stretches the jackknife used
-  /// The standard error the reports state: the jackknife's when there is one, else the widened
-  /// Jacobian's (widened_se).
+  /// The standard error the reports state: the larger of the jackknife's (when there is one)
+  /// and the widened Jacobian's (widened_se), as a friction fit takes the larger of its two:
+  /// neither sees a bias the model's own error leaves, and each misses what the other sees.
   double reported_se(std::size_t k) const {
-    return k < se_jackknife.size() ? se_jackknife[k] : widened_se(k);
+    return k < se_jackknife.size() ? std::max(se_jackknife[k], widened_se(k)) : widened_se(k);
   }
 };
 

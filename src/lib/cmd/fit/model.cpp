@@ -58,11 +58,11 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, const measur
     const auto place = ini_place(ini, n.names[i]);
     const auto k = static_cast<Eigen::Index>(i);
     const std::string unit = unit_of(infos, n.names[i]);
-    // The jackknife's error leads; the Jacobian's, widened for autocorrelation, stands beside it.
+    // The larger of the two errors leads; both stand beside it.
     const std::string beside =
         i < r.se_jackknife.size() && std::isfinite(n.std_errors[k])
-            ? fmt::format(" (jackknife over {} stretches; Jacobian {})", r.jackknife_stretches,
-                          se_comment(r.widened_se(i), unit))
+            ? fmt::format(" (jackknife over {} stretches {}; Jacobian, widened, {})", r.jackknife_stretches,
+                          se_comment(r.se_jackknife[i], unit), se_comment(r.widened_se(i), unit))
             : "";
     if (place)
       ini.set(place->first, place->second, num6(n.values[k]),
@@ -87,7 +87,8 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, const measur
           "Jacobian standard errors times this for the residuals' autocorrelation: sqrt((1 + rho) / (1 - rho))");
   if (!r.se_jackknife.empty())
     ini.set(sec, "se_jackknife_stretches", static_cast<double>(r.jackknife_stretches),
-            "NAME.se from a delete-one-stretch jackknife; NAME.se_jacobian the widened Jacobian's");
+            "NAME.se_jackknife from a delete-one-stretch jackknife, NAME.se_jacobian the widened "
+            "Jacobian's, NAME.se the larger");
   ini.set(sec, "iterations", static_cast<double>(n.iterations));
   ini.set(sec, "evaluations", static_cast<double>(n.evaluations));
   std::string free;
@@ -98,7 +99,10 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, const measur
     const auto k = static_cast<Eigen::Index>(i);
     ini.set(sec, n.names[i], num6(n.values[k]));
     ini.set(sec, n.names[i] + ".se", num6(r.reported_se(i)));
-    if (i < r.se_jackknife.size()) ini.set(sec, n.names[i] + ".se_jacobian", num6(r.widened_se(i)));
+    if (i < r.se_jackknife.size()) {
+      ini.set(sec, n.names[i] + ".se_jackknife", num6(r.se_jackknife[i]));
+      ini.set(sec, n.names[i] + ".se_jacobian", num6(r.widened_se(i)));
+    }
   }
   for (std::size_t i = 0; i < n.names.size(); ++i) {
     std::string row;
@@ -328,7 +332,7 @@ void FitModel::define(CLI::App& app) {
   md->add_option(
         "--free", model.free,
         "parameters to fit, comma separated (default from the data: J, R, Kt, Ke, Tc with a current, "
-        "else J, Kt = Ke, Tc; driven: J, Tc, visc1 and, both ways, the bias friction_asymmetry.dT_Nm)")
+        "else J, Kt = Ke, Tc; driven: J, Tc, visc1; a drive's bias: friction_asymmetry.dT_Nm)")
       ->allow_extra_args(false)
       ->delimiter(',');
   md->add_option("--fix", model.fix, "measured parameters pinned, NAME=VALUE, comma separated")
