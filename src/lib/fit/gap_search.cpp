@@ -151,7 +151,8 @@ std::optional<std::array<double, 4>> seen_friction(const std::vector<table::Tabl
   FrictionOptions options;
   options.order = 1;
   options.offset = both_directions;
-  if (!tables.empty() && tables.front().has(k_drive_torque_column)) options.torque_column = k_drive_torque_column;
+  if (!tables.empty() && tables.front().has(k_drive_torque_column))
+    options.torque_column = k_drive_torque_column;
   for (const bool statics : {true, false}) {
     options.static_friction = statics;
     try {
@@ -577,7 +578,8 @@ std::map<std::string, std::vector<double>> data_friction_starts(const model::Mod
   // A driven model short of friction may run away from the data's speeds, leaving no steady
   // state to estimate through: then its own friction is its parameters' (no bias).
   const model::Friction& own_f = model.params.motor.friction;
-  if (!own) own = std::array<double, 4>{own_f.Tc_Nm, std::max(own_f.Ts_Nm, own_f.Tc_Nm), own_f.viscous[0], 0.0};
+  if (!own)
+    own = std::array<double, 4>{own_f.Tc_Nm, std::max(own_f.Ts_Nm, own_f.Tc_Nm), own_f.viscous[0], 0.0};
   // What the data show beyond what the model's own friction shows through the same estimate
   // (so that the estimate's biases cancel). The static excess is the data's beyond the model's
   // own parameters, not through the model's simulated starts from rest, which a model without

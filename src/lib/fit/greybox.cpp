@@ -455,9 +455,9 @@ void apply_ties(model::Model& m, const std::vector<std::pair<std::string, std::s
 /// problem.jackknife_stretches contiguous stretches of about equal length (a run of its share,
 /// at least one), each left out of the residual in turn and the fit repeated from `fitted`.
 /// Empty when a refit fails to converge (its spread would then be the solver's, not the data's).
-std::vector<double> jackknife(std::vector<ParameterSpec> specs, std::size_t total, const ResidualFunction& residual,
-                              const FitProblem& problem, const std::vector<std::size_t>& offset,
-                              const Eigen::VectorXd& fitted) {
+std::vector<double> jackknife(std::vector<ParameterSpec> specs, std::size_t total,
+                              const ResidualFunction& residual, const FitProblem& problem,
+                              const std::vector<std::size_t>& offset, const Eigen::VectorXd& fitted) {
   // Each stretch: per run, a row range [from, to) whose residuals (every output) are zeroed.
   struct Stretch {
     std::size_t run;
@@ -469,8 +469,9 @@ std::vector<double> jackknife(std::vector<ParameterSpec> specs, std::size_t tota
   std::vector<Stretch> stretches;
   for (std::size_t r = 0; r < problem.runs.size(); ++r) {
     const std::size_t n = problem.runs[r].inputs.t_s.size();
-    const auto share = static_cast<std::size_t>(std::llround(
-        static_cast<double>(problem.jackknife_stretches) * static_cast<double>(n) / static_cast<double>(rows)));
+    const auto share =
+        static_cast<std::size_t>(std::llround(static_cast<double>(problem.jackknife_stretches) *
+                                              static_cast<double>(n) / static_cast<double>(rows)));
     const std::size_t pieces = std::clamp<std::size_t>(share, 1, n);
     for (std::size_t k = 0; k < pieces; ++k) stretches.push_back({r, k * n / pieces, (k + 1) * n / pieces});
   }

@@ -3,21 +3,21 @@
 // was measured, residual series and the NRMSE fit percentage.
 #pragma once
 
+#include <algorithm>
+#include <cstddef>
+#include <map>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
 #include "config/ini.hpp"
 #include "fit/nls.hpp"
 #include "measurement/measurement.hpp"
 #include "model/model.hpp"
 #include "table/table.hpp"
-
-#include <algorithm>
-#include <cstddef>
-#include <map>
-#include <utility>
-#include <optional>
-#include <string>
-#include <span>
-#include <string_view>
-#include <vector>
 
 namespace mcg::fit {
 
@@ -225,7 +225,9 @@ struct FitResult {
   /// white residuals).
   double se_widening = 1.0;
   /// nls.std_errors times se_widening.
-  double widened_se(std::size_t k) const { return se_widening * nls.std_errors[static_cast<Eigen::Index>(k)]; }
+  double widened_se(std::size_t k) const {
+    return se_widening * nls.std_errors[static_cast<Eigen::Index>(k)];
+  }
   /// Per free parameter, the delete-one-stretch jackknife's standard error (empty when
   /// FitProblem::jackknife_stretches is 0 or a refit failed): the fit repeated with each of g
   /// contiguous stretches of the runs left out of the residual (still simulated through),

@@ -83,8 +83,9 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, const measur
               : n.reason);
   for (std::size_t w = 0; w < r.warnings.size(); ++w)
     ini.set(sec, fmt::format("warning{}", w + 1), r.warnings[w]);
-  ini.set(sec, "se_widening", num6(r.se_widening),
-          "Jacobian standard errors times this for the residuals' autocorrelation: sqrt((1 + rho) / (1 - rho))");
+  ini.set(
+      sec, "se_widening", num6(r.se_widening),
+      "Jacobian standard errors times this for the residuals' autocorrelation: sqrt((1 + rho) / (1 - rho))");
   if (!r.se_jackknife.empty())
     ini.set(sec, "se_jackknife_stretches", static_cast<double>(r.jackknife_stretches),
             "NAME.se_jackknife from a delete-one-stretch jackknife, NAME.se_jacobian the widened "

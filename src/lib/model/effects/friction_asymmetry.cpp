@@ -34,7 +34,8 @@ EffectSpec friction_asymmetry() {
           "the motor shaft's friction is higher in one direction than the other",
           "forward F = Tc + dT (breakaway Ts + dT), reverse F = Tc - dT (Ts - dT): the symmetric friction "
           "plus a constant torque -dT on the motor shaft",
-          {{"dT_Nm", 5e-4, -0.05, 0.05, "N m", "half the forward-minus-reverse friction level; a drive's constant bias or load"}},
+          {{"dT_Nm", 5e-4, -0.05, 0.05, "N m",
+            "half the forward-minus-reverse friction level; a drive's constant bias or load"}},
           compile,
           EffectPlan::fit({"dT_Nm"}, {{-0.005, -0.0015, -0.0003, 0.0003, 0.0015, 0.005}},
                           EffectPlan::Needs::both_directions)
