@@ -7,11 +7,15 @@
 # with force pulses) its values must lie within two standard errors of the same IDIM-LS recipe
 # run on that file (Fc = 20.90 N, Fv = 210.09 N s/m, offset -3.22 N: friction moved between
 # the runs, see PROVENANCE.md). mcg-fit model, driven by the logged force (--torque) from the
-# axis given without friction (frictionless.ini, a start of Tc 15 N and Fv 150 N s/m), must land
-# within two of its standard errors of the published Fc and Fv; so must it on the force with the
-# offset friction estimated removed (the model has no offset term). mcg-fit gap on the same
-# model with its gap.args (the benchmark's row) must name friction and close >= 60 % of the
-# validation run's speed error. The data ship in tests/data/real/emps (Apache-2.0).
+# axis given without friction (frictionless.ini, a start of Tc 15 N and Fv 150 N s/m), freed
+# the force's constant offset beside the friction (friction_asymmetry.dT_Nm, the same constant
+# as friction's offset), must land within two of its standard errors of the published Fc and
+# Fv, with the offset within 0.5 N of friction's; so must it on the force with that offset
+# removed. mcg-fit gap on the same model with its gap.args (the benchmark's row) must
+# name friction with the drive's offset (friction_levels+friction_asymmetry), close >= 60 % of
+# the validation run's speed error, and give the published Fc and Fv within two of its
+# standard errors, J within 5 % of the published mass. The data ship in tests/data/real/emps
+# (Apache-2.0).
 # Args: TOOL_DIR SOURCE_DIR.
 set -euo pipefail
 tools=$(cd "$1" && pwd)
@@ -53,7 +57,8 @@ published state0.offset_N -3.22 "$work/validation.ini"
 dir="$src/tests/data/real/emps"
 printf '[motor]\nTc_Nm = 15\nvisc1_Nm_s_rad = 150\n' >"$work/start.ini"
 model_fit() {
-  mcg-fit model --config "$dir/frictionless.ini" --config "$work/start.ini" --torque force_N --position qm_m "$1"
+  mcg-fit model --config "$dir/frictionless.ini" --config "$work/start.ini" --torque force_N --position qm_m \
+    --free motor.J_kg_m2,motor.Tc_Nm,motor.visc1_Nm_s_rad,friction_asymmetry.dT_Nm "$1"
 }
 fitted() {
   local key=$1 published=$2 ini=$3 line value se
@@ -71,6 +76,16 @@ model_fit "$data" >"$work/model.ini"
 fitted Tc_Nm 20.3935 "$work/model.ini"
 fitted visc1_Nm_s_rad 203.5034 "$work/model.ini"
 offset=$(awk '/^state0.offset_N = / { print $3 }' "$work/fit.ini")
+# The drive's offset: the model's bias and friction's offset are one constant, sign included.
+dT=$(awk '/^dT_Nm = .*; fitted/ { print $3 }' "$work/model.ini")
+if [[ -n $dT ]] && awk -v a="$dT" -v b="$offset" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= 0.5) }'; then
+  pass
+  echo "ok   model's drive offset dT_Nm = $dT (friction's offset $offset)"
+else
+  fail "model's drive offset dT_Nm = '${dT:-not fitted}' is not within 0.5 N of friction's offset $offset"
+fi
+grep -q "^se_jackknife_stretches = " "$work/model.ini" && grep -q "^motor.Tc_Nm.se_jackknife = " "$work/model.ini" &&
+  pass || fail "model: the jackknife's standard errors are not reported beside the Jacobian's"
 awk -F, -v o="$offset" '/^#/ { print; next } $1 == "t" { print; next } { printf "%s,%s,%.10g\n", $1, $2, $3 - o }' \
   "$data" >"$work/estimation_no_offset.csv"
 model_fit "$work/estimation_no_offset.csv" >"$work/model_no_offset.ini"
@@ -81,12 +96,32 @@ fitted visc1_Nm_s_rad 203.5034 "$work/model_no_offset.ini"
 read -ra gap_args <<<"$(grep -v '^[[:space:]]*#' "$dir/gap.args" | tr '\n' ' ')"
 (cd "$dir" && mcg-fit gap "${gap_args[@]}" --format text) >"$work/gap.txt" 2>"$work/gap.err" || true
 diagnosis=$(sed -n 's/^diagnosis: //p' "$work/gap.txt")
-if [[ $diagnosis == *friction* ]]; then
+if [[ $diagnosis == friction_levels+friction_asymmetry ]]; then
   pass
   echo "ok   gap names $diagnosis"
 else
-  fail "gap on the frictionless axis: diagnosis '${diagnosis:-none}' does not name friction: $(tail -1 "$work/gap.err")"
+  fail "gap on the frictionless axis: diagnosis '${diagnosis:-none}' is not friction_levels+friction_asymmetry: $(tail -1 "$work/gap.err")"
 fi
+# gap_param KEY REFERENCE [TOLERANCE]: "KEY=value+-se" of the fitted parameters line within two
+# standard errors of REFERENCE, or within TOLERANCE of it when given.
+gap_param() {
+  local key=$1 reference=$2 tolerance=${3:-} item value se
+  item=$(sed -n 's/^fitted parameters[^:]*: //p' "$work/gap.txt" | tr ' ' '\n' | grep "^$key=") ||
+    { fail "gap: $key not fitted"; return; }
+  value=${item#*=}
+  value=${value%%+-*}
+  se=${item##*+-}
+  if awk -v v="$value" -v s="$se" -v p="$reference" -v t="$tolerance" \
+    'BEGIN { d = v - p; if (d < 0) d = -d; exit !(t != "" ? d <= t : s > 0 && d <= 2 * s) }'; then
+    pass
+    echo "ok   gap $key = $value +- $se (reference $reference)"
+  else
+    fail "gap $key = $value +- $se: reference $reference is not within ${tolerance:-two standard errors}"
+  fi
+}
+gap_param friction_levels.Tc_Nm 20.3935
+gap_param friction_levels.c1_Nm_s_rad 203.5034
+gap_param param_mismatch.J_scale 1.0012 0.05
 shrink=$(sed -n 's/^validation omega RMS: .*(\([0-9]*\) % less).*/\1/p' "$work/gap.txt")
 if [[ -n $shrink ]] && ((shrink >= 60)); then
   pass

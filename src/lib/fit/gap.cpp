@@ -91,7 +91,7 @@ std::string alike_one_way(const GapReport& report, const GapData& data) {
   bool i_reverse = false;
   const std::size_t f_i = floor_index(report.floors, "i");
   for (const Run& run : data.train) {
-    for (double v : run.inputs.v_V) {
+    for (double v : drive_command(run)) {
       forward = forward || v > 0.0;
       reverse = reverse || v < 0.0;
     }

@@ -115,8 +115,12 @@ void add_effect(model::Model& m, std::string_view name) {
   if (m.effect(name) == nullptr) m.effects.push_back(model::default_effect(name));
 }
 
+/// The column of friction_table() holding a torque-driven run's drive torque at the motor shaft.
+constexpr const char* k_drive_torque_column = "T_drive_Nm";
+
 /// A run as mcg-fit friction reads it: t, v, clutch, r_load, the motor shaft's speed in rpm
-/// (`speed`: per output of the run, as measured, times the gear ratio) and the current.
+/// (`speed`: per output of the run, as measured, times the gear ratio) and the current; a
+/// driven run's drive instead of v: its torque (k_drive_torque_column) or its current command.
 table::Table friction_table(const Run& run, const std::vector<std::vector<double>>& series) {
   table::Table t;
   t.source = run.source;
@@ -124,6 +128,8 @@ table::Table friction_table(const Run& run, const std::vector<std::vector<double
   t.set("v", run.inputs.v_V);
   t.set("clutch", run.inputs.clutch);
   t.set("r_load", run.inputs.r_load_ohm);
+  if (!run.inputs.T_cmd_Nm.empty()) t.set(k_drive_torque_column, run.inputs.T_cmd_Nm);
+  if (!run.inputs.i_cmd_A.empty()) t.set("i", run.inputs.i_cmd_A);
   for (std::size_t o = 0; o < run.outputs.size(); ++o) {
     if (run.outputs[o] == "rpm" || run.outputs[o] == "omega") {
       std::vector<double> rpm = series[o];
@@ -145,6 +151,8 @@ std::optional<std::array<double, 4>> seen_friction(const std::vector<table::Tabl
   FrictionOptions options;
   options.order = 1;
   options.offset = both_directions;
+  if (!tables.empty() && tables.front().has(k_drive_torque_column))
+    options.torque_column = k_drive_torque_column;
   for (const bool statics : {true, false}) {
     options.static_friction = statics;
     try {
@@ -273,11 +281,12 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
     if (info.name == key) lower = info.lower;
   }
   const double coulomb_Nm = model::Compiled(c.model).p.motor.friction.Tc_Nm;
-  const bool collapsed = !std::isfinite(jacobian_se) || !(value - lower > 0.05 * coulomb_Nm);
+  // The profile spans five of the solver's own (unwidened) errors.
+  const double solver_se = jacobian_se / fit.se_widening;
+  const bool collapsed = !std::isfinite(solver_se) || !(value - lower > 0.05 * coulomb_Nm);
   double centre_value = collapsed ? lower + 0.5 * coulomb_Nm : value;
-  double half = collapsed
-                    ? 0.5 * coulomb_Nm
-                    : std::max(0.3 * std::abs(value), 5.0 * (std::isfinite(jacobian_se) ? jacobian_se : 0.0));
+  double half = collapsed ? 0.5 * coulomb_Nm
+                          : std::max(0.3 * std::abs(value), 5.0 * (std::isfinite(solver_se) ? solver_se : 0.0));
   if (!(half > 0.0)) return {};
   std::vector<double> points;
   std::vector<double> costs;
@@ -405,7 +414,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     c.std_errors.clear();
     for (Eigen::Index k = 0; k < r.nls.values.size(); ++k) {
       c.values.push_back(r.nls.values[k]);
-      c.std_errors.push_back(r.nls.std_errors[k]);
+      c.std_errors.push_back(r.reported_se(static_cast<std::size_t>(k)));
     }
     c.warnings = r.warnings;
     c.flags = r.flags;
@@ -632,14 +641,18 @@ std::map<std::string, std::vector<double>> data_friction_starts(const model::Mod
   }
   const bool both = forward && reverse;
   const auto seen = seen_friction(measured, model.params, both);
-  const auto own = seen_friction(simulated, model.params, both);
-  if (!seen || !own) return out;
+  auto own = seen_friction(simulated, model.params, both);
+  if (!seen) return out;
+  // A driven model short of friction may run away from the data's speeds, leaving no steady
+  // state to estimate through: then its own friction is its parameters' (no bias).
+  const model::Friction& own_f = model.params.motor.friction;
+  if (!own)
+    own = std::array<double, 4>{own_f.Tc_Nm, std::max(own_f.Ts_Nm, own_f.Tc_Nm), own_f.viscous[0], 0.0};
   // What the data show beyond what the model's own friction shows through the same estimate
   // (so that the estimate's biases cancel). The static excess is the data's beyond the model's
   // own parameters, not through the model's simulated starts from rest, which a model without
   // stiction lacks (its shaft only coasts through zero, and those brackets reach the next drive
   // level).
-  const model::Friction& own_f = model.params.motor.friction;
   model::DataFriction d;
   d.coulomb_Nm = (*seen)[0] - (*own)[0];
   d.static_excess_Nm = (*seen)[1] - (*seen)[0] - std::max(0.0, own_f.Ts_Nm - own_f.Tc_Nm);
@@ -904,11 +917,23 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   // Every friction effect fitted joins the pool whatever its rank: alone, a friction effect that
   // shapes another's levels (an asymmetry, a load-dependent share) has no Coulomb level beneath
   // it and fits worse than the unrelated effects that happen to rank above it.
+  // An effect whose own parameters the data leave undetermined (a voltage-side effect on a
+  // driven run) scores as the refit does and would crowd out a weaker one that acts: the pool
+  // takes the determined ones first.
+  std::vector<const GapCandidate*> ranked;
+  for (const auto& c : singles) ranked.push_back(&c);
+  std::stable_partition(ranked.begin(), ranked.end(), [](const GapCandidate* c) {
+    return std::none_of(c->flags.begin(), c->flags.end(), [&](const FitFlag& f) {
+      return f.undetermined() && std::any_of(f.names.begin(), f.names.end(), [&](const std::string& n) {
+               return n.starts_with(c->name + ".");
+             });
+    });
+  });
   std::vector<const GapCandidate*> pool;
-  for (const auto& c : singles) {
-    if (c.evaluated && std::isfinite(c.score) && c.score < before.score &&
-        (pool.size() < settings.pool_effects || is_friction(c.name))) {
-      pool.push_back(&c);
+  for (const GapCandidate* c : ranked) {
+    if (c->evaluated && std::isfinite(c->score) && c->score < before.score &&
+        (pool.size() < settings.pool_effects || is_friction(c->name))) {
+      pool.push_back(c);
     }
   }
   const GapCandidate* best_single = nullptr;

@@ -320,7 +320,9 @@ std::vector<std::string> default_free(const std::vector<Run>& runs, const std::v
   std::vector<std::string> wanted;
   if (driven) {
     // The drive sets the torque: Kt only scales J and the friction (or, torque-driven, drops
-    // out), and no back-EMF damps the shaft, so the viscous friction is fitted instead.
+    // out), and no back-EMF damps the shaft, so the viscous friction is fitted instead. The
+    // drive's bias (k_drive_offset) is not: where the model misses more than an offset (a
+    // current loop taken as ideal), the bias trades with the Coulomb level and drives it to 0.
     wanted = {"motor.J_kg_m2", "motor.Tc_Nm", "motor.visc1_Nm_s_rad"};
   } else if (current) {
     wanted = {"motor.J_kg_m2", "motor.R_ohm", "motor.Kt_Nm_A", "motor.Ke_V_s_rad", "motor.Tc_Nm"};
@@ -336,6 +338,21 @@ std::vector<std::string> default_free(const std::vector<Run>& runs, const std::v
   if (!current && !driven && kt_free && !is_fixed("motor.Ke_V_s_rad"))
     ties.emplace_back("motor.Ke_V_s_rad", "motor.Kt_Nm_A");
   return free;
+}
+
+void add_free_effects(model::Model& model, const std::vector<std::string>& free) {
+  for (const auto& name : free) {
+    const auto dot = name.find('.');
+    if (dot == std::string::npos) continue;
+    const std::string effect = name.substr(0, dot);
+    const model::EffectSpec* spec = model::find_effect(effect);
+    if (spec == nullptr || model.effect(effect) != nullptr) continue;
+    model::Effect e = model::default_effect(effect);
+    for (const auto& p : spec->params) {
+      if (p.lower < 0.0 && p.upper > 0.0) e.set(p.name, 0.0);
+    }
+    model.effects.push_back(std::move(e));
+  }
 }
 
 std::vector<RunFit> evaluate_model(const model::Model& model, const std::vector<Run>& runs,
@@ -434,6 +451,60 @@ void apply_ties(model::Model& m, const std::vector<std::pair<std::string, std::s
   for (const auto& [follower, leader] : ties) model::set_parameter(m, follower, model::get_parameter(m, leader));
 }
 
+/// The delete-one-stretch jackknife of FitResult::se_jackknife: the runs' rows cut into
+/// problem.jackknife_stretches contiguous stretches of about equal length (a run of its share,
+/// at least one), each left out of the residual in turn and the fit repeated from `fitted`.
+/// Empty when a refit fails to converge (its spread would then be the solver's, not the data's).
+std::vector<double> jackknife(std::vector<ParameterSpec> specs, std::size_t total,
+                              const ResidualFunction& residual, const FitProblem& problem,
+                              const std::vector<std::size_t>& offset, const Eigen::VectorXd& fitted) {
+  // Each stretch: per run, a row range [from, to) whose residuals (every output) are zeroed.
+  struct Stretch {
+    std::size_t run;
+    std::size_t from;
+    std::size_t to;
+  };
+  std::size_t rows = 0;
+  for (const Run& run : problem.runs) rows += run.inputs.t_s.size();
+  std::vector<Stretch> stretches;
+  for (std::size_t r = 0; r < problem.runs.size(); ++r) {
+    const std::size_t n = problem.runs[r].inputs.t_s.size();
+    const auto share =
+        static_cast<std::size_t>(std::llround(static_cast<double>(problem.jackknife_stretches) *
+                                              static_cast<double>(n) / static_cast<double>(rows)));
+    const std::size_t pieces = std::clamp<std::size_t>(share, 1, n);
+    for (std::size_t k = 0; k < pieces; ++k) stretches.push_back({r, k * n / pieces, (k + 1) * n / pieces});
+  }
+  for (std::size_t i = 0; i < specs.size(); ++i) specs[i].initial = fitted[static_cast<Eigen::Index>(i)];
+  NlsOptions options = problem.nls;
+  options.check_smoothness = false;
+  const auto count = static_cast<Eigen::Index>(specs.size());
+  std::vector<Eigen::VectorXd> fits;
+  for (const Stretch& s : stretches) {
+    const Run& run = problem.runs[s.run];
+    const std::size_t len = run.inputs.t_s.size();
+    const ResidualFunction without = [&](const Eigen::VectorXd& p, Eigen::VectorXd& out) {
+      residual(p, out);
+      for (std::size_t o = 0; o < run.outputs.size(); ++o) {
+        const auto at = static_cast<Eigen::Index>(offset[s.run] + o * len + s.from);
+        out.segment(at, static_cast<Eigen::Index>(s.to - s.from)).setZero();
+      }
+    };
+    const NlsResult r = least_squares(specs, total, without, options);
+    if (!r.converged) return {};
+    fits.push_back(r.values);
+  }
+  const auto g = static_cast<double>(fits.size());
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(count);
+  for (const auto& f : fits) mean += f / g;
+  Eigen::VectorXd var = Eigen::VectorXd::Zero(count);
+  for (const auto& f : fits) var += (f - mean).cwiseAbs2();
+  var *= (g - 1.0) / g;
+  std::vector<double> se;
+  for (Eigen::Index i = 0; i < count; ++i) se.push_back(std::sqrt(var[i]));
+  return se;
+}
+
 }  // namespace
 
 FitResult fit_model(const FitProblem& problem) {
@@ -528,6 +599,10 @@ FitResult fit_model(const FitProblem& problem) {
 
   FitResult result;
   result.nls = least_squares(specs, total, residual, problem.nls);
+  if (problem.jackknife_stretches > 1 && result.nls.converged) {
+    result.se_jackknife = jackknife(specs, total, residual, problem, offset, result.nls.values);
+    if (!result.se_jackknife.empty()) result.jackknife_stretches = problem.jackknife_stretches;
+  }
   result.model = problem.model;
   for (std::size_t i = 0; i < specs.size(); ++i) {
     model::set_parameter(result.model, specs[i].name, result.nls.values[static_cast<Eigen::Index>(i)]);

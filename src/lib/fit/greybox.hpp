@@ -3,19 +3,21 @@
 // was measured, residual series and the NRMSE fit percentage.
 #pragma once
 
+#include <algorithm>
+#include <cstddef>
+#include <map>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
 #include "config/ini.hpp"
 #include "fit/nls.hpp"
 #include "measurement/measurement.hpp"
 #include "model/model.hpp"
 #include "table/table.hpp"
-
-#include <cstddef>
-#include <map>
-#include <utility>
-#include <optional>
-#include <string>
-#include <span>
-#include <vector>
 
 namespace mcg::fit {
 
@@ -144,7 +146,22 @@ struct FitProblem {
   std::vector<std::pair<std::string, std::string>> ties;
   /// Bounds that replace model::parameters()' (relative to the given model) for a name.
   std::map<std::string, std::pair<double, double>> bounds;
+  /// Contiguous stretches of the runs the delete-one-stretch jackknife leaves out in turn
+  /// (FitResult::se_jackknife); 0: no jackknife (each stretch costs a refit).
+  std::size_t jackknife_stretches = 0;
 };
+
+/// The constant bias of a drive, N m at the motor shaft (N on a linear axis): the part of the
+/// logged drive torque (or of Kt times a current command or reading) that does not act on the
+/// shaft, T_acting = T_logged - bias; a constant load (gravity on an axis) reads the same. It is
+/// friction_asymmetry's dT_Nm, whose equation is exactly this constant torque -dT on the shaft,
+/// and the `offset` a friction fit estimates (tau = J dw/dt + F(w) + offset), sign included.
+inline constexpr std::string_view k_drive_offset = "friction_asymmetry.dT_Nm";
+
+/// Adds to `model` each catalog effect that a name of `free` ("EFFECT.key") belongs to and the
+/// model lacks, with its defaults; a signed parameter (lower bound below 0) of it starts at 0,
+/// the effect absent in all but name. Unknown names are left for fit_model() to refuse.
+void add_free_effects(model::Model& model, const std::vector<std::string>& free);
 
 /// The [bounds] section of an INI: "NAME = LOWER UPPER" per parameter name as
 /// model::parameters() spells it (or any catalog effect's "EFFECT.key"). Throws mcg::Error naming the file and line for an unknown
@@ -156,7 +173,8 @@ std::map<std::string, std::pair<double, double>> read_bounds(const config::Ini& 
 ///   speed only: J, Kt and Tc with Ke tied to Kt (speed alone fixes only the ratios R/Kt and
 ///   J R/(Kt Ke): freeing R and Kt together is degenerate, so R stays at its given value);
 ///   a current- or torque-driven run (DriveInput): J, Tc and the viscous visc1 (Kt would
-///   only scale J and the friction, and no back-EMF damps the shaft).
+///   only scale J and the friction, and no back-EMF damps the shaft); the drive's constant
+///   bias k_drive_offset only when asked for (add_free_effects() brings its effect in).
 /// Names in `fixed` are left out. `ties` receives the ties the set needs.
 std::vector<std::string> default_free(const std::vector<Run>& runs, const std::vector<std::string>& fixed,
                                       std::vector<std::pair<std::string, std::string>>& ties);
@@ -207,7 +225,23 @@ struct FitResult {
   /// white residuals).
   double se_widening = 1.0;
   /// nls.std_errors times se_widening.
-  double reported_se(std::size_t k) const { return se_widening * nls.std_errors[static_cast<Eigen::Index>(k)]; }
+  double widened_se(std::size_t k) const {
+    return se_widening * nls.std_errors[static_cast<Eigen::Index>(k)];
+  }
+  /// Per free parameter, the delete-one-stretch jackknife's standard error (empty when
+  /// FitProblem::jackknife_stretches is 0 or a refit failed): the fit repeated with each of g
+  /// contiguous stretches of the runs left out of the residual (still simulated through),
+  /// se^2 = (g - 1) / g sum_i (p_(i) - mean)^2. A stretch's samples err together (the simulation
+  /// error is autocorrelated), which the Jacobian's error, taking the samples as independent,
+  /// does not see; leaving out whole stretches does, and it needs no model of the correlation.
+  std::vector<double> se_jackknife;
+  std::size_t jackknife_stretches = 0;  ///< g, the stretches the jackknife used
+  /// The standard error the reports state: the larger of the jackknife's (when there is one)
+  /// and the widened Jacobian's (widened_se), as a friction fit takes the larger of its two:
+  /// neither sees a bias the model's own error leaves, and each misses what the other sees.
+  double reported_se(std::size_t k) const {
+    return k < se_jackknife.size() ? std::max(se_jackknife[k], widened_se(k)) : widened_se(k);
+  }
 };
 
 /// |correlation| beyond which two parameters are reported as not told apart by the data.

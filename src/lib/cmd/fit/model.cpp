@@ -57,9 +57,16 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, const measur
   for (std::size_t i = 0; i < n.names.size(); ++i) {
     const auto place = ini_place(ini, n.names[i]);
     const auto k = static_cast<Eigen::Index>(i);
+    const std::string unit = unit_of(infos, n.names[i]);
+    // The larger of the two errors leads; both stand beside it.
+    const std::string beside =
+        i < r.se_jackknife.size() && std::isfinite(n.std_errors[k])
+            ? fmt::format(" (jackknife over {} stretches {}; Jacobian, widened, {})", r.jackknife_stretches,
+                          se_comment(r.se_jackknife[i], unit), se_comment(r.widened_se(i), unit))
+            : "";
     if (place)
       ini.set(place->first, place->second, num6(n.values[k]),
-              "fitted, " + se_comment(r.reported_se(i), unit_of(infos, n.names[i])));
+              "fitted, " + se_comment(r.reported_se(i), unit) + beside);
   }
   for (const auto& [follower, leader] : problem.ties) {
     if (const auto place = ini_place(ini, follower)) {
@@ -76,8 +83,13 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, const measur
               : n.reason);
   for (std::size_t w = 0; w < r.warnings.size(); ++w)
     ini.set(sec, fmt::format("warning{}", w + 1), r.warnings[w]);
-  ini.set(sec, "se_widening", num6(r.se_widening),
-          "standard errors times this for the residuals' autocorrelation: sqrt((1 + rho) / (1 - rho))");
+  ini.set(
+      sec, "se_widening", num6(r.se_widening),
+      "Jacobian standard errors times this for the residuals' autocorrelation: sqrt((1 + rho) / (1 - rho))");
+  if (!r.se_jackknife.empty())
+    ini.set(sec, "se_jackknife_stretches", static_cast<double>(r.jackknife_stretches),
+            "NAME.se_jackknife from a delete-one-stretch jackknife, NAME.se_jacobian the widened "
+            "Jacobian's, NAME.se the larger");
   ini.set(sec, "iterations", static_cast<double>(n.iterations));
   ini.set(sec, "evaluations", static_cast<double>(n.evaluations));
   std::string free;
@@ -88,6 +100,10 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, const measur
     const auto k = static_cast<Eigen::Index>(i);
     ini.set(sec, n.names[i], num6(n.values[k]));
     ini.set(sec, n.names[i] + ".se", num6(r.reported_se(i)));
+    if (i < r.se_jackknife.size()) {
+      ini.set(sec, n.names[i] + ".se_jackknife", num6(r.se_jackknife[i]));
+      ini.set(sec, n.names[i] + ".se_jacobian", num6(r.widened_se(i)));
+    }
   }
   for (std::size_t i = 0; i < n.names.size(); ++i) {
     std::string row;
@@ -177,6 +193,8 @@ void fit_joint(const model::Model& base, FitProblem problem, const std::vector<s
   } else {
     problem.free = options.free;
   }
+  add_free_effects(problem.model, problem.free);
+  problem.jackknife_stretches = options.jackknife;
   problem.nls.threads = parallel::worker_count(options.threads, problem.free.size());
   const FitResult result = fit_model(problem);
   write_model_ini(result, problem, speed, io);
@@ -269,6 +287,7 @@ void fit_batch(const model::Model& base, FitProblem problem, const std::vector<s
     }
   }
   problem.free = options.free.empty() ? default_free(loaded, fixed, problem.ties) : options.free;
+  add_free_effects(problem.model, problem.free);
   parallel::for_each(count, options.threads, [&](std::size_t k) {
     try {
       if (runs[k]) {
@@ -314,7 +333,7 @@ void FitModel::define(CLI::App& app) {
   md->add_option(
         "--free", model.free,
         "parameters to fit, comma separated (default from the data: J, R, Kt, Ke, Tc with a current, "
-        "else J, Kt = Ke, Tc)")
+        "else J, Kt = Ke, Tc; driven: J, Tc, visc1; a drive's bias: friction_asymmetry.dT_Nm)")
       ->allow_extra_args(false)
       ->delimiter(',');
   md->add_option("--fix", model.fix, "measured parameters pinned, NAME=VALUE, comma separated")
@@ -353,6 +372,11 @@ void FitModel::define(CLI::App& app) {
   md->add_option("--max-evaluations", model.max_evaluations, "simulation budget of the solver")
       ->check(mcg::Range(1, 1000000))
       ->capture_default_str();
+  md->add_option("--jackknife", model.jackknife,
+                 "standard errors from a jackknife leaving out each of this many stretches of the runs "
+                 "in turn (0: the Jacobian's only)")
+      ->check(mcg::Range(0, 100))
+      ->capture_default_str();
   md->add_option("files", model.files, "measured runs ('-' = stdin)");
 }
 
@@ -376,7 +400,9 @@ int FitModel::run(Io& io) {
   problem.ties = parse_ties(options.tie);
   problem.sim.max_step_s = options.max_step_s;
   problem.nls.max_evaluations = options.max_evaluations;
-  const auto infos = model::parameters(base);
+  model::Model with_free = base;
+  add_free_effects(with_free, options.free);
+  const auto infos = model::parameters(with_free);
   for (const auto& name : options.free) {
     if (std::none_of(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; })) {
       fail("unknown parameter {} (see {} model --list)", quote(name), io.tool);

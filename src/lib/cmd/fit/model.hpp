@@ -32,6 +32,8 @@ struct FitModelOptions {
   unsigned threads = 0;                                      ///< 0: every core
   double max_step_s = 2.5e-4;                                ///< integrator step bound during the fit
   int max_evaluations = 4000;
+  /// Stretches of the delete-one-stretch jackknife of the standard errors (a joint fit; 0: none).
+  std::size_t jackknife = 10;
 };
 
 /// Joint fit: the fitted model as INI (every parameter, the free ones with their standard

@@ -3,7 +3,10 @@
 // kinetic and static levels are Tc + dT and Ts + dT, in reverse Tc - dT and Ts - dT. That is
 // the symmetric friction plus a constant torque -dT on the shaft, moving or stuck, so the
 // plant's torque hook carries it with exact stick-slip. |dT| beyond the friction levels is a
-// constant load (gravity on an arm), which the same equation describes.
+// constant load (gravity on an arm), which the same equation describes, and so is a drive's
+// constant bias (an amplifier's or current sensor's offset: the torque acting is the logged one
+// minus dT): this is the one parameter of that constant, fit::k_drive_offset, which a friction
+// fit's offset estimates too.
 // Default 0.5 mN m, a fifth of the rig's Coulomb level; the diagnosis starts from a tenth to
 // twice that level, either sign.
 #include "model/effects/compiled.hpp"
@@ -31,7 +34,8 @@ EffectSpec friction_asymmetry() {
           "the motor shaft's friction is higher in one direction than the other",
           "forward F = Tc + dT (breakaway Ts + dT), reverse F = Tc - dT (Ts - dT): the symmetric friction "
           "plus a constant torque -dT on the motor shaft",
-          {{"dT_Nm", 5e-4, -0.05, 0.05, "N m", "half the forward-minus-reverse friction level"}},
+          {{"dT_Nm", 5e-4, -0.05, 0.05, "N m",
+            "half the forward-minus-reverse friction level; a drive's constant bias or load"}},
           compile,
           EffectPlan::fit({"dT_Nm"}, {{-0.005, -0.0015, -0.0003, 0.0003, 0.0015, 0.005}},
                           EffectPlan::Needs::both_directions)
