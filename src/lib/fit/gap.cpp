@@ -310,7 +310,8 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   decide(search_candidates(model, data, report.floors, before, gap, settings), gap, outputs, report);
 
   const bool diagnosed = report.diagnosis != "unexplained";
-  if (!diagnosed || settings.discrepancy) {
+  // The discrepancy terms are a fit of their own: one the time budget leaves no room for is not begun.
+  if ((!diagnosed || settings.discrepancy) && std::chrono::steady_clock::now() < settings.deadline) {
     if (settings.progress) settings.progress("fitting the catalog-free discrepancy terms");
     // The reference is the diagnosis' model (for unexplained: the best candidate's).
     const auto deadline = settings.deadline;

@@ -181,7 +181,7 @@ void decide(Candidates candidates, bool gap, std::size_t outputs, GapReport& rep
                    std::any_of(mixtures.begin(), mixtures.end(), cut);
   if (report.partial) {
     report.reason +=
-        "; PARTIAL: the time budget ran out, the candidates marked so were not fitted to the end";
+        "; PARTIAL: the time budget cut the search short, the candidates marked so are unfinished";
   }
   std::vector<GapCandidate> all;
   if (diagnosis == "unexplained") {

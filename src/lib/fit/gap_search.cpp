@@ -419,6 +419,22 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     c.warnings = r.warnings;
     c.flags = r.flags;
   };
+  const auto expired = [&] { return std::chrono::steady_clock::now() >= settings.deadline; };
+  // After the time budget only the validation score starts: a fit it cut short is ranked with
+  // the values it reached, without standard errors (flagged, so it cannot be the diagnosis),
+  // and the status says so.
+  const auto cut_short = [&](const FitResult& r) {
+    for (const auto& e : job.effects) {
+      if (const model::EffectSpec* plan = find_plan(e)) c.added_parameters += plan->plan.free.size();
+    }
+    c.status = fmt::format("{}; fit cut short after {} iterations, scored as it stands", k_out_of_time,
+                           r.nls.iterations);
+    c.evaluated = true;
+    const Evaluation ev = evaluate(c.model, data, floors);
+    c.score = ev.score;
+    c.rms = ev.rms;
+    c.train_rms_rpm = k_nan;
+  };
   const auto score = [&] {
     for (const auto& e : job.effects) {
       if (const model::EffectSpec* plan = find_plan(e)) c.added_parameters += plan->plan.free.size();
@@ -456,10 +472,14 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
       before = training_cost(without, data.train);
     }
     const FitResult alone = fit_model(problem);
+    if (expired()) {
+      take(alone, job.stage1_free);
+      cut_short(alone);
+      return c;
+    }
     start = alone.model;
     const double gain = before > 0.0 ? (before - alone.nls.cost) / before : 1.0;
-    if (may_reject && !(gain >= k_gap_reject_gain) && std::isfinite(before) &&
-        std::chrono::steady_clock::now() < settings.deadline) {
+    if (may_reject && !(gain >= k_gap_reject_gain) && std::isfinite(before)) {
       take(alone, job.stage1_free);
       c.status = fmt::format("{}: fitted alone it removes {:.2g} % of the training cost", k_rejected_early,
                              100.0 * std::max(gain, 0.0));
@@ -474,11 +494,15 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   // A mixture's members may trade along a long valley (a drive dead band against Coulomb
   // friction: the steady states see only their sum, the coasts and reversals tell them apart):
   // a joint fit that spent its budget still moving goes on once from where it stopped.
-  if (job.effects.size() > 1 && !fit.nls.converged && std::chrono::steady_clock::now() < settings.deadline) {
+  if (job.effects.size() > 1 && !fit.nls.converged && !expired()) {
     problem.model = fit.model;
     fit = fit_model(problem);
   }
   take(fit, job.free);
+  if (expired()) {
+    cut_short(fit);
+    return c;
+  }
   // A gauge the data cannot fix: an added effect that trades exactly against the nominal
   // scales (a drive dead band wider than one drive level leaves the volt unmeasured, so Kt, R,
   // J and friction scale with it). The effect's shape is determined, the common scale is not:
@@ -498,8 +522,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   std::vector<std::string> pinned;
   for (const std::string_view pin : k_gauge_pins) {
     const std::string key(pin);
-    if (c.determined() || !gauge_trade(c.flags, key) || std::chrono::steady_clock::now() >= settings.deadline)
-      continue;
+    if (c.determined() || !gauge_trade(c.flags, key) || expired()) continue;
     refit_pinned(key, 1.0);
     pinned.push_back(key);
   }
@@ -509,9 +532,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   std::vector<std::string> unexcited;
   for (const auto& e : job.effects) {
     const model::EffectSpec* spec = find_plan(e);
-    if (c.determined() || spec == nullptr || spec->plan.breakaway_key.empty() ||
-        std::chrono::steady_clock::now() >= settings.deadline)
-      continue;
+    if (c.determined() || spec == nullptr || spec->plan.breakaway_key.empty() || expired()) continue;
     const std::string key = e + "." + spec->plan.breakaway_key;
     if (!loose_flagged(c.flags, key)) continue;
     refit_pinned(key, 0.0);
@@ -551,11 +572,11 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     c.std_errors.insert(c.std_errors.begin() + static_cast<std::ptrdiff_t>(k), se);
     c.flags.insert(c.flags.end(), own.begin(), own.end());
   }
-  const bool out_of_time = settings.deadline != std::chrono::steady_clock::time_point::max() &&
-                           std::chrono::steady_clock::now() >= settings.deadline;
-  c.status = out_of_time         ? std::string(k_out_of_time) + "; fit stopped early"
-             : fit.nls.converged ? "fitted"
-                                 : "fitted; budget spent";
+  if (expired()) {
+    cut_short(fit);
+    return c;
+  }
+  c.status = fit.nls.converged ? "fitted" : "fitted; budget spent";
   if (!pinned.empty())
     c.status += fmt::format("; {} pinned at the given value (a gauge)", fmt::join(pinned, " "));
   if (!unexcited.empty())
@@ -877,7 +898,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
     std::vector<model::Model> trials(singles.size(), pm.model);
     std::vector<double> costs(singles.size(), std::numeric_limits<double>::infinity());
     parallel::for_each(singles.size(), 0, [&](std::size_t k) {
-      if (!singles[k].evaluated) return;
+      if (!singles[k].evaluated || std::chrono::steady_clock::now() >= settings.deadline) return;
       *std::find_if(trials[k].effects.begin(), trials[k].effects.end(), [](const auto& e) {
         return e.name == "param_mismatch";
       }) = *singles[k].model.effect("param_mismatch");

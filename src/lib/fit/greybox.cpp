@@ -424,7 +424,10 @@ void fit_warnings(const NlsResult& n, const std::vector<std::pair<double, double
       continue;
     }
     const double se = n.std_errors[i];
-    if (!std::isfinite(se)) {
+    if (n.stopped) {
+      add(Kind::undetermined, {n.names[k]},
+          fmt::format("{}: no standard error (the time budget cut the fit short)", n.names[k]));
+    } else if (!std::isfinite(se)) {
       add(Kind::undetermined, {n.names[k]},
           fmt::format("{}: not determined by the data (infinite standard error)", n.names[k]));
     } else if ((k < n.rough.size() && n.rough[k]) || se <= 1e-9 * std::abs(v)) {
@@ -608,7 +611,8 @@ FitResult fit_model(const FitProblem& problem) {
     model::set_parameter(result.model, specs[i].name, result.nls.values[static_cast<Eigen::Index>(i)]);
   }
   apply_ties(result.model, problem.ties);
-  result.runs = evaluate_model(result.model, problem.runs, problem.sim);
+  // A fit its time budget stopped starts no further simulation: the caller reports it cut short.
+  if (!result.nls.stopped) result.runs = evaluate_model(result.model, problem.runs, problem.sim);
   fit_warnings(result.nls, bounds, units, result);
   // Lag-1 autocorrelation of the residuals within each (run, output) block.
   double lag0 = 0.0;

@@ -278,6 +278,7 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
 
   NlsResult result;
   for (const auto& spec : specs) result.names.push_back(spec.name);
+  result.stopped = stopped;
   result.reason = stopped ? "stopped early (time budget spent)" : describe(status, result.converged);
   result.iterations = static_cast<int>(lm.iterations());
   result.evaluations = static_cast<int>(lm.nfev());
@@ -289,13 +290,23 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
     result.reason = "the model breaks down (non-finite output) at the solution";
   }
 
+  // A stopped fit spends no Jacobian on statistics: its budget is spent, and the caller reports
+  // the values it reached as such.
+  if (stopped) {
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    result.sigma = m > n ? std::sqrt(result.cost / static_cast<double>(m - n)) : nan;
+    result.std_errors = Eigen::VectorXd::Constant(n, nan);
+    result.correlation = Eigen::MatrixXd::Constant(n, n, nan);
+    result.correlation.diagonal().setOnes();
+    result.rough.assign(specs.size(), false);
+    return result;
+  }
   Eigen::MatrixXd jac_u;
   functor.jacobian(u, result.residuals, jac_u);
   // A discontinuity (a friction level at a breakaway) makes a small finite-difference step
   // see a jump: the column then shrinks in proportion to a larger step.
   result.rough.assign(specs.size(), false);
-  // A stopped fit skips the smoothness check (a second Jacobian): its budget is spent.
-  if (options.check_smoothness && !stopped) {
+  if (options.check_smoothness) {
     NlsOptions wide = options;
     wide.fd_step = 100.0 * options.fd_step;
     wide.central_differences = false;

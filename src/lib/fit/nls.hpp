@@ -46,8 +46,9 @@ struct NlsOptions {
   /// Check at the optimum whether the residual is smooth in each parameter (NlsResult::rough),
   /// at the cost of one more Jacobian.
   bool check_smoothness = true;
-  /// Asked before every iteration: true stops the solver there (a time budget), with the
-  /// result so far (the start, when it is true at once), not converged. Empty: never stops.
+  /// Asked before every iteration and every evaluation inside one: true stops the solver there
+  /// (a time budget), with the result so far (the start, when it is true at once), not
+  /// converged and without statistics (NlsResult::stopped). Empty: never stops.
   std::function<bool()> stop;
 };
 
@@ -70,6 +71,9 @@ struct NlsResult {
   /// standard error from the local Jacobian means nothing.
   std::vector<bool> rough;
   bool converged = false;
+  /// The caller's stop ended the fit (a time budget): the values are the last accepted step's,
+  /// and no Jacobian is spent on statistics (standard errors and correlations NaN, nothing rough).
+  bool stopped = false;
   std::string reason;  ///< why the solver stopped, in words
   int iterations = 0;
   int evaluations = 0;
