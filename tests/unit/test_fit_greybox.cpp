@@ -325,8 +325,8 @@ TEST(FitGreybox, TimeRangeOmegaAndFixedValues) {
 // from another, the updated solver lands where the finite-difference one does, for every
 // effect's fitted parameters: within 2 % of the standard error (plus 1e-6 relative), with
 // standard errors within 2 %; where the residual is not smooth at the optimum in one of the
-// effect's parameters (NlsResult::rough), within 2.5 standard errors. Effects the run does not determine (infinite error, or a fit
-// that does not converge) are counted apart; most must be checked.
+// effect's parameters (NlsResult::rough), within 2.5 standard errors. Effects the run does not determine
+// (infinite error, or a fit that does not converge) are counted apart; most must be checked.
 TEST(FitGreybox, BroydenUpdatesFitEveryEffectAsFiniteDifferencesDo) {
   Program p;
   p.hold(0.0, 0.05, 0).hold(6.0, 0.25, 0).hold(-5.0, 0.25, 0).hold(1.2, 0.2, 0);
