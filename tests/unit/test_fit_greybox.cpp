@@ -366,5 +366,71 @@ TEST(FitGreybox, TimeRangeOmegaAndFixedValues) {
   EXPECT_EQ(error_of([&] { fix_parameters(m, {"motor.R_ohm=x"}); }), "--fix: motor.R_ohm: invalid number 'x'");
 }
 
+// The gap search fits each catalog effect with Broyden updates between finite-difference
+// Jacobians (NlsOptions::broyden): on a run with the effect at a value of its grid, started
+// from another, the updated solver lands where the finite-difference one does, for every
+// effect's fitted parameters: within 2 % of the standard error (plus 1e-6 relative), with
+// standard errors within 2 %; where the residual is not smooth at the optimum in one of the
+// effect's parameters (NlsResult::rough), within 2.5 standard errors. Effects the run does not determine
+// (infinite error, or a fit that does not converge) are counted apart; most must be checked.
+TEST(FitGreybox, BroydenUpdatesFitEveryEffectAsFiniteDifferencesDo) {
+  Program p;
+  p.hold(0.0, 0.05, 0).hold(6.0, 0.25, 0).hold(-5.0, 0.25, 0).hold(1.2, 0.2, 0);
+  p.hold(8.0, 0.25, 2).hold(11.0, 0.25, 2, 5.6).hold(3.0, 0.2, 2, 5.6).hold(-6.0, 0.25, 2);
+  int checked = 0;
+  std::vector<std::string> unchecked;
+  for (const model::EffectSpec& spec : model::effect_catalog()) {
+    const model::EffectPlan& plan = spec.plan;
+    if (!plan.candidate || plan.free.empty()) continue;
+    const model::Model nominal;
+    const std::vector<double> scale = plan.grid_scale != nullptr ? plan.grid_scale(nominal.params)
+                                                                 : std::vector<double>(plan.free.size(), 1.0);
+    model::Model truth = nominal;
+    model::Model start = nominal;
+    truth.effects.push_back(model::default_effect(spec.name));
+    start.effects.push_back(model::default_effect(spec.name));
+    FitProblem problem;
+    for (std::size_t k = 0; k < plan.free.size(); ++k) {
+      if (plan.free[k] == plan.angle_order_key) continue;
+      const auto& grid = plan.grid[k];
+      truth.effects.back().set(plan.free[k], grid[grid.size() > 1 ? 1 : 0] * scale[k]);
+      start.effects.back().set(plan.free[k], grid[0] * scale[k] * (grid.size() > 1 ? 1.0 : 1.3));
+      problem.free.push_back(spec.name + "." + plan.free[k]);
+    }
+    problem.runs.push_back(make_run(measure(truth, p.inputs, 31), {}, nominal.params));
+    problem.model = start;
+    problem.sim.smooth_stick = plan.friction;
+    problem.nls.max_evaluations = 60 * static_cast<int>(problem.free.size() + 1);
+    const FitResult fd = fit_model(problem);
+    problem.nls.broyden = true;
+    const FitResult updated = fit_model(problem);
+    if (!fd.nls.converged || !fd.nls.std_errors.allFinite()) {
+      unchecked.push_back(spec.name);
+      continue;
+    }
+    ++checked;
+    EXPECT_TRUE(updated.nls.converged) << spec.name << ": " << updated.nls.reason;
+    // Not smooth at the optimum (a clutch event moves with it): the two paths may stop at
+    // different points of the rough floor, within the error.
+    const auto is_rough = [](const FitResult& f) {
+      return std::find(f.nls.rough.begin(), f.nls.rough.end(), true) != f.nls.rough.end();
+    };
+    const bool rough = is_rough(fd) || is_rough(updated);
+    for (Eigen::Index i = 0; i < fd.nls.values.size(); ++i) {
+      const double v = fd.nls.values[i];
+      const double se = fd.nls.std_errors[i];
+      const std::string& name = fd.nls.names[static_cast<std::size_t>(i)];
+      if (rough) {
+        const double wider = std::max(se, updated.nls.std_errors[i]);
+        EXPECT_NEAR(updated.nls.values[i], v, 2.5 * wider) << name << " +- " << wider << " (rough)";
+        continue;
+      }
+      EXPECT_NEAR(updated.nls.values[i], v, 0.02 * se + 1e-6 * std::abs(v)) << name << " +- " << se;
+      EXPECT_NEAR(updated.nls.std_errors[i], se, 0.02 * se) << name;
+    }
+  }
+  EXPECT_GE(checked, 8) << "not determined by the run: " << ::testing::PrintToString(unchecked);
+}
+
 }  // namespace
 }  // namespace mcg::fit

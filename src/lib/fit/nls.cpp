@@ -1,15 +1,15 @@
 // Levenberg-Marquardt via Eigen's unsupported module (a port of MINPACK's lmder).
 #include "fit/nls.hpp"
 
-#include "common/error.hpp"
-#include "common/parallel.hpp"
-
 #include <Eigen/SVD>
-#include <unsupported/Eigen/LevenbergMarquardt>
-
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <unsupported/Eigen/LevenbergMarquardt>
+
+#include "common/error.hpp"
+#include "common/parallel.hpp"
 
 namespace mcg::fit {
 
@@ -61,6 +61,10 @@ void sanitise(Eigen::VectorXd& r) {
 /// iteration is abandoned, its parameters are those of the last accepted step.
 struct Interrupted {};
 
+/// Thrown out of a second trial step on a Broyden-updated Jacobian (NlsOptions::broyden): the
+/// iteration is abandoned at the last accepted point and redone on finite differences.
+struct Refresh {};
+
 struct Functor : Eigen::DenseFunctor<double> {
   const Coordinates& coords;
   const ResidualFunction& residuals;
@@ -72,6 +76,7 @@ struct Functor : Eigen::DenseFunctor<double> {
 
   void evaluate(const Eigen::VectorXd& u, Eigen::VectorXd& r) const {
     if (interruptible && options.stop && options.stop()) throw Interrupted{};
+    m_simulations.fetch_add(1, std::memory_order_relaxed);
     r.resize(values());
     residuals(coords.to_physical(u), r);
     sanitise(r);
@@ -104,7 +109,10 @@ struct Functor : Eigen::DenseFunctor<double> {
     remember(u, r);
   }
 
+  /// The solver's own evaluations: its start, and the trial steps of an iteration.
   int operator()(const InputType& u, ValueType& r) const {
+    if (m_trials > 0 && !m_jac_fd) throw Refresh{};
+    if (m_jac_u.size() > 0) ++m_trials;
     at(u, r);
     return 0;
   }
@@ -139,17 +147,83 @@ struct Functor : Eigen::DenseFunctor<double> {
   /// last): the budget then stops a fit where it always did, and the lookup only saves time.
   int df(const InputType& u, JacobianType& jac) const {
     Eigen::VectorXd r0;
-    if (!options.central_differences) at(u, r0);
+    if (!options.central_differences || options.broyden) at(u, r0);
+    m_trials = 0;
+    if (options.broyden && !m_force_fd && m_jac_u.size() == u.size()) {
+      const Eigen::VectorXd du = u - m_jac_u;
+      const double du2 = du.squaredNorm();
+      if (du2 > 0.0) {
+        m_jac += (r0 - m_jac_r - m_jac * du) * (du.transpose() / du2);
+        jac = m_jac;
+        m_jac_u = u;
+        m_jac_r = r0;
+        m_jac_fd = false;
+        ++m_broyden_jacobians;
+        return 0;  // no evaluation
+      }
+    }
     jacobian(u, r0, jac);
+    m_jac = jac;
+    m_jac_u = u;
+    m_jac_r = r0;
+    m_jac_fd = true;
+    m_force_fd = false;
+    ++m_fd_jacobians;
     const int per_column = options.central_differences ? 2 : 1;
     return per_column * inputs() + (options.central_differences ? 0 : 1);
   }
+
+  /// The Jacobian at u for the statistics: the solver's last one when it is a finite-difference
+  /// Jacobian at u (the solver stopped where it differentiated), else a new one.
+  void final_jacobian(const Eigen::VectorXd& u, const Eigen::VectorXd& r, JacobianType& jac) const {
+    if (m_jac_fd && m_jac_u.size() == u.size() && (m_jac_u.array() == u.array()).all()) {
+      jac = m_jac;
+      return;
+    }
+    jacobian(u, r, jac);
+  }
+
+  /// The last Jacobian the solver used was a Broyden update.
+  bool on_broyden() const { return m_jac_u.size() > 0 && !m_jac_fd; }
+  /// The next Jacobian by finite differences.
+  void refresh() const { m_force_fd = true; }
+
+  int simulations() const { return m_simulations.load(); }
+  int fd_jacobians() const { return m_fd_jacobians; }
+  int broyden_jacobians() const { return m_broyden_jacobians; }
 
  private:
   mutable Eigen::VectorXd m_best_u;
   mutable Eigen::VectorXd m_best_r;
   mutable double m_best_cost = 0.0;
+  mutable std::atomic<int> m_simulations{0};
+  /// The solver's last Jacobian (before its QR factorisation), where and how it was made.
+  mutable Eigen::MatrixXd m_jac;
+  mutable Eigen::VectorXd m_jac_u;
+  mutable Eigen::VectorXd m_jac_r;
+  mutable bool m_jac_fd = false;
+  mutable bool m_force_fd = true;
+  mutable int m_trials = 0;  ///< trial steps on the current Jacobian
+  mutable int m_fd_jacobians = 0;
+  mutable int m_broyden_jacobians = 0;
 };
+
+/// A status of a convergence test (the solver stands at its optimum).
+bool converged_status(Eigen::LevenbergMarquardtSpace::Status status) {
+  using namespace Eigen::LevenbergMarquardtSpace;
+  switch (status) {
+    case RelativeReductionTooSmall:
+    case RelativeErrorTooSmall:
+    case RelativeErrorAndReductionTooSmall:
+    case CosinusTooSmall:
+    case FtolTooSmall:
+    case XtolTooSmall:
+    case GtolTooSmall:
+      return true;
+    default:
+      return false;
+  }
+}
 
 std::string describe(Eigen::LevenbergMarquardtSpace::Status status, bool& converged) {
   using namespace Eigen::LevenbergMarquardtSpace;
@@ -268,7 +342,19 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
       do {
         stopped = options.stop && options.stop();
         if (stopped) break;
-        status = lm.minimizeOneStep(u);
+        try {
+          status = lm.minimizeOneStep(u);
+        } catch (const Refresh&) {
+          status = Eigen::LevenbergMarquardtSpace::Running;
+          functor.refresh();
+          continue;
+        }
+        // A convergence test met on an updated Jacobian may be the update's error: go on from
+        // there on finite differences.
+        if (converged_status(status) && functor.on_broyden()) {
+          status = Eigen::LevenbergMarquardtSpace::Running;
+          functor.refresh();
+        }
       } while (status == Eigen::LevenbergMarquardtSpace::Running);
     } catch (const Interrupted&) {
       stopped = true;
@@ -302,7 +388,7 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
     return result;
   }
   Eigen::MatrixXd jac_u;
-  functor.jacobian(u, result.residuals, jac_u);
+  functor.final_jacobian(u, result.residuals, jac_u);
   // A discontinuity (a friction level at a breakaway) makes a small finite-difference step
   // see a jump: the column then shrinks in proportion to a larger step.
   result.rough.assign(specs.size(), false);
@@ -313,6 +399,7 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
     const Functor coarse(coords, residuals, wide, n, m);
     Eigen::MatrixXd jac_wide;
     coarse.jacobian(u, result.residuals, jac_wide);
+    result.simulations += coarse.simulations();
     for (Eigen::Index j = 0; j < n; ++j) {
       const double a = jac_u.col(j).norm();
       const double b = jac_wide.col(j).norm();
@@ -320,6 +407,9 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
       result.rough[static_cast<std::size_t>(j)] = std::isfinite(a) && std::isfinite(b) && d > 0.5 * std::max(a, b);
     }
   }
+  result.simulations += 1 + functor.simulations();  // the start, evaluated outside the solver
+  result.fd_jacobians = functor.fd_jacobians();
+  result.broyden_jacobians = functor.broyden_jacobians();
   const Eigen::VectorXd dp_du = coords.derivative(result.values);
   const Eigen::MatrixXd jac_p = jac_u * dp_du.cwiseInverse().asDiagonal();
   // A log parameter driven to its zero bound (many orders of magnitude below its start) has a

@@ -43,6 +43,13 @@ struct NlsOptions {
   /// parallel::Pool, or every core outside one). The residual function must then be safe to
   /// call concurrently; it sees the same value in FitProblem's simulations of its runs.
   unsigned threads = 1;
+  /// Between finite-difference Jacobians, update the last one by Broyden's rank-one formula
+  ///   J+ = J + (dr - J du) du^T / |du|^2   (du, dr: the accepted step and its change of r)
+  /// instead of simulating a column per parameter. An updated Jacobian gets one trial step: a
+  /// rejected trial, or a convergence test met on it, has the next Jacobian by finite
+  /// differences, so the solver stops only on a finite-difference Jacobian, and the statistics
+  /// at the optimum always use one.
+  bool broyden = false;
   /// Check at the optimum whether the residual is smooth in each parameter (NlsResult::rough),
   /// at the cost of one more Jacobian.
   bool check_smoothness = true;
@@ -77,6 +84,12 @@ struct NlsResult {
   std::string reason;  ///< why the solver stopped, in words
   int iterations = 0;
   int evaluations = 0;
+  /// Residual evaluations made, Jacobian columns and the statistics' Jacobian included (each
+  /// point once: a point evaluated before is looked up).
+  int simulations = 0;
+  /// Jacobians by finite differences and by Broyden updates (NlsOptions::broyden).
+  int fd_jacobians = 0;
+  int broyden_jacobians = 0;
 };
 
 /// Fills r (size m, preallocated) with the residuals at parameter values p (physical
