@@ -220,7 +220,7 @@ TEST(FitFrictionDirect, TorqueAndPositionColumnsWithInertia) {
   t.set("theta", position);
   t.set("torque", torque);
   FrictionOptions options;
-  options.torque_column = "torque";
+  options.drive.torque_column = "torque";
   options.position_column = "theta";
   options.fit_inertia = true;
   options.offset = true;
@@ -235,6 +235,71 @@ TEST(FitFrictionDirect, TorqueAndPositionColumnsWithInertia) {
   EXPECT_NEAR(st.total.value.viscous[0], rig.params.motor.friction.viscous[0], 0.15 * rig.params.motor.friction.viscous[0]);
   EXPECT_NEAR(st.offset, 0.0, 4.0 * st.offset_se);
   EXPECT_GT(st.inertia_se, 0.0);
+}
+
+// A gearmotor's servo logs the torque and the position at its output shaft: the friction is the
+// motor shaft's (speed times the ratio, torque over it), as DriveInput reads a torque column in
+// mcg-fit model and gap. Read undivided, Tc and J came out 30 times the motor's.
+TEST(FitFrictionDirect, ATorqueColumnActsAtTheMeasuredShaft) {
+  const model::Model rig;
+  const double gear = 30.0;
+  Program p;
+  for (const double v : {3.0, 8.0, -5.0, 12.0, -10.0, 6.0, -2.0, 14.0, -14.0, 4.0}) {
+    p.hold(v, 0.5, 0).ramp(v, -0.5 * v, 0.4, 0);
+  }
+  const model::Outputs out = model::simulate(rig, p.inputs);
+  table::Table t;
+  t.source = "gearmotor.csv";
+  std::vector<double> torque, position;
+  for (std::size_t k = 0; k < out.i_A.size(); ++k) {
+    torque.push_back(gear * rig.params.motor.Kt_Nm_A * out.i_A[k]);
+    position.push_back(out.theta_rad[k] / gear);
+  }
+  t.set("t", p.inputs.t_s);
+  t.set("theta", position);
+  t.set("torque", torque);
+  FrictionOptions options;
+  options.drive.torque_column = "torque";
+  options.position_column = "theta";
+  options.gear_ratio_override = gear;
+  options.fit_inertia = true;
+  options.static_friction = false;
+  options.settle_s = 0.0;
+  options.window_s = 0.02;
+  const FrictionResult r = fit_friction({t}, rig.params, options);
+  ASSERT_EQ(r.states.size(), 1U);
+  const auto& st = r.states[0];
+  EXPECT_NEAR(st.inertia, rig.params.motor.J_kg_m2, 0.03 * rig.params.motor.J_kg_m2);
+  EXPECT_NEAR(st.total.value.Tc_Nm, rig.params.motor.friction.Tc_Nm, 0.05 * rig.params.motor.friction.Tc_Nm);
+}
+
+// A current-driven drive's i is the drive torque Kt i, whatever --no-current says; without an
+// i column it names the missing column.
+TEST(FitFrictionDirect, ACurrentDrivenDrivesThroughItsCommand) {
+  const model::Model rig;
+  Program p;
+  for (const double v : {3.0, 8.0, -5.0, 12.0, -10.0, 6.0, -2.0, 14.0, -14.0, 4.0}) p.hold(v, 0.5, 0);
+  const model::Outputs out = model::simulate(rig, p.inputs);
+  table::Table t;
+  t.source = "servo.csv";
+  t.set("t", p.inputs.t_s);
+  t.set("omega", out.omega_rad_s);
+  t.set("i", out.i_A);
+  FrictionOptions options;
+  options.drive.current = true;
+  options.use_current = false;
+  options.order = 1;
+  options.static_friction = false;
+  const FrictionResult r = fit_friction({t}, rig.params, options);
+  ASSERT_EQ(r.states.size(), 1U);
+  EXPECT_TRUE(r.states[0].from_current);
+  EXPECT_NEAR(r.states[0].total.value.Tc_Nm, rig.params.motor.friction.Tc_Nm,
+              0.1 * rig.params.motor.friction.Tc_Nm);
+  table::Table no_i = t;
+  no_i.names.pop_back();
+  no_i.columns.pop_back();
+  EXPECT_EQ(test::error_of([&] { fit_friction({no_i}, rig.params, options); }),
+            "servo.csv: missing column 'i' (has: t,omega)");
 }
 
 /// Holds of a driven shaft whose friction each hold sees shifted by its own bias (a real
@@ -277,7 +342,7 @@ TEST(FitFrictionDirect, StandardErrorsSeeWhatAHoldsWindowsShare) {
     tab.set("torque", torque);
     FrictionOptions options;
     options.order = 1;
-    options.torque_column = "torque";
+    options.drive.torque_column = "torque";
     options.position_column = "theta";
     options.static_friction = false;
     const FrictionResult r = fit_friction({tab}, model::Params{}, options);

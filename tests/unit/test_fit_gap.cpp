@@ -1,14 +1,6 @@
 // The gap diagnosis: residual analysis in closed form and data preparation. The diagnoses
 // of runs with withheld effects run the Release tools in tests/sh/test_gap.sh (each one
 // simulates hundreds of runs: too slow for the sanitizer build of these tests).
-#include "common/error.hpp"
-#include "fit/diag_residual.hpp"
-#include "fit/gap.hpp"
-#include "fit/gap_parts.hpp"
-#include "sim/encoder.hpp"
-#include "sim/run.hpp"
-#include "table/table.hpp"
-
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -16,6 +8,15 @@
 #include <numbers>
 #include <random>
 #include <sstream>
+
+#include "common/error.hpp"
+#include "common/units.hpp"
+#include "fit/diag_residual.hpp"
+#include "fit/gap.hpp"
+#include "fit/gap_parts.hpp"
+#include "sim/encoder.hpp"
+#include "sim/run.hpp"
+#include "table/table.hpp"
 
 namespace mcg::fit {
 namespace {
@@ -614,6 +615,163 @@ TEST(GapSearch, EarlyRejectionKeepsTheDiagnosisAndItsParameters) {
   EXPECT_EQ(a.free, b.free);
   EXPECT_EQ(a.values, b.values);
   EXPECT_EQ(a.score, b.score);
+}
+
+/// A current-driven motor alone as a servo logs it: the current loop's command `i` held at
+/// `levels_A` for `hold_s` each, the speed as omega with 0.5 rad/s of white noise (seeded).
+table::Table current_driven(const model::Model& rig, const std::vector<double>& levels_A, double hold_s,
+                            std::uint64_t seed, const std::string& name) {
+  model::Inputs in;
+  for (const double level : levels_A) {
+    for (int k = 0; k < static_cast<int>(std::lround(hold_s * 1000.0)); ++k) {
+      in.t_s.push_back(1e-3 * static_cast<double>(in.t_s.size()));
+      in.v_V.push_back(0.0);
+      in.clutch.push_back(0.0);
+      in.r_load_ohm.push_back(k_inf);
+      in.i_cmd_A.push_back(level);
+    }
+  }
+  const model::Outputs out = model::simulate(rig, in);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, 0.5);
+  std::vector<double> omega = out.omega_rad_s;
+  for (double& w : omega) w += noise(rng);
+  table::Table t;
+  t.source = name;
+  t.set("t", in.t_s);
+  t.set("i", in.i_cmd_A);
+  t.set("omega", omega);
+  return t;
+}
+
+/// What a current-driven drive's command does (0.1-0.2 A: 0.5 A would spin the unloaded rig to
+/// 2000 rad/s), and the runs gap prepares from it: the truth has 30 % more inertia and a 4 ms
+/// dead time, which the refit of the nominal parameters cannot take up.
+GapData current_driven_data() {
+  model::Model truth;
+  truth.params.motor.J_kg_m2 *= 1.3;
+  truth.effects.push_back(model::parse_effect("dead_time:tau_d_s=0.004"));
+  const table::Table train =
+      current_driven(truth, {0.15, 0.2, 0.0, -0.12, -0.2, 0.0, 0.18, -0.15}, 0.3, 1, "train.csv");
+  const table::Table validate = current_driven(truth, {0.18, 0.0, -0.16, 0.12, -0.2}, 0.3, 2, "validate.csv");
+  DriveInput drive;
+  drive.current = true;
+  return prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6, false, drive);
+}
+
+// An ideal current loop overrides the bridge and the motor's circuit: the effects that act there
+// (each plan says where it acts) cannot show on a current-driven motor alone and are listed as
+// not applicable, never fitted; with the engaged generator on a load, its circuit shows the
+// brush drop and the heating. The residual's independence is checked against the drive's input,
+// the current command (v is 0 throughout).
+TEST(GapDrive, EffectsTheCurrentLoopOverridesAreNotApplicable) {
+  const GapData data = current_driven_data();
+  const auto spec = [](std::string_view name) { return model::find_effect(name)->plan; };
+  const std::string why = "not applicable to a current-driven drive";
+  for (const char* name : {"supply_sag", "hbridge", "brush_drop", "thermal"})
+    EXPECT_EQ(gap_detail::not_applicable(spec(name), data.train), why) << name;
+  for (const char* name : {"dead_time", "friction_levels", "cogging", "stribeck"})
+    EXPECT_EQ(gap_detail::not_applicable(spec(name), data.train), "") << name;
+  std::vector<fit::Run> loaded = data.train;
+  loaded.front().inputs.clutch.assign(loaded.front().inputs.clutch.size(), 2.0);
+  loaded.front().inputs.r_load_ohm.assign(loaded.front().inputs.clutch.size(), 4.0);
+  EXPECT_EQ(gap_detail::not_applicable(spec("brush_drop"), loaded), "");
+  EXPECT_EQ(gap_detail::not_applicable(spec("thermal"), loaded), "");
+  EXPECT_EQ(gap_detail::not_applicable(spec("hbridge"), loaded), why);
+  loaded.front().inputs.i_cmd_A.clear();
+  EXPECT_EQ(gap_detail::not_applicable(spec("hbridge"), loaded), "");
+
+  GapSettings settings;
+  settings.threads = 2;
+  for (const model::EffectSpec& e : model::effect_catalog()) {
+    if (e.plan.candidate && e.plan.acts == model::EffectPlan::Acts::anywhere)
+      settings.excluded.push_back(e.name);
+  }
+  const GapReport report = diagnose_gap(model::Model{}, data, settings);
+  std::size_t listed = 0;
+  for (const GapCandidate& c : report.candidates) {
+    if (c.name == "param_mismatch" || c.name == "none" || c.name == "unexplained") continue;
+    EXPECT_EQ(c.status, why) << c.name;
+    EXPECT_FALSE(c.evaluated) << c.name;
+    ++listed;
+  }
+  EXPECT_EQ(listed, 4U);
+  EXPECT_EQ(report.drive_input, "i");
+  // A residual the dead time leaves after each step of the command: correlated with it.
+  EXPECT_FALSE(report.white_before.independent());
+  EXPECT_GT(report.white_before.max_cross, 0.2);
+}
+
+// gap's standard errors are the fit's widened for the residuals' autocorrelation
+// (FitResult::reported_se, as mcg-fit model reports them): the refit of the nominal parameters,
+// whose residual the withheld dead time leaves strongly autocorrelated, carries the errors the
+// fit gives at its values times the widening.
+TEST(GapSearch, StandardErrorsAreWidenedForAutocorrelation) {
+  const GapData data = current_driven_data();
+  GapSettings settings;
+  settings.threads = 2;
+  for (const model::EffectSpec& e : model::effect_catalog()) {
+    if (e.plan.candidate) settings.excluded.push_back(e.name);
+  }
+  const GapReport report = diagnose_gap(model::Model{}, data, settings);
+  const auto pm = std::find_if(report.candidates.begin(), report.candidates.end(),
+                               [](const GapCandidate& c) { return c.name == "param_mismatch"; });
+  ASSERT_NE(pm, report.candidates.end());
+  ASSERT_FALSE(pm->free.empty());
+  // The fit's errors at the candidate's values: a fit stopped before its first iteration.
+  FitProblem problem;
+  problem.model = pm->model;
+  problem.runs = data.train;
+  problem.free = pm->free;
+  problem.nls.stop = [] { return true; };
+  const FitResult at = fit_model(problem);
+  EXPECT_GT(at.se_widening, 2.0);
+  std::size_t finite = 0;
+  for (std::size_t k = 0; k < pm->free.size(); ++k) {
+    if (!std::isfinite(at.reported_se(k))) continue;  // undetermined either way
+    ++finite;
+    EXPECT_NEAR(pm->std_errors[k], at.reported_se(k), 0.02 * at.reported_se(k)) << pm->free[k];
+    EXPECT_GT(pm->std_errors[k], 2.0 * at.nls.std_errors[static_cast<Eigen::Index>(k)]) << pm->free[k];
+  }
+  EXPECT_GE(finite, 2U);
+}
+
+// The friction candidates start from what a current-driven run's command shows: the friction
+// estimate reads the drive torque as Kt i of the command, not a voltage balance of a v that is 0
+// throughout (which put the levels at the floor of their range).
+TEST(GapFrictionStart, ACurrentDrivenRunStartsFromItsCommand) {
+  model::Model truth;
+  truth.params.motor.friction.viscous = {2e-5, 0.0, 0.0};  // a time constant J / c1 of 0.35 s
+  model::Model given = truth;
+  given.params.motor.friction.Tc_Nm = 0.0;
+  given.params.motor.friction.Ts_Nm = 0.0;
+  const table::Table t = current_driven(truth, {0.0, 0.12, 0.0, -0.15, 0.0, 0.2, 0.0, -0.11, 0.0, 0.17, -0.2},
+                                        1.5, 3, "servo.csv");
+  DriveInput drive;
+  drive.current = true;
+  const GapData data = prepare_gap_data({t}, {t}, truth.params, 0.6, false, drive);
+  const auto starts = gap_detail::data_friction_starts(given, data.train);
+  ASSERT_EQ(starts.count("friction_levels"), 1U);
+  const double tc = truth.params.motor.friction.Tc_Nm;
+  EXPECT_NEAR(starts.at("friction_levels")[0], tc, 0.15 * tc);
+}
+
+// The training RMS is the speed's, in the runs' unit (omega as well as rpm), simulated as the fit
+// it comes from simulated (its SimOptions: the regularised stick for friction).
+TEST(GapSearch, TrainingRmsUsesTheFitsSimulationAndAnySpeedColumn) {
+  GapData data = current_driven_data();
+  const model::Model model;
+  const double exact = gap_detail::training_speed_rms(model, data.train);
+  model::SimOptions smooth;
+  smooth.smooth_stick = true;
+  const double regularised = gap_detail::training_speed_rms(model, data.train, smooth);
+  EXPECT_TRUE(std::isfinite(exact));
+  EXPECT_NE(exact, regularised);
+  // The same run read as omega, rad/s: the RMS in rad/s.
+  fit::Run& run = data.train.front();
+  for (double& y : run.measured.front()) y *= k_rad_s_per_rpm;
+  run.outputs.front() = "omega";
+  EXPECT_NEAR(gap_detail::training_speed_rms(model, data.train), exact * k_rad_s_per_rpm, 1e-9 * exact);
 }
 
 }  // namespace

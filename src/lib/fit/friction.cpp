@@ -64,18 +64,23 @@ double largest(const std::vector<double>& torque, int d, std::size_t from, std::
   return best;
 }
 
-void collect(const table::Table& table, const model::Params& p, const FrictionOptions& options,
+void collect(const table::Table& logged, const model::Params& p, const FrictionOptions& options,
              std::map<int, StateData>& states, std::size_t& block) {
-  table::require_increasing(table, "t");
-  if (table.rows() < k_min_rows) fail("{}: too short: {} rows (at least {} needed)", table.source, table.rows(), k_min_rows);
+  table::require_increasing(logged, "t");
+  if (logged.rows() < k_min_rows)
+    fail("{}: too short: {} rows (at least {} needed)", logged.source, logged.rows(), k_min_rows);
+  const table::Table table = with_speed_from_position(logged, options.position_column);
+  const DriveInput& drive_input = options.drive;
+  if (drive_input.current && !drive_input.torque_column.empty())
+    fail("a drive is current- or torque-driven, not both");
   model::Inputs in;
   in.t_s = table.col("t");
   const std::size_t n = table.rows();
-  const bool direct = !options.torque_column.empty();
+  const bool direct = !drive_input.torque_column.empty();
   if (!table.has("v") && table.has("duty")) {
     in.v_V = table.col("duty");
     for (double& v : in.v_V) v *= p.supply_V;
-  } else if (direct && !table.has("v")) {
+  } else if (!drive_input.voltage() && !table.has("v")) {
     in.v_V.assign(n, 0.0);
   } else {
     in.v_V = table.col("v");
@@ -85,16 +90,7 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
   in.r_load_ohm = table.has("r_load") ? table.col("r_load") : std::vector<double>(n, model::k_open_circuit);
   model::validate_inputs(in, table.source, table.first_line);
   std::vector<double> omega;
-  if (!options.position_column.empty()) {
-    table::require_finite(table, options.position_column);
-    const auto& x = table.col(options.position_column);
-    omega.resize(n);
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::size_t a = k > 0 ? k - 1 : 0;
-      const std::size_t b = k + 1 < n ? k + 1 : n - 1;
-      omega[k] = (x[b] - x[a]) / (in.t_s[b] - in.t_s[a]);
-    }
-  } else if (table.has("rpm") || !table.has("omega")) {
+  if (table.has("rpm") || !table.has("omega")) {
     omega = table.col("rpm");
     for (double& w : omega) w *= k_rad_s_per_rpm;
   } else {
@@ -105,9 +101,12 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
   const double gear = measurement::settle_gear_ratio(stated.gear_ratio, options.gear_ratio_ini,
                                                      options.gear_ratio_override, table.source);
   for (double& w : omega) w *= gear;
-  const std::vector<double>* current = options.use_current && table.has("i") ? &table.col("i") : nullptr;
+  // A current-driven drive's `i` is its command: the drive torque, not a reading to do without.
+  const std::vector<double>* current = drive_input.current                     ? &table.col("i")
+                                       : options.use_current && table.has("i") ? &table.col("i")
+                                                                               : nullptr;
   const std::vector<double>* current_gen = options.use_current && table.has("i_gen") ? &table.col("i_gen") : nullptr;
-  const std::vector<double>* torque = direct ? &table.col(options.torque_column) : nullptr;
+  const std::vector<double>* torque = direct ? &table.col(drive_input.torque_column) : nullptr;
 
   const auto& m = p.motor;
   std::vector<double> drive(n);
@@ -115,8 +114,9 @@ void collect(const table::Table& table, const model::Params& p, const FrictionOp
   for (std::size_t k = 0; k < n; ++k) {
     const double v = std::clamp(in.v_V[k], -p.supply_V, p.supply_V);
     if (torque != nullptr) {
+      // The logged torque acts at the measured shaft: the motor's is it over the gear ratio.
       measured[k] = std::isfinite((*torque)[k]);
-      drive[k] = (*torque)[k];
+      drive[k] = (*torque)[k] / gear;
       continue;
     }
     measured[k] = current != nullptr && std::isfinite((*current)[k]);

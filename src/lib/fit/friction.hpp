@@ -3,15 +3,16 @@
 // the generator.
 #pragma once
 
-#include "model/model.hpp"
-#include "table/table.hpp"
-
 #include <array>
 #include <cstddef>
 #include <limits>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "fit/greybox.hpp"
+#include "model/model.hpp"
+#include "table/table.hpp"
 
 namespace mcg::fit {
 
@@ -29,13 +30,15 @@ struct FrictionOptions {
   /// Estimate the static level from starts from rest. Off for runs that never rest (a
   /// closed loop that keeps the shaft moving): then Ts is reported equal to Tc.
   bool static_friction = true;
-  /// Column holding the drive torque (N m; N on a linear axis) itself, e.g. a force computed
-  /// by a current-driven amplifier's controller: used instead of Kt i or the voltage balance
-  /// (no machine constant needed). Runs without clutch or r_load are then the motor alone
-  /// (clutch 0, relay open) and need no v.
-  std::string torque_column;
+  /// What drives the rig, as mcg-fit model and gap read it (DriveInput, its one owner): a
+  /// current-driven drive's `i` is the drive torque Kt i whatever use_current says; a
+  /// torque-driven drive's column (N m at the measured shaft; N on a linear axis), e.g. a force
+  /// computed by a current-driven amplifier's controller, is the motor's torque column /
+  /// gear ratio (no machine constant needed). Such runs need no v.
+  DriveInput drive;
   /// Column holding the measured position (rad; m on a linear axis): the speed is its central
-  /// difference instead of a measured rpm/omega.
+  /// difference (with_speed_from_position, as model and gap take it) instead of a measured
+  /// rpm/omega.
   std::string position_column;
   /// Estimate the inertia (kg m^2; kg on a linear axis) with the friction: the windows are
   /// regressed on the mean acceleration too, instead of subtracting J dw/dt with J from

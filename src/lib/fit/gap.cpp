@@ -111,7 +111,7 @@ std::string alike_one_way(const GapReport& report, const GapData& data) {
   };
   const auto shape_of = [&](std::string_view name) {
     const model::EffectSpec* spec = model::find_effect(name);
-    if (spec == nullptr) return Shape::none;
+    if (spec == nullptr || !not_applicable(spec->plan, data.train).empty()) return Shape::none;
     for (const model::TermSeed& rule : spec->plan.seeded_by) {
       if (alike(rule.shape)) return rule.shape;
     }
@@ -210,6 +210,7 @@ void seed_catalog(GapReport& report, const GapData& data, const GapSettings& set
       continue;
     }
     const model::EffectSpec* spec = model::find_effect(seed.name);
+    if (!not_applicable(spec->plan, data.train).empty()) continue;
     FitProblem problem;
     problem.model = reference.model;
     problem.model.effects.push_back(seed);
@@ -255,7 +256,7 @@ void seed_catalog(GapReport& report, const GapData& data, const GapSettings& set
     c.rms = ev.rms;
     c.fpe = fpe(ev.score, reference.free.size() + c.free.size(),
                 static_cast<double>(report.validation_samples * outputs));
-    c.train_rms_rpm = training_rms_rpm(fit.model, data.train);
+    c.train_rms_rpm = training_speed_rms(fit.model, data.train, problem.sim);
     c.significant = true;
     c.evaluated = true;
     c.warnings = fit.warnings;
@@ -279,6 +280,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   GapReport report;
   report.split_note = data.split_note;
   report.speed_unit = data.speed_unit;
+  report.drive_input = drive_name(data.validate.front().run);
   report.validation_samples = validation_count(data);
   report.floors = noise_floors(data);
   const std::size_t outputs = report.floors.size();

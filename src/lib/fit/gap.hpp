@@ -258,6 +258,9 @@ struct GapReport {
   std::vector<RegimeStat> bands_before, bands_after;
   std::vector<RegimeStat> current_regimes_before, current_regimes_after;
   Whiteness white_before, white_after;
+  /// The drive's input the residual is checked for independence of (drive_name: "v", "i", the
+  /// torque column).
+  std::string drive_input = "v";
   /// Per validation run and output: simulated series of the model as given and of the diagnosis.
   std::vector<std::vector<std::vector<double>>> simulated_before, simulated_after;
 };

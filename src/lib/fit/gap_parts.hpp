@@ -92,14 +92,24 @@ std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, co
 std::map<std::string, std::vector<double>> data_friction_starts(const model::Model& model,
                                                                 const std::vector<Run>& runs);
 
+/// Why the effect of `plan` cannot show in `runs` whatever its parameters (empty: it can): it
+/// acts where their drive overrides it (EffectPlan::applies_to), "not applicable to a
+/// current-driven drive". Such a candidate is reported, never fitted (it could only come out
+/// undetermined).
+std::string not_applicable(const model::EffectPlan& plan, const std::vector<Run>& runs);
+
 /// Throws unless every name is a candidate effect of the catalog (--exclude).
 void check_excluded(const std::vector<std::string>& excluded);
 
 /// The fit objective on the training runs (sum over runs and outputs of the squared NRMSE),
 /// used to pick a starting point on a grid.
 double training_cost(const model::Model& model, const std::vector<Run>& runs);
-/// RMS of the rpm residual over the training runs.
-double training_rms_rpm(const model::Model& model, const std::vector<Run>& runs);
+/// RMS of the speed residual over the training runs, in their measured unit (rpm or omega; the
+/// diagnosis holds every speed in rpm, its report converts), simulated with `options`: those of
+/// the fit the model came from (the regularised stick for friction), so that it is the error that
+/// fit minimised.
+double training_speed_rms(const model::Model& model, const std::vector<Run>& runs,
+                          const model::SimOptions& options = {});
 
 /// The candidates of one diagnosis, before the decision orders them.
 struct Candidates {

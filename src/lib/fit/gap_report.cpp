@@ -118,7 +118,9 @@ void gap_detail::analyse(const GapData& data, const std::vector<std::vector<std:
                                                std::numeric_limits<std::size_t>::max()) + 1);
     }
     joined_r.insert(joined_r.end(), rpm_res[r].begin(), rpm_res[r].end());
-    joined_u.insert(joined_u.end(), run.inputs.v_V.begin(), run.inputs.v_V.end());
+    // The drive's own input: a current- or torque-driven run's v is 0 throughout.
+    const std::vector<double>& u = drive_command(run);
+    joined_u.insert(joined_u.end(), u.begin(), u.end());
     joined_r.insert(joined_r.end(), max_lag, k_nan);
     joined_u.insert(joined_u.end(), max_lag, k_nan);
   }
@@ -391,10 +393,10 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
   auto checks = [&](const char* label, const Whiteness& w) {
     out << fmt::format(
         "  {}: autocorrelation Q = {:.0f} (99 % limit {:.0f}, {}; largest {:.3f} at lag {}), "
-        "cross-correlation with v Q = {:.0f} (limit {:.0f}, {}; largest {:.3f} at lag {})\n",
+        "cross-correlation with {} Q = {:.0f} (limit {:.0f}, {}; largest {:.3f} at lag {})\n",
         label, w.q_auto, w.q_auto_limit, w.white() ? "white" : "not white", w.max_auto, w.max_auto_lag,
-        w.q_cross, w.q_cross_limit, w.independent() ? "independent" : "correlated", w.max_cross,
-        w.max_cross_lag);
+        report.drive_input, w.q_cross, w.q_cross_limit, w.independent() ? "independent" : "correlated",
+        w.max_cross, w.max_cross_lag);
   };
   out << fmt::format(
       "residual checks (speed; whiteness from lag {}, past the estimator window, to 50 samples):\n",

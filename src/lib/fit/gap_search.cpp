@@ -115,21 +115,30 @@ void add_effect(model::Model& m, std::string_view name) {
   if (m.effect(name) == nullptr) m.effects.push_back(model::default_effect(name));
 }
 
-/// The column of friction_table() holding a torque-driven run's drive torque at the motor shaft.
-constexpr const char* k_drive_torque_column = "T_drive_Nm";
+/// The column a friction table holds a torque-driven run's motor torque in.
+constexpr const char* k_motor_torque_column = "T_motor_Nm";
+
+/// How mcg-fit friction reads the tables friction_table() makes of runs driven as `run`.
+DriveInput friction_drive(const Run& run) {
+  DriveInput drive;
+  drive.current = drive_kind(run) == model::DriveKind::current;
+  if (drive_kind(run) == model::DriveKind::torque) drive.torque_column = k_motor_torque_column;
+  return drive;
+}
 
 /// A run as mcg-fit friction reads it: t, v, clutch, r_load, the motor shaft's speed in rpm
 /// (`speed`: per output of the run, as measured, times the gear ratio) and the current; a
-/// driven run's drive instead of v: its torque (k_drive_torque_column) or its current command.
+/// current-driven run's command as `i`, a torque-driven run's motor torque (the logged torque
+/// over the gear ratio) in k_motor_torque_column.
 table::Table friction_table(const Run& run, const std::vector<std::vector<double>>& series) {
   table::Table t;
   t.source = run.source;
   t.set("t", run.inputs.t_s);
   t.set("v", run.inputs.v_V);
+  if (drive_kind(run) == model::DriveKind::current) t.set("i", run.inputs.i_cmd_A);
+  if (drive_kind(run) == model::DriveKind::torque) t.set(k_motor_torque_column, run.inputs.T_cmd_Nm);
   t.set("clutch", run.inputs.clutch);
   t.set("r_load", run.inputs.r_load_ohm);
-  if (!run.inputs.T_cmd_Nm.empty()) t.set(k_drive_torque_column, run.inputs.T_cmd_Nm);
-  if (!run.inputs.i_cmd_A.empty()) t.set("i", run.inputs.i_cmd_A);
   for (std::size_t o = 0; o < run.outputs.size(); ++o) {
     if (run.outputs[o] == "rpm" || run.outputs[o] == "omega") {
       std::vector<double> rpm = series[o];
@@ -146,13 +155,13 @@ table::Table friction_table(const Run& run, const std::vector<std::vector<double
 /// The friction mcg-fit friction sees in `tables` (order 1, with a constant bias when the
 /// shaft turns both ways): Tc, Ts, c1 and the bias, in the clutch state with most windows; or
 /// nothing when the runs hold no quasi-steady stretch.
-std::optional<std::array<double, 4>> seen_friction(const std::vector<table::Table>& tables, const model::Params& p,
-                                                   bool both_directions) {
+std::optional<std::array<double, 4>> seen_friction(const std::vector<table::Table>& tables,
+                                                   const model::Params& p, bool both_directions,
+                                                   const DriveInput& drive) {
   FrictionOptions options;
+  options.drive = drive;
   options.order = 1;
   options.offset = both_directions;
-  if (!tables.empty() && tables.front().has(k_drive_torque_column))
-    options.torque_column = k_drive_torque_column;
   for (const bool statics : {true, false}) {
     options.static_friction = statics;
     try {
@@ -417,6 +426,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     c.std_errors.clear();
     for (Eigen::Index k = 0; k < r.nls.values.size(); ++k) {
       c.values.push_back(r.nls.values[k]);
+      // Widened for the residuals' autocorrelation, as mcg-fit model reports them.
       c.std_errors.push_back(r.reported_se(static_cast<std::size_t>(k)));
     }
     c.warnings = r.warnings;
@@ -446,7 +456,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     const Evaluation ev = evaluate(c.model, data, floors);
     c.score = ev.score;
     c.rms = ev.rms;
-    c.train_rms_rpm = training_rms_rpm(c.model, data.train);
+    c.train_rms_rpm = training_speed_rms(c.model, data.train, problem.sim);
   };
   // Stage 1: the added effect alone on the refitted nominal model (cheap, and it brings the
   // effect into its basin before the nominal parameters may move to absorb it).
@@ -645,6 +655,7 @@ namespace gap_detail {
 std::map<std::string, std::vector<double>> data_friction_starts(const model::Model& model,
                                                                 const std::vector<Run>& runs) {
   std::map<std::string, std::vector<double>> out;
+  if (runs.empty()) return out;
   bool forward = false;
   bool reverse = false;
   std::vector<table::Table> measured;
@@ -664,8 +675,9 @@ std::map<std::string, std::vector<double>> data_friction_starts(const model::Mod
     return out;  // a run without a speed: no friction from steady states
   }
   const bool both = forward && reverse;
-  const auto seen = seen_friction(measured, model.params, both);
-  auto own = seen_friction(simulated, model.params, both);
+  const DriveInput drive = friction_drive(runs.front());
+  const auto seen = seen_friction(measured, model.params, both, drive);
+  auto own = seen_friction(simulated, model.params, both, drive);
   if (!seen) return out;
   // A driven model short of friction may run away from the data's speeds, leaving no steady
   // state to estimate through: then its own friction is its parameters' (no bias).
@@ -698,6 +710,20 @@ std::map<std::string, std::vector<double>> data_friction_starts(const model::Mod
     out[spec.name] = std::move(start);
   }
   return out;
+}
+
+std::string not_applicable(const model::EffectPlan& plan, const std::vector<Run>& runs) {
+  bool loaded = false;
+  for (const Run& run : runs) {
+    for (std::size_t n = 0; n < run.inputs.clutch.size() && !loaded; ++n)
+      loaded = run.inputs.clutch[n] == 2.0 && std::isfinite(run.inputs.r_load_ohm[n]);
+  }
+  for (const Run& run : runs) {
+    const model::DriveKind drive = drive_kind(run);
+    if (!plan.applies_to(drive, loaded))
+      return fmt::format("not applicable to {}", model::drive_kind_text(drive));
+  }
+  return {};
 }
 
 bool measures_current(const std::vector<Run>& runs) {
@@ -803,14 +829,16 @@ double training_cost(const model::Model& model, const std::vector<Run>& runs) {
   return std::isfinite(cost) ? cost : std::numeric_limits<double>::infinity();
 }
 
-double training_rms_rpm(const model::Model& model, const std::vector<Run>& runs) {
+double training_speed_rms(const model::Model& model, const std::vector<Run>& runs,
+                          const model::SimOptions& options) {
   double sq = 0.0;
   std::size_t count = 0;
   for (const Run& run : runs) {
-    const auto it = std::find(run.outputs.begin(), run.outputs.end(), "rpm");
+    const auto it = std::find_if(run.outputs.begin(), run.outputs.end(),
+                                 [](const std::string& o) { return o == "rpm" || o == "omega"; });
     if (it == run.outputs.end()) continue;
     const auto o = static_cast<std::size_t>(it - run.outputs.begin());
-    const auto sim = simulate_as_measured(model, run);
+    const auto sim = simulate_as_measured(model, run, options);
     for (std::size_t n = 0; n < run.measured[o].size(); ++n) {
       const double r = run.measured[o][n] - sim[o][n];
       if (std::isfinite(r)) {
@@ -838,7 +866,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   none.score = before.score;
   none.fpe = before.score;
   none.rms = before.rms;
-  none.train_rms_rpm = training_rms_rpm(model, data.train);
+  none.train_rms_rpm = training_speed_rms(model, data.train);
   none.evaluated = true;
 
   std::size_t done = 0;
@@ -863,7 +891,8 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
     if (model.effect(plan.name) != nullptr) continue;
     if (std::find(settings.excluded.begin(), settings.excluded.end(), plan.name) != settings.excluded.end())
       continue;
-    const std::string why = not_excited(plan.plan, data.train);
+    std::string why = not_applicable(plan.plan, data.train);
+    if (why.empty()) why = not_excited(plan.plan, data.train);
     if (!why.empty()) {
       GapCandidate c;
       c.name = plan.name;

@@ -88,6 +88,7 @@ Run make_run(const table::Table& table, const std::vector<std::string>& outputs,
   if (drive.current) run.inputs.i_cmd_A = table.col("i");
   if (!drive.torque_column.empty()) {
     run.drive_torque = table.col(drive.torque_column);
+    run.torque_column = drive.torque_column;
     run.inputs.T_cmd_Nm = run.drive_torque;
   }
   // A motor alone has no clutch and no load relay to log: without those columns the run is the
@@ -202,9 +203,33 @@ table::Table with_speed_from_position(table::Table table, const std::string& col
 }
 
 const std::vector<double>& drive_command(const Run& run) {
-  if (!run.inputs.i_cmd_A.empty()) return run.inputs.i_cmd_A;
-  if (!run.drive_torque.empty()) return run.drive_torque;
+  switch (drive_kind(run)) {
+    case model::DriveKind::current:
+      return run.inputs.i_cmd_A;
+    case model::DriveKind::torque:
+      return run.drive_torque;
+    case model::DriveKind::voltage:
+      break;
+  }
   return run.inputs.v_V;
+}
+
+model::DriveKind drive_kind(const Run& run) {
+  if (!run.inputs.i_cmd_A.empty()) return model::DriveKind::current;
+  if (!run.drive_torque.empty()) return model::DriveKind::torque;
+  return model::DriveKind::voltage;
+}
+
+std::string drive_name(const Run& run) {
+  switch (drive_kind(run)) {
+    case model::DriveKind::current:
+      return "i";
+    case model::DriveKind::torque:
+      return run.torque_column;
+    case model::DriveKind::voltage:
+      break;
+  }
+  return "v";
 }
 
 table::Table with_rpm(table::Table table) {

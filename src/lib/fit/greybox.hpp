@@ -67,6 +67,7 @@ struct Run {
   /// A torque-driven run's torque column as logged (DriveInput): inputs.T_cmd_Nm is it over
   /// the gear ratio, set again whenever the ratio is settled.
   std::vector<double> drive_torque;
+  std::string torque_column;  ///< its name (DriveInput::torque_column)
 };
 
 /// Settles how the run's speed was measured: `gear_override` (a command's --gear-ratio) wins;
@@ -105,6 +106,10 @@ table::Table with_speed_from_position(table::Table table, const std::string& col
 /// The command that drives a run (DriveInput): the current loop's current (A), else the drive
 /// torque as logged, else the bridge voltage (V); what a direction or a drive level is read from.
 const std::vector<double>& drive_command(const Run& run);
+/// What drives the run: the kind of drive_command(run).
+model::DriveKind drive_kind(const Run& run);
+/// How reports name drive_command(run): "v", "i" or the torque column.
+std::string drive_name(const Run& run);
 
 /// Pins parameters at measured values: each "NAME=VALUE" (names as model::parameters()
 /// spells them) is set in `model`; returns the names. Throws mcg::Error "--fix: ..." for a

@@ -159,15 +159,39 @@ struct TermSeed {
                                                        const Params& nominal) = nullptr;
 };
 
+/// What drives the motor in a run (the fits' DriveInput): the bridge voltage (or duty), an ideal
+/// current loop's command, or the drive torque itself (commanded as a current).
+enum class DriveKind { voltage, current, torque };
+
+/// How a report names a drive: "a voltage-driven drive", ...
+inline const char* drive_kind_text(DriveKind drive) {
+  switch (drive) {
+    case DriveKind::voltage:
+      return "a voltage-driven drive";
+    case DriveKind::current:
+      return "a current-driven drive";
+    case DriveKind::torque:
+      return "a torque-driven drive";
+  }
+  return "a drive";
+}
+
 /// How `mcg-fit gap` tries an effect as a candidate: the parameters it sets free, a coarse
 /// grid of starting values for each (the best grid point on the training cost starts the
 /// fit), and what the training runs must contain to excite the effect at all.
 struct EffectPlan {
   enum class Needs { nothing, clutch_engaged, clutch_engagement, both_directions };
+  /// Where the effect acts, which decides the drives it can show under: on the shaft, a
+  /// measurement or the command's timing (every drive); in the bridge or the motor's circuit,
+  /// which an ideal current loop overrides (a voltage drive only); in the armature circuits
+  /// of motor and generator (under a current or torque drive only through the generator's,
+  /// so only where the engaged generator feeds a load).
+  enum class Acts { anywhere, motor_circuit, circuits };
   bool candidate = true;                    ///< false: not tried as an added effect
   std::vector<std::string> free;            ///< effect parameter keys fitted
   std::vector<std::vector<double>> grid;    ///< per free key, starting values tried
   Needs needs = Needs::nothing;
+  Acts acts = Acts::anywhere;
   /// A parameter that is a harmonic order of the motor angle (cogging's N_per_rev): its
   /// starting values are the strongest orders of the residual over the measured angle.
   std::string angle_order_key;
@@ -211,6 +235,17 @@ struct EffectPlan {
   EffectPlan seeded_by_terms(std::vector<TermSeed> seeds) && {
     seeded_by = std::move(seeds);
     return std::move(*this);
+  }
+  /// This plan for an effect that acts where `where` says (Acts).
+  EffectPlan acting_in(Acts where) && {
+    acts = where;
+    return std::move(*this);
+  }
+  /// True when the effect can show under `drive`; `generator_loaded`: some run engages the
+  /// generator on a load (its armature circuit carries a current whatever drives the motor).
+  bool applies_to(DriveKind drive, bool generator_loaded) const {
+    if (drive == DriveKind::voltage || acts == Acts::anywhere) return true;
+    return acts == Acts::circuits && generator_loaded;
   }
   static EffectPlan not_a_candidate() {
     EffectPlan plan;

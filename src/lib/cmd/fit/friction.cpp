@@ -73,8 +73,11 @@ void FitFriction::define(CLI::App& app) {
                "ignore a measured current (use the voltage balance)");
   fr->add_flag("!--no-static", friction.fit.static_friction,
                "runs never rest: no static level (Ts written = Tc)");
-  fr->add_option("--torque", friction.fit.torque_column,
-                 "column holding the drive torque (N m; N with --linear) itself");
+  fr->add_flag("--current", friction.fit.drive.current,
+               "current-driven drive: the i column is the current loop's command, A (its torque Kt i)");
+  fr->add_option("--torque", friction.fit.drive.torque_column,
+                 "column holding the drive torque itself (N m at the measured shaft; N with --linear)")
+      ->excludes("--current");
   fr->add_option("--position", friction.fit.position_column,
                  "column holding the position (rad; m with --linear): speed by differences");
   fr->add_flag("--fit-inertia", friction.fit.fit_inertia, "estimate the inertia (mass) with the friction");
@@ -93,7 +96,7 @@ int FitFriction::run(Io& io) {
   const config::Ini config = config::Ini::load_all(options.config);
   const model::Params base = model::from_ini(config);
   options.fit.gear_ratio_ini = measurement::speed_path_from_ini(config).gear_ratio;
-  if (options.linear && (options.fit.torque_column.empty() || options.fit.position_column.empty())) {
+  if (options.linear && (options.fit.drive.torque_column.empty() || options.fit.position_column.empty())) {
     fail("--linear: needs --torque (a force column, N) and --position (m)");
   }
   const FrictionResult result = fit_friction(read_all(options.files), base, options.fit);
@@ -121,8 +124,8 @@ int FitFriction::run(Io& io) {
     ini.set(sec, p + (lin ? "speed_range_m_s" : "speed_range_rad_s"),
             fmt::format("{} {}", num6(st.omega_min_rad_s), num6(st.omega_max_rad_s)));
     ini.set(sec, p + "torque_from",
-            !options.fit.torque_column.empty() ? "column " + options.fit.torque_column
-                                               : (st.from_current ? "current" : "voltage balance"));
+            !options.fit.drive.torque_column.empty() ? "column " + options.fit.drive.torque_column
+                                                     : (st.from_current ? "current" : "voltage balance"));
     ini.set(sec, p + "total_Ts" + torque_key, num6(st.total.value.Ts_Nm),
             se_comment(st.total.se.Ts_Nm, torque_unit));
     ini.set(sec, p + "total_Tc" + torque_key, num6(st.total.value.Tc_Nm),

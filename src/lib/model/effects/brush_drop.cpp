@@ -1,5 +1,6 @@
 // brush_drop: a constant contact voltage drop of the brushes. Default 0.5 V for a pair of
 // metal-graphite brushes; the diagnosis starts from 0.2 V to carbon brushes' 2 V.
+// Under a current-driven motor only the generator's circuit shows it, when that feeds a load.
 #include "model/effects/compiled.hpp"
 
 namespace mcg::model::effects {
@@ -26,6 +27,7 @@ EffectSpec brush_drop() {
           {{"V_b_V", 0.5, 0.0, 3.0, "V", "contact drop"}},
           compile,
           EffectPlan::fit({"V_b_V"}, {{0.2, 0.5, 1.0, 2.0}})
+              .acting_in(EffectPlan::Acts::circuits)
               .seeded_by_terms({{TermShape::current_drop, from_drop}})};
 }
 

@@ -1,6 +1,7 @@
 // hbridge: switch on-resistance and a duty deadband. Default 0.2 ohm per switch and 2 % of
 // the PWM period lost to dead time; the diagnosis starts from MOSFET to bipolar on-resistance
 // and deadbands of 0.5-6 % of the period.
+// It acts in the bridge: a current-driven drive's loop overrides it, the diagnosis does not try it there.
 #include "model/effects/compiled.hpp"
 
 namespace mcg::model::effects {
@@ -29,6 +30,7 @@ EffectSpec hbridge() {
            {"deadband", 0.02, 0.0, 0.3, "1", "duty lost per PWM period"}},
           compile,
           EffectPlan::fit({"R_on_ohm", "deadband"}, {{0.1, 0.5}, {0.005, 0.02, 0.06}})
+              .acting_in(EffectPlan::Acts::motor_circuit)
               .seeded_by_terms({{TermShape::drive_dead_band, from_dead_band}})};
 }
 

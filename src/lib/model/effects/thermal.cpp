@@ -1,5 +1,6 @@
 // thermal: winding resistance rises as the winding heats. Default 10 K/W and 30 s, a small
 // can motor's winding; the diagnosis starts R_th from 5 to 60 K/W and tau_th from 5 to 60 s.
+// Under a current-driven motor only the generator's circuit shows it, when that feeds a load.
 #include "model/effects/compiled.hpp"
 
 namespace mcg::model::effects {
@@ -28,7 +29,8 @@ EffectSpec thermal() {
            {"alpha_per_K", 0.00393, 0.0, 0.01, "1/K", "temperature coefficient (copper 0.00393)"},
            {"dT0_K", 0.0, 0.0, 150.0, "K", "initial temperature rise"}},
           compile,
-          EffectPlan::fit({"R_th_K_W", "tau_th_s"}, {{5.0, 20.0, 60.0}, {5.0, 60.0}})};
+          EffectPlan::fit({"R_th_K_W", "tau_th_s"}, {{5.0, 20.0, 60.0}, {5.0, 60.0}})
+              .acting_in(EffectPlan::Acts::circuits)};
 }
 
 }  // namespace mcg::model::effects
