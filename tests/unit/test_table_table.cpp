@@ -328,7 +328,9 @@ TEST(ParseNumber, PlainDecimalsReadAsFromChars) {
     const bool ok = ec == std::errc() && ptr == text.data() + text.size();
     double got = 0.0;
     ASSERT_EQ(parse_number(text, got), ok) << text;
-    if (ok) ASSERT_EQ(std::bit_cast<std::uint64_t>(got), std::bit_cast<std::uint64_t>(want)) << text;
+    if (ok) {
+      ASSERT_EQ(std::bit_cast<std::uint64_t>(got), std::bit_cast<std::uint64_t>(want)) << text;
+    }
   }
 }
 
