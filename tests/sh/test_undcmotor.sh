@@ -27,18 +27,25 @@ steady --effect pwm_coast:coast=1 >"$work/coast"
 steady >"$work/braking"
 
 # rms FILE: RMS of measured - FILE over the moving points
-rms() { paste -d' ' "$work/measured" "$1" | awk '$1 != 0 { n++; s += ($1 - $2)^2 } END { printf "%.2f", sqrt(s / n) }'; }
-line=$(awk -F, 'NR > 1 && $2 != 0 { u = $1 < 0 ? -$1 : $1; y = $2 < 0 ? -$2 : $2; U[++n] = u; Y[n] = y
+rms() {
+  paste -d' ' "$work/measured" "$1" |
+    awk '$1 != 0 { n++; s += ($1 - $2)^2 } END { printf "%.2f", sqrt(s / n) }'
+}
+# the best straight line |y| = a |u| + b through the moving points, its RMS miss
+line=$(awk -F, 'NR > 1 && $2 != 0 {
+    u = $1 < 0 ? -$1 : $1; y = $2 < 0 ? -$2 : $2; U[++n] = u; Y[n] = y
     su += u; sy += y; suu += u * u; suy += u * y }
   END { a = (n * suy - su * sy) / (n * suu - su * su); b = (sy - a * su) / n
-    for (k = 1; k <= n; ++k) s += (Y[k] - a * U[k] - b)^2; printf "%.1f", sqrt(s / n) }' "$set_dir/static_curve.csv")
+    for (k = 1; k <= n; ++k) s += (Y[k] - a * U[k] - b)^2
+    printf "%.1f", sqrt(s / n) }' "$set_dir/static_curve.csv")
 coast=$(rms "$work/coast")
 braking=$(rms "$work/braking")
 echo "static curve RMS: best line $line, coasting driver $coast, braking driver $braking deg/s"
-check "the best line misses the curve by more than 100 deg/s ($line)" awk -v x="$line" 'BEGIN { exit !(x > 100) }'
-check "the coasting driver within 4 deg/s ($coast)" awk -v x="$coast" 'BEGIN { exit !(x < 4) }'
-check "the braking driver off by more than 100 deg/s ($braking)" awk -v x="$braking" 'BEGIN { exit !(x > 100) }'
+above() { awk -v x="$1" -v y="$2" 'BEGIN { exit !(x > y) }'; }
+check "the best line misses the curve by more than 100 deg/s ($line)" above "$line" 100
+check "the coasting driver within 4 deg/s ($coast)" above 4 "$coast"
+check "the braking driver off by more than 100 deg/s ($braking)" above "$braking" 100
 at_rest=$(paste -d' ' "$work/measured" "$work/coast" |
   awk '$1 == 0 { d = $2 < 0 ? -$2 : $2; if (d > m) m = d } END { printf "%.2f", m }')
-check "the points at rest stay within one count of 0 ($at_rest deg/s)" awk -v x="$at_rest" 'BEGIN { exit !(x < 6.43) }'
+check "the points at rest stay within one count of 0 ($at_rest deg/s)" above 6.43 "$at_rest"
 finish undcmotor
