@@ -364,8 +364,8 @@ void lift_trapped_levels(model::Model& m, const std::vector<std::string>& free) 
     const auto it = std::find(plan.free.begin(), plan.free.end(), key.substr(dot + 1));
     if (it == plan.free.end()) continue;
     const auto k = static_cast<std::size_t>(it - plan.free.begin());
-    const auto param = std::find_if(spec->params.begin(), spec->params.end(),
-                                    [&](const auto& q) { return q.name == *it; });
+    const auto param =
+        std::find_if(spec->params.begin(), spec->params.end(), [&](const auto& q) { return q.name == *it; });
     if (param == spec->params.end() || param->lower != 0.0 || k >= plan.grid.size() || plan.grid[k].empty())
       continue;
     const double scale = plan.grid_scale != nullptr ? plan.grid_scale(m.params)[k] : 1.0;
@@ -494,8 +494,9 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   // climb a valley together), at most k_joint_rounds times.
   constexpr int k_joint_rounds = 3;
   double cost_before = std::numeric_limits<double>::infinity();
-  for (int round = 0; round < k_joint_rounds && job.effects.size() > 1 && !fit.nls.converged &&
-                      fit.nls.cost < 0.9 * cost_before && std::chrono::steady_clock::now() < settings.deadline;
+  for (int round = 0;
+       round < k_joint_rounds && job.effects.size() > 1 && !fit.nls.converged &&
+       fit.nls.cost < 0.9 * cost_before && std::chrono::steady_clock::now() < settings.deadline;
        ++round) {
     cost_before = fit.nls.cost;
     problem.model = fit.model;
