@@ -354,7 +354,8 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
 /// positive levels in log coordinates, by ratios, and from 1e-30 no step brings it back when
 /// the other parameters have moved to where it belongs (a friction level first fitted beside a
 /// coasting driver's share that, without friction, had to hold the speeds down). Such a level
-/// (below a hundredth of its plan's smallest start) is set there before a further fit.
+/// (below a hundredth of its plan's smallest start) is set there before a further fit: an
+/// extension's stage 1 from a single fit that ended at 0, or a joint fit after stage 1.
 void lift_trapped_levels(model::Model& m, const std::vector<std::string>& free) {
   for (const std::string& key : free) {
     const auto dot = key.find('.');
@@ -447,6 +448,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   // Stage 1: the added effect alone on the refitted nominal model (cheap, and it brings the
   // effect into its basin before the nominal parameters may move to absorb it).
   if (!job.stage1_free.empty()) {
+    lift_trapped_levels(start, job.stage1_free);
     problem.model = start;
     problem.free = job.stage1_free;
     problem.nls.max_evaluations = budget(job.stage1_free.size());
