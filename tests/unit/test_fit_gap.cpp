@@ -668,7 +668,7 @@ TEST(GapDrive, EffectsTheCurrentLoopOverridesAreNotApplicable) {
   const GapData data = current_driven_data();
   const auto spec = [](std::string_view name) { return model::find_effect(name)->plan; };
   const std::string why = "not applicable to a current-driven drive";
-  for (const char* name : {"supply_sag", "hbridge", "brush_drop", "thermal"})
+  for (const char* name : {"supply_sag", "hbridge", "pwm_coast", "brush_drop", "thermal"})
     EXPECT_EQ(gap_detail::not_applicable(spec(name), data.train), why) << name;
   for (const char* name : {"dead_time", "friction_levels", "cogging", "stribeck"})
     EXPECT_EQ(gap_detail::not_applicable(spec(name), data.train), "") << name;
@@ -695,7 +695,7 @@ TEST(GapDrive, EffectsTheCurrentLoopOverridesAreNotApplicable) {
     EXPECT_FALSE(c.evaluated) << c.name;
     ++listed;
   }
-  EXPECT_EQ(listed, 4U);
+  EXPECT_EQ(listed, 5U);
   EXPECT_EQ(report.drive_input, "i");
   // A residual the dead time leaves after each step of the command: correlated with it.
   EXPECT_FALSE(report.white_before.independent());
@@ -718,19 +718,19 @@ TEST(GapSearch, StandardErrorsAreWidenedForAutocorrelation) {
                                [](const GapCandidate& c) { return c.name == "param_mismatch"; });
   ASSERT_NE(pm, report.candidates.end());
   ASSERT_FALSE(pm->free.empty());
-  // The fit's errors at the candidate's values: a fit stopped before its first iteration.
+  // The fit's errors at the candidate's values: a fit started at its optimum stays there (a fit
+  // cut short by a stop reports no errors at all).
   FitProblem problem;
   problem.model = pm->model;
   problem.runs = data.train;
   problem.free = pm->free;
-  problem.nls.stop = [] { return true; };
   const FitResult at = fit_model(problem);
   EXPECT_GT(at.se_widening, 2.0);
   std::size_t finite = 0;
   for (std::size_t k = 0; k < pm->free.size(); ++k) {
     if (!std::isfinite(at.reported_se(k))) continue;  // undetermined either way
     ++finite;
-    EXPECT_NEAR(pm->std_errors[k], at.reported_se(k), 0.02 * at.reported_se(k)) << pm->free[k];
+    EXPECT_NEAR(pm->std_errors[k], at.reported_se(k), 0.1 * at.reported_se(k)) << pm->free[k];
     EXPECT_GT(pm->std_errors[k], 2.0 * at.nls.std_errors[static_cast<Eigen::Index>(k)]) << pm->free[k];
   }
   EXPECT_GE(finite, 2U);
