@@ -427,9 +427,9 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   problem.nls.xtol = 1e-4;
   problem.nls.ftol = 1e-5;
   problem.nls.check_smoothness = false;
-  // Most of a candidate's simulations were Jacobian columns: between finite-difference
-  // Jacobians the solver updates the last one from its steps (it stops on a fresh one).
-  problem.nls.broyden = true;
+  // Jacobians by finite differences throughout: Broyden's updates between them (NlsOptions::
+  // broyden) saved a fifth of the public cases' time but lost a two-effect mixture, whose
+  // single fits stopped early on updated Jacobians.
   problem.bounds = settings.bounds;
   // Friction is fitted on the regularised stick, where the breakaway moves the response
   // continuously (on the exact stick-slip any level between two drive levels of a staircase
