@@ -575,18 +575,6 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     refit_pinned(key, 1.0);
     pinned.push_back(key);
   }
-  // A breakaway the runs never excite (no start from rest near it) leaves a friction effect's
-  // static excess undetermined while its Coulomb and viscous levels are not: pin the excess at
-  // 0 (breakaway at the Coulomb level) and say so, rather than set the effect aside.
-  std::vector<std::string> unexcited;
-  for (const auto& e : job.effects) {
-    const model::EffectSpec* spec = find_plan(e);
-    if (c.determined() || spec == nullptr || spec->plan.breakaway_key.empty() || expired()) continue;
-    const std::string key = e + "." + spec->plan.breakaway_key;
-    if (!loose_flagged(c.flags, key)) continue;
-    refit_pinned(key, 0.0);
-    unexcited.push_back(key);
-  }
   std::vector<std::string> profiled;
   for (const auto& e : job.effects) {
     const model::EffectSpec* spec = find_plan(e);
@@ -620,6 +608,20 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     c.values.insert(c.values.begin() + static_cast<std::ptrdiff_t>(k), value);
     c.std_errors.insert(c.std_errors.begin() + static_cast<std::ptrdiff_t>(k), se);
     c.flags.insert(c.flags.end(), own.begin(), own.end());
+  }
+  // A breakaway the runs never excite (no start from rest near it) leaves a friction effect's
+  // static excess undetermined, even on the exact stick's profile, while its Coulomb and
+  // viscous levels are not: pin the excess at 0 (breakaway at the Coulomb level) and say so,
+  // rather than set the effect aside.
+  std::vector<std::string> unexcited;
+  for (const auto& e : job.effects) {
+    const model::EffectSpec* spec = find_plan(e);
+    if (c.determined() || spec == nullptr || spec->plan.breakaway_key.empty() || expired()) continue;
+    const std::string key = e + "." + spec->plan.breakaway_key;
+    if (!loose_flagged(c.flags, key)) continue;
+    refit_pinned(key, 0.0);
+    unexcited.push_back(key);
+    std::erase_if(profiled, [&](const std::string& note) { return note.starts_with(key + " "); });
   }
   if (expired()) {
     cut_short(fit);
