@@ -139,8 +139,7 @@ class PlantImpl {
       s.v_applied_V = motor_resistance(m_y, d) * s.i_A + m_c.p.motor.Ke_V_s_rad * m_y[W_M];
       if (m_c.circuit.V_sat_V > 0.0) s.v_applied_V += m_c.circuit.drop(s.i_A);
     } else {
-      s.v_applied_V = v_b - (m_c.circuit.R_series_ohm + std::abs(d) * m_c.circuit.R_duty_ohm) * s.i_A +
-                      (1.0 - m_c.circuit.emf_share(d)) * m_c.p.motor.Ke_V_s_rad * m_y[W_M];
+      s.v_applied_V = v_b - (m_c.circuit.R_series_ohm + std::abs(d) * m_c.circuit.R_duty_ohm) * s.i_A;
     }
     s.temp_rise_K = m_y[X_M];
     s.clutch = m_clutch;
@@ -234,8 +233,7 @@ class PlantImpl {
     if (!m_motor_quasi) return y[I_M];
     double d = 0.0;
     const double v_b = bridge(d);
-    return algebraic_current(v_b - m_c.circuit.emf_share(d) * m_c.p.motor.Ke_V_s_rad * y[W_M],
-                             motor_resistance(y, d));
+    return algebraic_current(v_b - m_c.p.motor.Ke_V_s_rad * y[W_M], motor_resistance(y, d));
   }
 
   /// Capacity of the clutch plates at time t (CouplingTerms::capacity).
@@ -295,7 +293,7 @@ class PlantImpl {
     if (m_motor_quasi || current_driven()) {
       dy[I_M] = 0.0;
     } else {
-      double vm = v_b - Rm * i_m - m_c.circuit.emf_share(d) * mm.Ke_V_s_rad * y[W_M];
+      double vm = v_b - Rm * i_m - mm.Ke_V_s_rad * y[W_M];
       if (m_c.circuit.V_sat_V > 0.0) vm -= m_c.circuit.drop(i_m);
       dy[I_M] = vm / mm.L_H;
     }
@@ -877,8 +875,8 @@ class PlantImpl {
   double m_r_load = k_open_circuit;
   bool m_gen_circuit = false;
   bool m_gen_quasi = false;
-  bool m_motor_quasi = false;               ///< the motor current solved as algebraic (see motor_current)
-  bool m_exp_circuits = true;               ///< the circuits stepped exponentially (linear_rates)
+  bool m_motor_quasi = false;  ///< the motor current solved as algebraic (see motor_current)
+  bool m_exp_circuits = true;  ///< the circuits stepped exponentially (linear_rates)
   mutable std::array<ExpCoef, 2> m_coef{};  ///< per circuit, the coefficients of the last step
   double m_v = 0.0;
   double m_i_cmd = std::numeric_limits<double>::quiet_NaN();  ///< Drive::i_cmd_A in force
