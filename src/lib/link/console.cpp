@@ -443,9 +443,16 @@ class Worker {
         values[n] = line;
       }
     } catch (const Error& e) {
-      report(fmt::format("polling the registers: {}", e.what()));
+      // Said once, not at every poll: a repeated poll error would overwrite the answer to what
+      // the user does meanwhile (a recording ended while the port is gone).
+      std::string text = fmt::format("polling the registers: {}", e.what());
+      if (text != m_poll_error) {
+        m_poll_error = text;
+        report(std::move(text));
+      }
       return;
     }
+    m_poll_error.clear();
     const std::lock_guard lock(m_mutex);
     m_registers = std::move(values);
   }
@@ -520,6 +527,7 @@ class Worker {
   std::condition_variable m_wake;
   std::deque<ConsoleAction> m_queue;
   std::string m_status;
+  std::string m_poll_error;  ///< the last poll error said; the worker thread's alone
   std::map<std::string, std::string> m_registers;
   std::optional<std::vector<std::pair<std::string, std::string>>> m_config;
   bool m_config_failed = false;
