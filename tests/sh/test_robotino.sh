@@ -57,11 +57,5 @@ else
   fail "gap on the frictionless motor: diagnosis '${diagnosis:-none}' does not name friction:" \
     "$(tail -1 "$work/gap.err")"
 fi
-shrink=$(sed -n 's/^validation omega RMS: .*(\([0-9]*\) % less).*/\1/p' "$work/gap.txt")
-if [[ -n $shrink ]] && ((shrink >= 60)); then
-  pass
-  echo "ok   gap closes $shrink % of the validation speed error"
-else
-  fail "gap closes '${shrink:-?}' % of the validation speed error (>= 60 % expected)"
-fi
+gap_closes_most "$work/gap.txt"
 finish robotino
