@@ -90,3 +90,20 @@ gap_closes_most() {
     fail "gap closes '${shrink:-?}' % of the validation speed error (>= 60 % expected)"
   fi
 }
+
+# warnings_hold_values FILE: every "NAME = VALUE ... at its lower/upper bound" warning of gap's
+# text report FILE names the value its fitted-parameters line gives (within its 4 digits).
+warnings_hold_values() {
+  local bad
+  bad=$(awk '/^(best candidate.s )?fitted parameters/ { sub(/^[^:]*: /, ""); n = split($0, f, " ")
+      for (k = 1; k <= n; k++) { split(f[k], p, "="); split(p[2], q, "[+]-"); v[p[1]] = q[1] } }
+    /^warning: .* is at its (lower|upper) bound/ { w[$2] = $4 }
+    END { for (x in w) if (x in v) { d = w[x] - v[x]; if (d < 0) d = -d; a = v[x] < 0 ? -v[x] : v[x]
+            if (d > 1e-3 * a + 1e-300) print x " warned at " w[x] ", reported " v[x] } }' "$1")
+  if [[ -z $bad ]]; then
+    pass
+    echo "ok   every bound warning names the value reported"
+  else
+    fail "a warning names a value the report does not hold: $bad"
+  fi
+}

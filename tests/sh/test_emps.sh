@@ -123,4 +123,5 @@ gap_param friction_levels.Tc_Nm 20.3935
 gap_param friction_levels.c1_Nm_s_rad 203.5034
 gap_param param_mismatch.J_scale 1.0012 0.05
 gap_closes_most "$work/gap.txt"
+warnings_hold_values "$work/gap.txt"
 finish emps

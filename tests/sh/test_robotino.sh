@@ -58,4 +58,5 @@ else
     "$(tail -1 "$work/gap.err")"
 fi
 gap_closes_most "$work/gap.txt"
+warnings_hold_values "$work/gap.txt"
 finish robotino

@@ -363,6 +363,18 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
     }
     return false;
   });
+  // The fit's sentences on this level go with its flags (a warning printed after the profile
+  // moved the level off its bound would name a value the report no longer holds).
+  std::erase_if(c.warnings, [&](const std::string& w) {
+    if (points[best] > lower && w.starts_with(key + " = ") && w.ends_with(" bound")) return true;
+    return !open && w.starts_with(key + ": ");
+  });
+  if (open && std::none_of(c.warnings.begin(), c.warnings.end(),
+                           [&](const std::string& w) { return w.starts_with(key + ": "); }))
+    c.warnings.push_back(
+        fmt::format("{}: its profile on the exact stick does not close within the values scanned (its error "
+                    "is more than {:.2g})",
+                    key, half));
   return fmt::format("{} profiled on the exact stick: {:.4g} +- {}{:.2g} (regularised fit {:.4g} +- {:.2g})",
                      key, points[best], open ? "more than " : "", open ? half : profile_se, value,
                      jacobian_se);
