@@ -74,6 +74,7 @@ class PlantImpl {
     if (m_clutch == 2) {
       m_coupling = spring() ? Coupling::spring : Coupling::rigid;
     }
+    set_bridge();
     update_gen_mode();
   }
 
@@ -139,7 +140,7 @@ class PlantImpl {
     double d = 0.0;
     const double v_b = bridge(d);
     if (current_driven()) {
-      s.v_applied_V = motor_resistance(m_y, d) * s.i_A + m_c.p.motor.Ke_V_s_rad * m_y[W_M];
+      s.v_applied_V = motor_resistance(m_y) * s.i_A + m_c.p.motor.Ke_V_s_rad * m_y[W_M];
       if (m_c.circuit.V_sat_V > 0.0) s.v_applied_V += m_c.circuit.drop(s.i_A);
     } else {
       s.v_applied_V = v_b - (m_c.circuit.R_series_ohm + std::abs(d) * m_c.circuit.R_duty_ohm) * s.i_A;
@@ -162,6 +163,7 @@ class PlantImpl {
     m_gen_circuit = gen_present() && std::isfinite(m_r_load);
     m_gen_quasi =
         m_gen_circuit && (m_c.p.generator.R_ohm + m_r_load) / m_c.p.generator.L_H > k_quasi_static_rate;
+    update_rates();
   }
   bool rigid() const { return m_coupling == Coupling::rigid; }
   bool spring() const { return m_c.coupling.spring_k_Nm_rad > 0.0; }
@@ -173,14 +175,24 @@ class PlantImpl {
     m_v = v_V;
     m_i_cmd = i_cmd_A;
     if (current_driven()) m_y[I_M] = m_i_cmd;
+    set_bridge();
+  }
+
+  /// The bridge at the command in force, once per command rather than at every stage: its
+  /// duty d' (m_duty), its output d' supply_V (m_v_bridge), the motor circuit's resistance
+  /// R + R_series + |d'| R_duty without the windings' states (m_R_bridge_ohm), and the rates.
+  void set_bridge() {
+    const double supply = m_c.p.supply_V;
+    m_duty = m_c.circuit.duty(std::clamp(m_v / supply, -1.0, 1.0));
+    m_v_bridge = m_duty * supply;
+    m_R_bridge_ohm = m_c.p.motor.R_ohm + m_c.circuit.R_series_ohm + std::abs(m_duty) * m_c.circuit.R_duty_ohm;
+    update_rates();
   }
 
   /// Bridge output before the current-dependent drops: d' supply_V; d' is returned.
   double bridge(double& d_out) const {
-    const double supply = m_c.p.supply_V;
-    const double d = m_c.circuit.duty(std::clamp(m_v / supply, -1.0, 1.0));
-    d_out = d;
-    return d * supply;
+    d_out = m_duty;
+    return m_v_bridge;
   }
 
   double gen_resistance(const Vec& y) const {
@@ -221,11 +233,12 @@ class PlantImpl {
     return algebraic_current(m_c.p.generator.Ke_V_s_rad * y[W_G], gen_resistance(y) + m_r_load);
   }
 
-  /// The motor circuit's resistance at duty d: winding (with its state), series, duty share.
-  double motor_resistance(const Vec& y, double d) const {
-    const Machine& mm = m_c.p.motor;
-    return (winding_states() ? mm.R_ohm * (1.0 + m_c.winding.R_per_x * y[X_M]) : mm.R_ohm) +
-           m_c.circuit.R_series_ohm + std::abs(d) * m_c.circuit.R_duty_ohm;
+  /// The motor circuit's resistance at the bridge's duty d': winding (with its state), series,
+  /// duty share.
+  double motor_resistance(const Vec& y) const {
+    if (!winding_states()) return m_R_bridge_ohm;
+    return m_c.p.motor.R_ohm * (1.0 + m_c.winding.R_per_x * y[X_M]) + m_c.circuit.R_series_ohm +
+           std::abs(m_duty) * m_c.circuit.R_duty_ohm;
   }
 
   /// The motor current: the state, or for a motor whose electrical time constant is far
@@ -236,7 +249,7 @@ class PlantImpl {
     if (!m_motor_quasi) return y[I_M];
     double d = 0.0;
     const double v_b = bridge(d);
-    return algebraic_current(v_b - m_c.p.motor.Ke_V_s_rad * y[W_M], motor_resistance(y, d));
+    return algebraic_current(v_b - m_c.p.motor.Ke_V_s_rad * y[W_M], motor_resistance(y));
   }
 
   /// Capacity of the clutch plates at time t (CouplingTerms::capacity).
@@ -290,7 +303,7 @@ class PlantImpl {
     const double v_b = bridge(d);
     const Machine& mm = m_c.p.motor;
     const Machine& mg = m_c.p.generator;
-    const double Rm = motor_resistance(y, d);
+    const double Rm = motor_resistance(y);
     const double i_m = motor_current(y);
     const double load_Nm = std::abs(mm.Kt_Nm_A * i_m);
     if (m_motor_quasi || current_driven()) {
@@ -353,19 +366,14 @@ class PlantImpl {
   /// Decay rates lambda = -R/L, 1/s, of the armature circuits integrated as states (0 for every
   /// other state, and for all of them under a saturating drop, whose slope near zero current the
   /// step bound follows instead): the stiff linear part the exponential step takes exactly.
-  /// The windings' states stay in the rest of the right-hand side.
-  Vec linear_rates() const {
-    Vec lam{};
-    if (!m_exp_circuits) return lam;
-    if (!m_motor_quasi && !current_driven()) {
-      double d = 0.0;
-      bridge(d);
-      lam[I_M] = -(m_c.p.motor.R_ohm + m_c.circuit.R_series_ohm + std::abs(d) * m_c.circuit.R_duty_ohm) /
-                 m_c.p.motor.L_H;
-    }
+  /// The windings' states stay in the rest of the right-hand side. Kept in m_lam, set whenever
+  /// the command, the clutch or the load changes.
+  void update_rates() {
+    m_lam.fill(0.0);
+    if (!m_exp_circuits) return;
+    if (!m_motor_quasi && !current_driven()) m_lam[I_M] = -m_R_bridge_ohm / m_c.p.motor.L_H;
     if (gen_circuit() && !gen_quasi_static())
-      lam[I_G] = -(m_c.p.generator.R_ohm + m_r_load) / m_c.p.generator.L_H;
-    return lam;
+      m_lam[I_G] = -(m_c.p.generator.R_ohm + m_r_load) / m_c.p.generator.L_H;
   }
 
   /// The coefficients of one step of h for one circuit of rate lambda (z = lambda h): the
@@ -392,11 +400,31 @@ class PlantImpl {
     p2 = (em1 - z) / (z * z);
     p3 = (em1 - z - 0.5 * z * z) / (z * z * z);
   }
+  /// Coefficients kept per circuit: a dead time splits every row into two steps of different
+  /// lengths, and the step bound splits each again, so a few lengths recur in turn.
+  static constexpr std::size_t k_coef_memo = 4;
+  struct CoefMemo {
+    std::array<ExpCoef, k_coef_memo> coef{};
+    std::size_t last = 0;  ///< the entry computed or found last
+    std::size_t next = 0;  ///< the entry the next computation overwrites
+  };
   const ExpCoef& exp_coef(std::size_t slot, double lambda, double h) const {
-    ExpCoef& c = m_coef[slot];
+    CoefMemo& memo = m_coef[slot];
     // Rows at decimal times differ in the last bits of their spacing: one step's coefficients
     // serve the next within a relative 1e-9 of h (a change of order 1e-9 in the decay).
-    if (c.lambda == lambda && std::abs(c.h - h) <= 1e-9 * h) return c;
+    const ExpCoef& last = memo.coef[memo.last];
+    if (last.lambda == lambda && std::abs(last.h - h) <= 1e-9 * h) return last;
+    // Any other entry serves only a step of exactly its length, so that the coefficients are
+    // the ones computed afresh would be.
+    for (std::size_t k = 0; k < k_coef_memo; ++k) {
+      if (memo.coef[k].lambda == lambda && memo.coef[k].h == h) {
+        memo.last = k;
+        return memo.coef[k];
+      }
+    }
+    memo.last = memo.next;
+    memo.next = (memo.next + 1) % k_coef_memo;
+    ExpCoef& c = memo.coef[memo.last];
     c.lambda = lambda;
     c.h = h;
     const double z = lambda * h;
@@ -417,37 +445,45 @@ class PlantImpl {
   /// b = e^(z/2) y0 + h/2 phi1(z/2) N(a), c = e^(z/2) a + h/2 phi1(z/2) (2 N(b) - N(y0)),
   /// y1 = e^z y0 + h (phi1 - 3 phi2 + 4 phi3) N(y0) + 2 h (phi2 - 2 phi3) (N(a) + N(b))
   ///      + h (4 phi3 - phi2) N(c); exact for a constant N, RK4 at lambda = 0.
+  /// The circuits (I_M, I_G) come first in the state and take the exponential step where their
+  /// rate is not 0; the loops over the other states have no branch.
   Vec step_once(const Vec& y0, double t0, double h, const Vec& k1) const {
-    const Vec lam = linear_rates();
+    const Vec& lam = m_lam;
     if (lam[I_M] == 0.0 && lam[I_G] == 0.0) return rk4(y0, t0, h, k1);
-    std::array<const ExpCoef*, 2> coef{};
+    constexpr std::size_t k_circuits = 2;
+    std::array<const ExpCoef*, k_circuits> coef{};
     for (std::size_t j : {I_M, I_G}) coef[j] = lam[j] != 0.0 ? &exp_coef(j, lam[j], h) : nullptr;
     Vec n1, n2, n3, n4, a, b, c;
-    for (std::size_t j = 0; j < k_states; ++j) {
-      n1[j] = k1[j] - lam[j] * y0[j];
-      a[j] = j < 2 && coef[j] ? coef[j]->e_half * y0[j] + coef[j]->stage * n1[j] : y0[j] + 0.5 * h * k1[j];
+    for (std::size_t j = 0; j < k_states; ++j) n1[j] = k1[j] - lam[j] * y0[j];
+    for (std::size_t j = 0; j < k_circuits; ++j) {
+      a[j] = coef[j] ? coef[j]->e_half * y0[j] + coef[j]->stage * n1[j] : y0[j] + 0.5 * h * k1[j];
     }
+    for (std::size_t j = k_circuits; j < k_states; ++j) a[j] = y0[j] + 0.5 * h * k1[j];
     deriv(a, t0 + 0.5 * h, n2);
-    for (std::size_t j = 0; j < k_states; ++j) {
-      n2[j] -= lam[j] * a[j];
-      b[j] = j < 2 && coef[j] ? coef[j]->e_half * y0[j] + coef[j]->stage * n2[j] : y0[j] + 0.5 * h * n2[j];
+    for (std::size_t j = 0; j < k_states; ++j) n2[j] -= lam[j] * a[j];
+    for (std::size_t j = 0; j < k_circuits; ++j) {
+      b[j] = coef[j] ? coef[j]->e_half * y0[j] + coef[j]->stage * n2[j] : y0[j] + 0.5 * h * n2[j];
     }
+    for (std::size_t j = k_circuits; j < k_states; ++j) b[j] = y0[j] + 0.5 * h * n2[j];
     deriv(b, t0 + 0.5 * h, n3);
-    for (std::size_t j = 0; j < k_states; ++j) {
-      n3[j] -= lam[j] * b[j];
-      c[j] = j < 2 && coef[j] ? coef[j]->e_half * a[j] + coef[j]->stage * (2.0 * n3[j] - n1[j])
-                              : y0[j] + h * n3[j];
+    for (std::size_t j = 0; j < k_states; ++j) n3[j] -= lam[j] * b[j];
+    for (std::size_t j = 0; j < k_circuits; ++j) {
+      c[j] = coef[j] ? coef[j]->e_half * a[j] + coef[j]->stage * (2.0 * n3[j] - n1[j]) : y0[j] + h * n3[j];
     }
+    for (std::size_t j = k_circuits; j < k_states; ++j) c[j] = y0[j] + h * n3[j];
     deriv(c, t0 + h, n4);
     Vec y1;
-    for (std::size_t j = 0; j < k_states; ++j) {
-      if (j < 2 && coef[j]) {
+    for (std::size_t j = 0; j < k_circuits; ++j) {
+      if (coef[j]) {
         const ExpCoef& e = *coef[j];
         n4[j] -= lam[j] * c[j];
         y1[j] = e.e_full * y0[j] + e.w1 * n1[j] + 2.0 * e.w2 * (n2[j] + n3[j]) + e.w3 * n4[j];
       } else {
         y1[j] = y0[j] + h / 6.0 * (n1[j] + 2.0 * n2[j] + 2.0 * n3[j] + n4[j]);
       }
+    }
+    for (std::size_t j = k_circuits; j < k_states; ++j) {
+      y1[j] = y0[j] + h / 6.0 * (n1[j] + 2.0 * n2[j] + 2.0 * n3[j] + n4[j]);
     }
     return y1;
   }
@@ -879,9 +915,13 @@ class PlantImpl {
   bool m_gen_circuit = false;
   bool m_gen_quasi = false;
   bool m_motor_quasi = false;  ///< the motor current solved as algebraic (see motor_current)
-  bool m_exp_circuits = true;  ///< the circuits stepped exponentially (linear_rates)
-  mutable std::array<ExpCoef, 2> m_coef{};  ///< per circuit, the coefficients of the last step
+  bool m_exp_circuits = true;  ///< the circuits stepped exponentially (update_rates)
+  mutable std::array<CoefMemo, 2> m_coef{};  ///< per circuit, the coefficients of recent steps
   double m_v = 0.0;
+  double m_duty = 0.0;          ///< the bridge's duty d' at m_v (set_bridge)
+  double m_v_bridge = 0.0;      ///< its output d' supply_V, V
+  double m_R_bridge_ohm = 0.0;  ///< R + R_series + |d'| R_duty, ohm
+  Vec m_lam{};                  ///< the circuits' decay rates (update_rates), 1/s
   double m_i_cmd = std::numeric_limits<double>::quiet_NaN();  ///< Drive::i_cmd_A in force
   /// Commands waiting out the drive's dead time: when each acts, and what it commands.
   struct Queued {
