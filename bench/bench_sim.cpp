@@ -82,6 +82,21 @@ void BM_OpenLoop60s(benchmark::State& state) {
 }
 BENCHMARK(BM_OpenLoop60s)->Unit(benchmark::kMillisecond);
 
+/// The plant as a fit runs it (the circuits' step bound kept) behind a dead time of 3.3 ms, not
+/// a whole number of rows: every row is integrated as steps of two lengths in turn.
+void BM_OpenLoopDeadTime60s(benchmark::State& state) {
+  const auto in = open_program();
+  mcg::model::Model model;
+  model.params.dead_time_s = 3.3e-3;
+  for (auto _ : state) {
+    auto out = mcg::model::simulate(model, in, {});
+    benchmark::DoNotOptimize(out.omega_rad_s.back());
+  }
+  state.counters["realtime_x"] =
+      benchmark::Counter(k_duration_s * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_OpenLoopDeadTime60s)->Unit(benchmark::kMillisecond);
+
 /// The accuracy the speed is bought at: rpm RMS change when the step is halved, open loop
 /// (in a closed loop the encoder's quantisation turns any tiny difference into a different
 /// count sequence, so the comparison there measures the loop's sensitivity, not the integrator).
