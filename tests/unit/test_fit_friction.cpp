@@ -302,6 +302,60 @@ TEST(FitFrictionDirect, ACurrentDrivenDrivesThroughItsCommand) {
             "servo.csv: missing column 'i' (has: t,omega)");
 }
 
+// On a current-driven drive the steps of the command are the jumps (not v, which such a drive
+// need not log): the quasi-steady windows skip the acceleration after each step. With an
+// inertia in the configuration that is a tenth of the shaft's, a window inside that transient
+// misreads J dw/dt as friction; the command's own steps start the settling time, and the
+// friction comes back within 1 % (0.3 %). Taken as never jumping (as v, which is 0 throughout,
+// made it), the same run is off by more than 4 % (6 %). A noisy command (a logged current) jumps
+// only at its steps.
+TEST(FitFrictionDirect, ACurrentDrivesStepsAreJumps) {
+  model::Model rig;
+  rig.params.motor.friction.viscous = {3e-5, 0.0, 0.0};  // J / c1 = 0.24 s: settled within 1.2 s
+  model::Inputs in;
+  for (const double level : {0.0, 0.1, 0.25, 0.4, 0.15, 0.0, -0.1, -0.3, -0.4, -0.2, 0.3, -0.25}) {
+    for (int k = 0; k < 2000; ++k) {
+      in.t_s.push_back(1e-3 * static_cast<double>(in.t_s.size()));
+      in.v_V.push_back(0.0);
+      in.clutch.push_back(0.0);
+      in.r_load_ohm.push_back(model::k_open_circuit);
+      in.i_cmd_A.push_back(level);
+    }
+  }
+  const model::Outputs out = model::simulate(rig, in);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  std::vector<double> logged = in.i_cmd_A;
+  for (double& i : logged) i += noise(rng);
+  table::Table t;
+  t.source = "servo.csv";
+  t.set("t", in.t_s);
+  t.set("omega", out.omega_rad_s);
+  t.set("i", logged);
+  model::Params given = rig.params;
+  given.motor.J_kg_m2 /= 10.0;
+  FrictionOptions options;
+  options.drive.current = true;
+  options.order = 1;
+  options.static_friction = false;
+  options.settle_s = 1.2;
+  const model::Friction& truth = rig.params.motor.friction;
+  const FrictionResult r = fit_friction({t}, given, options);
+  ASSERT_EQ(r.states.size(), 1U);
+  EXPECT_NEAR(r.states[0].total.value.Tc_Nm, truth.Tc_Nm, 0.01 * truth.Tc_Nm);
+  EXPECT_NEAR(r.states[0].total.value.viscous[0], truth.viscous[0], 0.01 * truth.viscous[0]);
+  const double windows = static_cast<double>(r.states[0].windows);
+  options.jump = 1e9;
+  const FrictionResult blind = fit_friction({t}, given, options);
+  ASSERT_EQ(blind.states.size(), 1U);
+  const double off_tc = std::abs(blind.states[0].total.value.Tc_Nm / truth.Tc_Nm - 1.0);
+  const double off_c1 = std::abs(blind.states[0].total.value.viscous[0] / truth.viscous[0] - 1.0);
+  EXPECT_GT(std::max(off_tc, off_c1), 0.04);
+  // The steps skip their settling time, and the noise skips nothing: about half the windows stay.
+  EXPECT_LT(windows, static_cast<double>(blind.states[0].windows) - 30.0);
+  EXPECT_GT(windows, 0.3 * static_cast<double>(blind.states[0].windows));
+}
+
 /// Holds of a driven shaft whose friction each hold sees shifted by its own bias (a real
 /// shaft's friction varies with position and temperature): the windows of a hold err together.
 /// The OLS error takes the ~19 windows of a hold as independent and is several times too small;

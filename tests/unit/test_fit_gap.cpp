@@ -2,6 +2,7 @@
 // of runs with withheld effects run the Release tools in tests/sh/test_gap.sh (each one
 // simulates hundreds of runs: too slow for the sanitizer build of these tests).
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -48,6 +49,32 @@ TEST(GapEvents, ClutchRelayAndVoltageJumpsAreEventsSmallStepsAreNot) {
   EXPECT_TRUE(mask[200]);
   EXPECT_TRUE(mask[299]);   // t = 0.299 < 0.2 + 0.1
   EXPECT_FALSE(mask[300]);  // t = 0.300 is 100 ms after the event
+}
+
+// On a current- or torque-driven run the drive's own command jumps (v is 0 throughout): a
+// step of more than 5 % of its largest value is an event, its noise (a logged current) is not,
+// and a step that noise would hide is not either.
+TEST(GapEvents, ADrivenRunsEventsAreItsCommandsSteps) {
+  model::Inputs in = constant_inputs(1000, 0.001, 0.0, 0, k_inf);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.004);
+  for (std::size_t n = 0; n < 1000; ++n) {
+    const double level = n < 250 ? 0.2 : n < 500 ? 1.0 : n < 750 ? 0.97 : -0.6;
+    in.i_cmd_A.push_back(level + noise(rng));
+  }
+  const std::vector<std::size_t> expected{250, 750};
+  EXPECT_EQ(event_rows(in), expected) << "0.03 A is within 10 times the noise's typical change";
+  const std::vector<bool> mask = transient_mask(in);
+  EXPECT_TRUE(mask[250]);
+  EXPECT_TRUE(mask[349]);
+  EXPECT_FALSE(mask[350]);
+  EXPECT_FALSE(mask[500]);
+  model::Inputs torque = in;
+  torque.T_cmd_Nm = in.i_cmd_A;
+  for (double& x : torque.T_cmd_Nm) x *= 0.05;
+  torque.i_cmd_A.clear();
+  EXPECT_EQ(event_rows(torque), expected) << "the same in N m";
+  EXPECT_DOUBLE_EQ(drive_jump(in.v_V, model::DriveKind::voltage, 1.0, 0.05), 1.0);
 }
 
 TEST(GapRegimes, RmsAndSharesPerRegimeAreExact) {
@@ -477,11 +504,44 @@ TEST(GapDecision, AnUndeterminedCandidateIsNeverTheDiagnosis) {
   // A bound is flagged on the row but does not disqualify.
   EXPECT_NE(csv.str().find(",1,fitted,param_mismatch.J_scale at a bound\n"), std::string::npos) << csv.str();
   // The parameters the refit is degenerate in are not freed without a current.
-  const auto speed_only = gap_detail::mismatch_free({}, model::builtin_rig(), false);
+  fit::Run run;
+  run.inputs = constant_inputs(100, 0.001, 3.0, 2, k_inf);
+  run.outputs = {"rpm"};
+  const auto speed_only = gap_detail::mismatch_free({}, model::builtin_rig(), {run});
   EXPECT_EQ(std::count(speed_only.begin(), speed_only.end(), "param_mismatch.R_scale"), 0);
-  const auto with_current = gap_detail::mismatch_free({}, model::builtin_rig(), true);
+  run.outputs = {"rpm", "i"};
+  const auto with_current = gap_detail::mismatch_free({}, model::builtin_rig(), {run});
   EXPECT_EQ(std::count(with_current.begin(), with_current.end(), "param_mismatch.R_scale"), 1);
   EXPECT_EQ(with_current.size(), speed_only.size() + 1);
+}
+
+// The refit frees only the nominal scales whose parameters act in the training runs: a motor
+// alone given without friction has none to scale, whatever the (built-in) generator's and clutch's
+// friction, which only an attached or engaged clutch puts on the shaft; a current-driven motor's
+// Kt only scales J and the friction with it, unless the generator's load shows it.
+TEST(GapSearch, TheRefitFreesOnlyScalesThatActInTheRuns) {
+  model::Params motor_alone = model::builtin_rig();
+  motor_alone.motor.friction = {};
+  const auto freed = [&](const model::Params& p, double clutch, double r_load_ohm, bool current) {
+    fit::Run run;
+    run.inputs = constant_inputs(100, 0.001, 3.0, 0, k_inf);
+    run.inputs.clutch.back() = clutch;
+    run.inputs.r_load_ohm.back() = r_load_ohm;
+    if (current) run.inputs.i_cmd_A.assign(100, 0.1);
+    run.outputs = {"rpm"};
+    std::vector<std::string> out;
+    for (const std::string& f : gap_detail::mismatch_free({}, p, {run})) out.push_back(f.substr(15));
+    return fmt::format("{}", fmt::join(out, " "));
+  };
+  EXPECT_EQ(freed(motor_alone, 0, k_inf, false), "Kt_scale J_scale");
+  EXPECT_EQ(freed(motor_alone, 1, k_inf, false), "Kt_scale J_scale coulomb_scale static_scale viscous_scale");
+  EXPECT_EQ(freed(motor_alone, 2, k_inf, false), "Kt_scale J_scale coulomb_scale static_scale viscous_scale");
+  EXPECT_EQ(freed(model::builtin_rig(), 0, k_inf, false),
+            "Kt_scale J_scale coulomb_scale static_scale viscous_scale");
+  EXPECT_EQ(freed(motor_alone, 0, k_inf, true), "J_scale");
+  EXPECT_EQ(freed(model::builtin_rig(), 0, k_inf, true), "J_scale coulomb_scale static_scale viscous_scale");
+  EXPECT_EQ(freed(motor_alone, 2, k_inf, true), "J_scale coulomb_scale static_scale viscous_scale");
+  EXPECT_EQ(freed(motor_alone, 2, 4.0, true), "Kt_scale J_scale coulomb_scale static_scale viscous_scale");
 }
 
 // The emulated board running exactly the given model: the validation score is 1.81 against
@@ -697,9 +757,56 @@ TEST(GapDrive, EffectsTheCurrentLoopOverridesAreNotApplicable) {
   }
   EXPECT_EQ(listed, 4U);
   EXPECT_EQ(report.drive_input, "i");
+  // The residual series carry the drive's own column, the command in A (not a v of zeros).
+  std::ostringstream series;
+  write_gap_residuals(series, report, data);
+  std::istringstream in(series.str());
+  const table::Table written = table::read(in, "residuals.csv");
+  EXPECT_FALSE(written.has("v"));
+  ASSERT_TRUE(written.has("i"));
+  const ScoredRun& scored = data.validate.front();
+  ASSERT_EQ(written.rows(), scored.run.inputs.t_s.size() - scored.first_scored);
+  for (std::size_t n = 0; n < written.rows(); ++n)
+    ASSERT_NEAR(written.col("i")[n], scored.run.inputs.i_cmd_A[scored.first_scored + n], 1e-9) << n;
   // A residual the dead time leaves after each step of the command: correlated with it.
   EXPECT_FALSE(report.white_before.independent());
   EXPECT_GT(report.white_before.max_cross, 0.2);
+}
+
+// Every effect's starting grid is sized by the given model and its drive: on a current drive by
+// the torque its command applies (5 Kt max|i|, here 0.2 A) and the speed the runs reach, not by a
+// stall torque Kt supply_V / R that no current loop has (5.1 times larger here); the grids stated
+// for the built-in rig's voltage drive keep their values there exactly, and scale with another
+// motor's resistance or supply.
+TEST(GapSearch, StartingGridsScaleWithTheModelAndTheDrive) {
+  const GapData data = current_driven_data();
+  const model::Params rig = model::builtin_rig();
+  const model::DriveScale drive = gap_detail::drive_scale(rig, data.train);
+  EXPECT_DOUBLE_EQ(drive.torque_Nm, 5.0 * rig.motor.Kt_Nm_A * 0.2);
+  double fastest_rpm = 0.0;
+  for (double y : data.train.front().measured.front()) fastest_rpm = std::max(fastest_rpm, std::abs(y));
+  EXPECT_DOUBLE_EQ(drive.speed_rad_s, fastest_rpm * k_rad_s_per_rpm);
+  const auto scale = [&](std::string_view effect, const model::Params& p, const model::DriveScale& d) {
+    return model::find_effect(effect)->plan.grid_scale(p, d);
+  };
+  const model::DriveScale stall = model::voltage_drive_scale(rig);
+  const std::vector<double> levels = scale("friction_levels", rig, drive);
+  EXPECT_DOUBLE_EQ(levels[0], drive.torque_Nm);
+  EXPECT_DOUBLE_EQ(levels[2], drive.torque_Nm / drive.speed_rad_s);
+  EXPECT_DOUBLE_EQ(scale("friction_asymmetry", rig, drive)[0], drive.torque_Nm / stall.torque_Nm);
+  EXPECT_DOUBLE_EQ(scale("cogging", rig, drive)[0], drive.torque_Nm / stall.torque_Nm);
+  EXPECT_DOUBLE_EQ(scale("stribeck", rig, drive)[0], drive.speed_rad_s / stall.speed_rad_s);
+  for (const char* name :
+       {"friction_asymmetry", "cogging", "stribeck", "brush_drop", "hbridge", "supply_sag"}) {
+    for (double f : scale(name, rig, stall)) EXPECT_EQ(f, 1.0) << name;
+  }
+  model::Params small = rig;
+  small.motor.R_ohm = 2.0 * rig.motor.R_ohm;
+  small.supply_V = 0.5 * rig.supply_V;
+  EXPECT_DOUBLE_EQ(scale("hbridge", small, model::voltage_drive_scale(small))[0], 2.0);
+  EXPECT_DOUBLE_EQ(scale("supply_sag", small, model::voltage_drive_scale(small))[0], 2.0);
+  EXPECT_DOUBLE_EQ(scale("brush_drop", small, model::voltage_drive_scale(small))[0], 0.5);
+  EXPECT_DOUBLE_EQ(scale("friction_asymmetry", small, model::voltage_drive_scale(small))[0], 0.25);
 }
 
 // gap's standard errors are the fit's widened for the residuals' autocorrelation

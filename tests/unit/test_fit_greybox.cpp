@@ -383,8 +383,10 @@ TEST(FitGreybox, BroydenUpdatesFitEveryEffectAsFiniteDifferencesDo) {
     const model::EffectPlan& plan = spec.plan;
     if (!plan.candidate || plan.free.empty()) continue;
     const model::Model nominal;
-    const std::vector<double> scale = plan.grid_scale != nullptr ? plan.grid_scale(nominal.params)
-                                                                 : std::vector<double>(plan.free.size(), 1.0);
+    const std::vector<double> scale =
+        plan.grid_scale != nullptr
+            ? plan.grid_scale(nominal.params, model::voltage_drive_scale(nominal.params))
+            : std::vector<double>(plan.free.size(), 1.0);
     model::Model truth = nominal;
     model::Model start = nominal;
     truth.effects.push_back(model::default_effect(spec.name));

@@ -57,12 +57,14 @@ double second_difference_noise(std::span<const double> y, Use use) {
 
 std::vector<std::size_t> event_rows(const model::Inputs& inputs) {
   std::vector<std::size_t> events;
+  const std::vector<double>& u = drive_command(inputs);
+  const double jump_limit = drive_jump(u, drive_kind(inputs), k_event_voltage_jump_V, k_event_drive_share);
   for (std::size_t n = 1; n < inputs.t_s.size(); ++n) {
     const bool clutch = inputs.clutch[n] != inputs.clutch[n - 1];
     const double r0 = inputs.r_load_ohm[n - 1];
     const double r1 = inputs.r_load_ohm[n];
     const bool relay = relay_closed(r0) != relay_closed(r1) || (relay_closed(r0) && r0 != r1);
-    const bool jump = std::abs(inputs.v_V[n] - inputs.v_V[n - 1]) > k_event_voltage_jump_V;
+    const bool jump = std::abs(u[n] - u[n - 1]) > jump_limit;
     if (clutch || relay || jump) events.push_back(n);
   }
   return events;

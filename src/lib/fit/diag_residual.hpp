@@ -17,12 +17,17 @@ namespace mcg::fit {
 inline constexpr double k_transient_window_s = 0.1;
 /// A jump of the applied voltage larger than this between two rows is an event, V.
 inline constexpr double k_event_voltage_jump_V = 1.0;
+/// On a current or torque drive, a jump of the command by more than this share of its largest
+/// magnitude (and far beyond its row-to-row noise: drive_jump) is an event.
+inline constexpr double k_event_drive_share = 0.05;
 /// The report's low-speed regime: moving slower than this share of the largest |speed| measured
 /// (relative, so that it means the same on a 60:1 gearmotor's output shaft and a fast spindle).
 inline constexpr double k_low_speed_share = 0.05;
 
 /// Row indices n (n >= 1) where an input changes: the clutch state, the relay (r_load
-/// switching between open and closed or changing value), or |v(n) - v(n-1)| > 1 V.
+/// switching between open and closed or changing value), or the drive's command jumps
+/// (drive_command(inputs)): |v(n) - v(n-1)| > 1 V; a current or torque command by more than
+/// drive_jump(u, kind, 1 V, k_event_drive_share).
 std::vector<std::size_t> event_rows(const model::Inputs& inputs);
 
 /// Per row: true when the row lies within k_transient_window_s after an event row

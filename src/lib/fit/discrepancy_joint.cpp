@@ -31,8 +31,7 @@ JointFit joint_refit(const model::Model& model, std::size_t first_term, const st
   if (!start.effect("param_mismatch")) start.effects.push_back(model::default_effect("param_mismatch"));
   std::vector<std::string> effects;
   for (const model::Effect& e : model.effects) effects.push_back(e.name);
-  std::vector<std::string> nominal =
-      gap_detail::mismatch_free({}, model.params, gap_detail::measures_current(data.train), effects);
+  std::vector<std::string> nominal = gap_detail::mismatch_free({}, model.params, data.train, effects);
   for (const model::Effect& e : model.effects) {
     const model::EffectSpec* spec = model::find_effect(e.name);
     if (spec == nullptr || e.name == "param_mismatch") continue;

@@ -107,6 +107,13 @@ void collect(const table::Table& logged, const model::Params& p, const FrictionO
                                                                                : nullptr;
   const std::vector<double>* current_gen = options.use_current && table.has("i_gen") ? &table.col("i_gen") : nullptr;
   const std::vector<double>* torque = direct ? &table.col(drive_input.torque_column) : nullptr;
+  // The drive's own command as logged: its steps are the transients the windows skip.
+  const std::vector<double>& command = direct ? *torque : drive_input.current ? table.col("i") : in.v_V;
+  const model::DriveKind kind = direct                ? model::DriveKind::torque
+                                : drive_input.current ? model::DriveKind::current
+                                                      : model::DriveKind::voltage;
+  const double jump =
+      options.jump ? *options.jump : drive_jump(command, kind, k_friction_jump_V, k_friction_jump_share);
 
   const auto& m = p.motor;
   std::vector<double> drive(n);
@@ -129,8 +136,9 @@ void collect(const table::Table& logged, const model::Params& p, const FrictionO
   ++block;
   std::size_t start = 0;
   for (std::size_t k = 0; k < n; ++k) {
-    const bool changed = k > 0 && (std::abs(in.v_V[k] - in.v_V[k - 1]) > options.jump_V ||
-                                   in.clutch[k] != in.clutch[k - 1] || in.r_load_ohm[k] != in.r_load_ohm[k - 1]);
+    const bool changed =
+        k > 0 && (std::abs(command[k] - command[k - 1]) > jump || in.clutch[k] != in.clutch[k - 1] ||
+                  in.r_load_ohm[k] != in.r_load_ohm[k - 1]);
     if (changed) event_t = in.t_s[k];
     if (changed || in.t_s[k] - block_t >= k_block_s) {
       block_t = in.t_s[k];

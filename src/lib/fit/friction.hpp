@@ -16,13 +16,23 @@
 
 namespace mcg::fit {
 
+/// A jump of v by more than this between rows is a step of the drive, V (a slow ramp moves it
+/// by millivolts a row).
+inline constexpr double k_friction_jump_V = 0.05;
+/// On a current or torque drive, a jump of the command by more than this share of its largest
+/// magnitude (and far beyond its row-to-row noise: drive_jump) is a step.
+inline constexpr double k_friction_jump_share = 0.05;
+
 struct FrictionOptions {
   /// Order of the viscous polynomial P(x) = c1 x + ... + c_order x^order (1..3).
   int order = 3;
-  /// Samples closer than settle_s after a jump of v larger than jump_V (or a change of
-  /// clutch or r_load) are transients and skipped; a slow ramp never jumps.
+  /// Samples closer than settle_s after a jump of the drive's command (DriveInput: v, or a
+  /// current or torque drive's own column) larger than `jump` (or a change of clutch or r_load)
+  /// are transients and skipped; a slow ramp never jumps.
   double settle_s = 0.15;
-  double jump_V = 0.05;
+  /// In the command's unit (V; A; the torque column's). Unset: k_friction_jump_V on a voltage
+  /// drive; on a current or torque drive drive_jump()'s with k_friction_jump_share.
+  std::optional<double> jump;
   /// Length of the averaging windows in the quasi-steady stretches, s.
   double window_s = 0.1;
   /// Use the measured current `i` where the run has it (else the voltage balance).

@@ -168,6 +168,29 @@ std::size_t floor_index(const std::vector<OutputFloor>& floors, const std::strin
   return std::string::npos;
 }
 
+model::DriveScale drive_scale(const model::Params& p, const std::vector<Run>& runs) {
+  const model::DriveScale voltage = model::voltage_drive_scale(p);
+  if (runs.empty() || drive_kind(runs.front()) == model::DriveKind::voltage) return voltage;
+  double torque_Nm = 0.0;
+  double speed_rad_s = 0.0;
+  for (const Run& run : runs) {
+    const bool current = drive_kind(run) == model::DriveKind::current;
+    for (double u : current ? run.inputs.i_cmd_A : run.inputs.T_cmd_Nm) {
+      if (std::isfinite(u)) torque_Nm = std::max(torque_Nm, std::abs(current ? p.motor.Kt_Nm_A * u : u));
+    }
+    for (std::size_t o = 0; o < run.outputs.size(); ++o) {
+      const double to_rad_s = run.outputs[o] == "rpm"     ? k_rad_s_per_rpm
+                              : run.outputs[o] == "omega" ? 1.0
+                                                          : 0.0;
+      for (double y : run.measured[o]) {
+        if (std::isfinite(y)) speed_rad_s = std::max(speed_rad_s, std::abs(y) * to_rad_s * run.gear_ratio);
+      }
+    }
+  }
+  return {torque_Nm > 0.0 ? k_command_headroom * torque_Nm : voltage.torque_Nm,
+          speed_rad_s > 0.0 ? speed_rad_s : voltage.speed_rad_s};
+}
+
 std::size_t validation_count(const GapData& data) {
   std::size_t n = 0;
   for (const ScoredRun& sr : data.validate) n += sr.run.inputs.t_s.size() - sr.first_scored;

@@ -45,6 +45,16 @@ inline constexpr double k_unstated_moving_share = 0.01;
 double speed_resolution(const Run& run);
 /// Scored validation rows.
 std::size_t validation_count(const GapData& data);
+/// A current or torque drive's runs command a few times the friction they must overcome, a
+/// voltage drive's stall torque some 25 times it (the grids' Coulomb starts are 0.2-4 % of it):
+/// the torque such a drive can apply is taken as this multiple of the largest it commands.
+inline constexpr double k_command_headroom = 5.0;
+/// The size of the runs' drive (model::DriveScale), which the effects' starting grids scale
+/// with: a voltage drive's stall torque and no-load speed (model::voltage_drive_scale); on a
+/// current drive k_command_headroom times the torque Kt max|i| of its largest command, on a
+/// torque drive times its largest torque at the motor shaft, and for both the fastest the motor
+/// shaft turns in the runs (the voltage drive's figures where the runs give none).
+model::DriveScale drive_scale(const model::Params& p, const std::vector<Run>& runs);
 /// Index of output `name` in `floors`, or npos.
 std::size_t floor_index(const std::vector<OutputFloor>& floors, const std::string& name);
 
@@ -73,14 +83,18 @@ double residual_noise(const GapData& data, const Evaluation& ev, const std::stri
 bool measures_current(const std::vector<Run>& runs);
 
 /// The nominal scales of param_mismatch a refit moves ("param_mismatch.Kt_scale", ...): those
-/// --fix does not pin (`fixed`), that multiply something in `p` (a model without friction has
-/// no Coulomb level to scale: its scale is undetermined) and that none of `effects`
-/// supersedes (friction_levels adds to the levels they scale). Without a measured current
-/// (`current` false) R_scale is left at 1: speed alone fixes only Kt and the ratios R Tc/Kt,
-/// R c/Kt and R J/Kt (the motor equation divided by Kt/R), so R_scale with the inertia and
-/// friction scales is a degenerate set (mcg-fit model leaves R alone likewise). Throws when
-/// --fix pins them all.
-std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, const model::Params& p, bool current,
+/// --fix does not pin (`fixed`), that multiply something in `p` that acts in `runs` (a friction
+/// element the runs' clutch states put on a turning shaft: the generator's and the clutch's act
+/// only with the clutch attached or engaged; a model without friction has no Coulomb level to
+/// scale: its scale is undetermined) and that none of `effects` supersedes (friction_levels adds
+/// to the levels they scale). Without a measured current R_scale is left at 1: speed alone
+/// fixes only Kt and the ratios R Tc/Kt, R c/Kt and R J/Kt (the motor equation divided by Kt/R),
+/// so R_scale with the inertia and friction scales is a degenerate set (mcg-fit model leaves R
+/// alone likewise). On a current- or torque-driven run Kt_scale is left at 1 unless the
+/// generator's load current or EMF shows it: the drive sets the torque, and Kt would only scale
+/// J and the friction with it. Throws when --fix pins them all.
+std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, const model::Params& p,
+                                       const std::vector<Run>& runs,
                                        const std::vector<std::string>& effects = {});
 
 /// Starting points of the friction candidates from the training runs themselves: the friction

@@ -412,7 +412,10 @@ void write_gap_residuals(std::ostream& out, const GapReport& report, const GapDa
   for (std::size_t r = 0; r < data.validate.size(); ++r) {
     w.meta(fmt::format("run_{}", r + 1), data.validate[r].run.source);
   }
-  std::vector<std::string> names = {"run", "t", "v", "clutch", "r_load", "transient"};
+  // The drive's own column as the data log it (v, a current loop's i, the torque column), so
+  // that a driven run's residual is plotted against what drove it.
+  const std::string drive = data.validate.empty() ? "v" : drive_name(data.validate.front().run);
+  std::vector<std::string> names = {"run", "t", drive, "clutch", "r_load", "transient"};
   for (const auto& f : report.floors) {
     for (const char* suffix : {"", "_before", "_after", "_res_before", "_res_after"})
       names.push_back(output_name(report, f.output) + suffix);
@@ -426,7 +429,7 @@ void write_gap_residuals(std::ostream& out, const GapReport& report, const GapDa
     for (std::size_t n = sr.first_scored; n < in.t_s.size(); ++n) {
       row[0] = static_cast<double>(r + 1);
       row[1] = in.t_s[n];
-      row[2] = in.v_V[n];
+      row[2] = drive_command(sr.run)[n];
       row[3] = in.clutch[n];
       row[4] = in.r_load_ohm[n];
       row[5] = transient[n] ? 1.0 : 0.0;

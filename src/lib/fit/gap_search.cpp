@@ -189,10 +189,19 @@ model::Model grid_start(const std::vector<model::Model>& bases, const model::Eff
   std::vector<std::vector<double>> axes = plan.grid;
   std::vector<std::string> keys = plan.free;
   if (plan.grid_scale != nullptr) {
-    const std::vector<double> scale = plan.grid_scale(bases.front().params);
+    const std::vector<double> scale =
+        plan.grid_scale(bases.front().params, drive_scale(bases.front().params, runs));
     MCG_DEMAND(scale.size() == axes.size());
+    // Scaled to another motor or drive, a start stays inside the range the fit keeps it in.
+    const std::vector<model::ParamInfo> ranges = model::parameters(bases.front());
     for (std::size_t k = 0; k < axes.size(); ++k) {
-      for (double& v : axes[k]) v *= scale[k];
+      const auto range = std::find_if(ranges.begin(), ranges.end(), [&](const auto& info) {
+        return info.name == effect.name + "." + keys[k];
+      });
+      for (double& v : axes[k]) {
+        v *= scale[k];
+        if (range != ranges.end()) v = std::clamp(v, range->lower, range->upper);
+      }
     }
   }
   if (!plan.angle_order_key.empty() && !orders.empty()) {
@@ -746,20 +755,48 @@ bool measures_current(const std::vector<Run>& runs) {
   });
 }
 
-std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, const model::Params& p, bool current,
+std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, const model::Params& p,
+                                       const std::vector<Run>& runs,
                                        const std::vector<std::string>& effects) {
-  const model::Friction* all[] = {&p.motor.friction, &p.generator.friction, &p.clutch_disengaged,
-                                  &p.clutch_engaged};
-  auto any = [&](auto level) { return std::any_of(std::begin(all), std::end(all), level); };
+  const bool current = measures_current(runs);
+  bool detached = false;
+  bool engaged = false;
+  bool generator_shows = false;
+  bool driven = false;
+  for (const Run& run : runs) {
+    driven = driven || drive_kind(run) != model::DriveKind::voltage;
+    for (std::size_t n = 0; n < run.inputs.clutch.size(); ++n) {
+      detached = detached || run.inputs.clutch[n] == 1.0;
+      engaged = engaged || run.inputs.clutch[n] == 2.0;
+      generator_shows =
+          generator_shows || (run.inputs.clutch[n] == 2.0 && std::isfinite(run.inputs.r_load_ohm[n]));
+    }
+    for (const auto& o : run.outputs) generator_shows = generator_shows || o == "i_gen" || o == "v_gen";
+  }
+  // The friction elements the runs' clutch states put on a turning shaft (mcg-fit friction's
+  // stacking): the motor's always, the attached clutch's in state 1, the generator's and the
+  // engaged clutch's in state 2.
+  const model::Friction* const none = nullptr;
+  const model::Friction* const all[] = {&p.motor.friction, detached ? &p.clutch_disengaged : none,
+                                        engaged ? &p.generator.friction : none,
+                                        engaged ? &p.clutch_engaged : none};
+  auto any = [&](auto level) {
+    return std::any_of(std::begin(all), std::end(all),
+                       [&](const model::Friction* f) { return f && level(f); });
+  };
   const bool coulomb = any([](const model::Friction* f) { return f->Tc_Nm != 0.0; });
   const bool statics = any([](const model::Friction* f) { return f->Ts_Nm != 0.0; });
   const bool viscous = any([](const model::Friction* f) {
     return std::any_of(f->viscous.begin(), f->viscous.end(), [](double c) { return c != 0.0; });
   });
+  // A current or torque drive sets the motor's torque itself: Kt then only scales J and the
+  // friction together (or nothing), unless the generator's load current or EMF shows it.
+  const bool torque_constant = !driven || generator_shows;
   std::vector<std::string> free;
   for (const auto& s : mismatch_scales()) {
     if ((s == "coulomb_scale" && !coulomb) || (s == "static_scale" && !statics) ||
-        (s == "viscous_scale" && !viscous) || (s == "R_scale" && !current)) {
+        (s == "viscous_scale" && !viscous) || (s == "R_scale" && !current) ||
+        (s == "Kt_scale" && !torque_constant)) {
       continue;
     }
     const bool superseded = std::any_of(effects.begin(), effects.end(), [&](const std::string& e) {
@@ -868,7 +905,6 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
                              const std::vector<OutputFloor>& floors, const Evaluation& before, bool gap,
                              const GapSettings& settings) {
   const std::size_t outputs = floors.size();
-  const bool has_current = measures_current(data.train);
   const auto n_val = static_cast<double>(validation_count(data) * outputs);
   auto fpe = [&](double score, std::size_t k) { return gap_detail::fpe(score, k, n_val); };
 
@@ -889,7 +925,15 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   // The refit of the nominal parameters, warm start of every effect candidate.
   model::Model base = model;
   add_effect(base, "param_mismatch");
-  Job pm_job{"param_mismatch", {}, base, mismatch_free(settings.fixed, model.params, has_current), {}, 20, {}, {}, {}};
+  Job pm_job{"param_mismatch",
+             {},
+             base,
+             mismatch_free(settings.fixed, model.params, data.train),
+             {},
+             20,
+             {},
+             {},
+             {}};
   if (settings.progress) settings.progress("fitting param_mismatch (nominal parameters)");
   std::vector<GapCandidate> pm_result = run_jobs({pm_job}, data, floors, settings, {}, done, total);
   GapCandidate pm = std::move(pm_result.front());
@@ -920,8 +964,11 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       ++done;
       continue;
     }
-    Job job{plan.name,   {plan.name}, pm.model, mismatch_free(settings.fixed, model.params, has_current, {plan.name}),
-            {plan.name}, 15,          {},       {base}, {}};
+    Job job{plan.name,   {plan.name},
+            pm.model,    mismatch_free(settings.fixed, model.params, data.train, {plan.name}),
+            {plan.name}, 15,
+            {},          {base},
+            {}};
     add_effect(job.start, plan.name);
     for (const auto& key : plan.plan.free) {
       job.free.push_back(plan.name + "." + key);
@@ -959,7 +1006,15 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
     if (best < pm_cost) {
       if (settings.progress) settings.progress("refitting param_mismatch from a better start");
       ++total;
-      Job again{"param_mismatch", {}, start, mismatch_free(settings.fixed, model.params, has_current), {}, 10, {}, {}, {}};
+      Job again{"param_mismatch",
+                {},
+                start,
+                mismatch_free(settings.fixed, model.params, data.train),
+                {},
+                10,
+                {},
+                {},
+                {}};
       GapCandidate refit = std::move(run_jobs({again}, data, floors, settings, {}, done, total).front());
       refit.fpe = fpe(refit.score, refit.free.size());
       if (refit.evaluated && training_cost(refit.model, data.train) < pm_cost) pm = std::move(refit);
@@ -1029,8 +1084,15 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         for (const auto& m : members) name += (name.empty() ? "" : "+") + m;
         // Started from the current model with the added effect at its single-fit values, or
         // from the model as given with every member at its single-fit values.
-        Job job{name, members, current.model, mismatch_free(settings.fixed, model.params, has_current, members), {},
-                10,   {},      {base}, {}};
+        Job job{name,
+                members,
+                current.model,
+                mismatch_free(settings.fixed, model.params, data.train, members),
+                {},
+                10,
+                {},
+                {base},
+                {}};
         job.extension = true;
         for (const auto& f : current.free) {
           if (!f.starts_with("param_mismatch.")) job.free.push_back(f);

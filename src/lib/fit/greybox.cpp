@@ -220,6 +220,42 @@ model::DriveKind drive_kind(const Run& run) {
   return model::DriveKind::voltage;
 }
 
+const std::vector<double>& drive_command(const model::Inputs& inputs) {
+  switch (drive_kind(inputs)) {
+    case model::DriveKind::current:
+      return inputs.i_cmd_A;
+    case model::DriveKind::torque:
+      return inputs.T_cmd_Nm;
+    case model::DriveKind::voltage:
+      break;
+  }
+  return inputs.v_V;
+}
+
+model::DriveKind drive_kind(const model::Inputs& inputs) {
+  if (!inputs.i_cmd_A.empty()) return model::DriveKind::current;
+  if (!inputs.T_cmd_Nm.empty()) return model::DriveKind::torque;
+  return model::DriveKind::voltage;
+}
+
+double drive_jump(std::span<const double> command, model::DriveKind kind, double jump_V, double share) {
+  if (kind == model::DriveKind::voltage) return jump_V;
+  double largest = 0.0;
+  std::vector<double> changes;
+  for (std::size_t n = 0; n < command.size(); ++n) {
+    if (!std::isfinite(command[n])) continue;
+    largest = std::max(largest, std::abs(command[n]));
+    if (n > 0 && std::isfinite(command[n - 1])) changes.push_back(std::abs(command[n] - command[n - 1]));
+  }
+  double typical = 0.0;
+  if (!changes.empty()) {
+    const auto q90 = changes.begin() + static_cast<std::ptrdiff_t>((changes.size() - 1) * 9 / 10);
+    std::nth_element(changes.begin(), q90, changes.end());
+    typical = *q90;
+  }
+  return std::max(share * largest, k_jump_over_typical * typical);
+}
+
 std::string drive_name(const Run& run) {
   switch (drive_kind(run)) {
     case model::DriveKind::current:

@@ -111,6 +111,24 @@ model::DriveKind drive_kind(const Run& run);
 /// How reports name drive_command(run): "v", "i" or the torque column.
 std::string drive_name(const Run& run);
 
+/// The command of `inputs` (what drive_command() reads off a run): the current loop's command
+/// i_cmd_A (A), else the drive torque T_cmd_Nm (N m at the motor shaft), else v_V (V).
+const std::vector<double>& drive_command(const model::Inputs& inputs);
+/// The kind of drive_command(inputs).
+model::DriveKind drive_kind(const model::Inputs& inputs);
+
+/// A current or torque command's change between two rows counts as a jump only beyond this
+/// multiple of its 90th-percentile row-to-row change: a logged reading's noise, or a feedback
+/// controller's work, moves it every row; a step of the command moves it far more.
+inline constexpr double k_jump_over_typical = 10.0;
+
+/// The change of a drive command between two rows that counts as a jump (an input event), in
+/// the command's unit: `jump_V` on a voltage drive; on a current or torque drive, whose size no
+/// volt describes, the larger of `share` of the command's largest magnitude and
+/// k_jump_over_typical times the 90th percentile of its row-to-row changes (finite rows only):
+///   jump = max(share max|u|, 10 q90(|u(n) - u(n-1)|)).
+double drive_jump(std::span<const double> command, model::DriveKind kind, double jump_V, double share);
+
 /// Pins parameters at measured values: each "NAME=VALUE" (names as model::parameters()
 /// spells them) is set in `model`; returns the names. Throws mcg::Error "--fix: ..." for a
 /// malformed item, an unknown name or a value the INI form refuses (model::parameter_problem).

@@ -163,6 +163,25 @@ struct TermSeed {
 /// current loop's command, or the drive torque itself (commanded as a current).
 enum class DriveKind { voltage, current, torque };
 
+/// The size of a drive, which the diagnosis scales an effect's starting grid by: the torque it
+/// can apply to the motor shaft and the speed that shaft reaches (N m and rad/s; N and m/s on a
+/// linear axis).
+struct DriveScale {
+  double torque_Nm = 0.0;
+  double speed_rad_s = 0.0;
+};
+
+/// A voltage drive's size: the stall torque Kt supply_V / R and the no-load speed supply_V / Ke.
+DriveScale voltage_drive_scale(const Params& p);
+
+/// Per-key factors for a grid stated for the built-in rig's voltage drive
+/// (voltage_drive_scale(builtin_rig())), from the units `kind` names per key: 'T' a torque
+/// (drive.torque_Nm over the rig's), 'w' a speed (drive.speed_rad_s over the rig's), 'V' a
+/// voltage (supply_V over the rig's), 'R' a resistance (the motor's R over the rig's), '1' (or
+/// anything else) none.
+/// The built-in rig's own voltage drive gets factors of exactly 1.
+std::vector<double> builtin_grid_scale(std::string_view kind, const Params& nominal, const DriveScale& drive);
+
 /// How a report names a drive: "a voltage-driven drive", ...
 inline const char* drive_kind_text(DriveKind drive) {
   switch (drive) {
@@ -196,9 +215,9 @@ struct EffectPlan {
   /// starting values are the strongest orders of the residual over the measured angle.
   std::string angle_order_key;
   /// Per free key, the factor the grid values are multiplied by for the given nominal
-  /// parameters (grids in units of the motor's own size, e.g. its stall torque, so they fit
-  /// any motor); nullptr: the grid is absolute.
-  std::vector<double> (*grid_scale)(const Params& nominal) = nullptr;
+  /// parameters and the runs' drive (grids in units of the motor's and the drive's own size, e.g.
+  /// the torque it can apply, so they fit any motor and drive); nullptr: the grid is absolute.
+  std::vector<double> (*grid_scale)(const Params& nominal, const DriveScale& drive) = nullptr;
   /// Keys of param_mismatch the refit holds at 1 while this effect is in the model (they
   /// would move what the effect's own parameters move).
   std::vector<std::string> supersedes;
@@ -234,6 +253,11 @@ struct EffectPlan {
   /// This plan, started from discrepancy terms of the shapes of `seeds` as well.
   EffectPlan seeded_by_terms(std::vector<TermSeed> seeds) && {
     seeded_by = std::move(seeds);
+    return std::move(*this);
+  }
+  /// This plan with its grid scaled by `scale` (grid_scale).
+  EffectPlan scaled_by(std::vector<double> (*scale)(const Params&, const DriveScale&)) && {
+    grid_scale = scale;
     return std::move(*this);
   }
   /// This plan for an effect that acts where `where` says (Acts).

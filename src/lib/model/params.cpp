@@ -173,6 +173,36 @@ std::optional<std::string> parameter_problem(const Model& model, std::string_vie
   return std::nullopt;
 }
 
+DriveScale voltage_drive_scale(const Params& p) {
+  return {p.motor.Kt_Nm_A * p.supply_V / p.motor.R_ohm, p.supply_V / p.motor.Ke_V_s_rad};
+}
+
+std::vector<double> builtin_grid_scale(std::string_view kind, const Params& nominal,
+                                       const DriveScale& drive) {
+  static const Params rig = builtin_rig();
+  static const DriveScale reference = voltage_drive_scale(rig);
+  std::vector<double> out;
+  for (const char k : kind) {
+    switch (k) {
+      case 'T':
+        out.push_back(drive.torque_Nm / reference.torque_Nm);
+        break;
+      case 'w':
+        out.push_back(drive.speed_rad_s / reference.speed_rad_s);
+        break;
+      case 'V':
+        out.push_back(nominal.supply_V / rig.supply_V);
+        break;
+      case 'R':
+        out.push_back(nominal.motor.R_ohm / rig.motor.R_ohm);
+        break;
+      default:  // '1'
+        out.push_back(1.0);
+    }
+  }
+  return out;
+}
+
 Params builtin_rig() {
   Params p;
   p.motor = report_machine();

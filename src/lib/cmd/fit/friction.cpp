@@ -60,12 +60,13 @@ void FitFriction::define(CLI::App& app) {
   fr->add_option("--order", friction.fit.order, "order of the viscous polynomial")
       ->check(mcg::Range(1, 3))
       ->capture_default_str();
-  fr->add_option("--settle", friction.fit.settle_s, "time skipped after a jump of v, s")
+  fr->add_option("--settle", friction.fit.settle_s, "time skipped after a jump of the drive, s")
       ->check(mcg::Range(0.0, 100.0))
       ->capture_default_str();
-  fr->add_option("--jump", friction.fit.jump_V, "change of v between rows that counts as a jump, V")
-      ->check(mcg::Range(0.0, 100.0))
-      ->capture_default_str();
+  fr->add_option("--jump", friction.fit.jump,
+                 "change of the drive's command between rows that counts as a jump, in its unit "
+                 "(default 0.05 V; with --current or --torque 5 % of its largest value, above its noise)")
+      ->check(mcg::Range(0.0, 1e12));
   fr->add_option("--window", friction.fit.window_s, "averaging window, s")
       ->check(mcg::Range(0.002, 100.0))
       ->capture_default_str();

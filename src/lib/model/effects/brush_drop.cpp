@@ -1,5 +1,6 @@
 // brush_drop: a constant contact voltage drop of the brushes. Default 0.5 V for a pair of
-// metal-graphite brushes; the diagnosis starts from 0.2 V to carbon brushes' 2 V.
+// metal-graphite brushes; the diagnosis starts from 0.2 V to carbon brushes' 2 V (on the rig's
+// supply; scaled by the given supply over it).
 // Under a current-driven motor only the generator's circuit shows it, when that feeds a load.
 #include "model/effects/compiled.hpp"
 
@@ -18,6 +19,10 @@ std::vector<std::pair<std::string, double>> from_drop(const TermValues& t, const
   return {{"V_b_V", t.coefficient}};
 }
 
+std::vector<double> grid_scale(const Params& nominal, const DriveScale& drive) {
+  return builtin_grid_scale("V", nominal, drive);
+}
+
 }  // namespace
 
 EffectSpec brush_drop() {
@@ -27,6 +32,7 @@ EffectSpec brush_drop() {
           {{"V_b_V", 0.5, 0.0, 3.0, "V", "contact drop"}},
           compile,
           EffectPlan::fit({"V_b_V"}, {{0.2, 0.5, 1.0, 2.0}})
+              .scaled_by(grid_scale)
               .acting_in(EffectPlan::Acts::circuits)
               .seeded_by_terms({{TermShape::current_drop, from_drop}})};
 }

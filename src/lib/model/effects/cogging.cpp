@@ -1,7 +1,8 @@
 // cogging: position-dependent torque ripple on the motor shaft. Default 1 mN m at 14 per
 // revolution, the least common multiple of 7 slots and 2 poles of the usual small-motor
-// armature. The diagnosis starts amplitudes from a quarter to the whole Coulomb level, eight
-// phases, and the orders the residual's spectrum over the measured angle shows strongest.
+// armature. The diagnosis starts amplitudes from a quarter to the whole Coulomb level (the
+// rig's, scaled by the torque the drive can apply over the rig's stall torque), eight phases,
+// and the orders the residual's spectrum over the measured angle shows strongest.
 #include "model/effects/compiled.hpp"
 
 namespace mcg::model::effects {
@@ -25,6 +26,10 @@ std::vector<std::pair<std::string, double>> from_harmonic(const TermValues& t, c
   return {{"T_c_Nm", t.coefficient}, {"N_per_rev", t.order}, {"phase_rad", t.phase_rad}};
 }
 
+std::vector<double> grid_scale(const Params& nominal, const DriveScale& drive) {
+  return builtin_grid_scale("T1", nominal, drive);
+}
+
 }  // namespace
 
 EffectSpec cogging() {
@@ -39,6 +44,7 @@ EffectSpec cogging() {
       EffectPlan::fit({"T_c_Nm", "phase_rad"},
                       {{0.0006, 0.001, 0.0016, 0.0025}, {-2.75, -1.96, -1.18, -0.39, 0.39, 1.18, 1.96, 2.75}},
                       EffectPlan::Needs::nothing, "N_per_rev")
+          .scaled_by(grid_scale)
           .seeded_by_terms({{TermShape::angle_harmonic, from_harmonic}})};
 }
 

@@ -8,7 +8,8 @@
 // minus dT): this is the one parameter of that constant, fit::k_drive_offset, which a friction
 // fit's offset estimates too.
 // Default 0.5 mN m, a fifth of the rig's Coulomb level; the diagnosis starts from a tenth to
-// twice that level, either sign.
+// twice that level, either sign, scaled by the torque the drive can apply over the rig's stall
+// torque (model::builtin_grid_scale), so that a larger motor or a current drive starts alike.
 #include "model/effects/compiled.hpp"
 
 namespace mcg::model::effects {
@@ -27,6 +28,10 @@ std::vector<double> start_from_data(const DataFriction& seen, const Params& /*no
   return {seen.asymmetry_Nm};
 }
 
+std::vector<double> grid_scale(const Params& nominal, const DriveScale& drive) {
+  return builtin_grid_scale("T", nominal, drive);
+}
+
 }  // namespace
 
 EffectSpec friction_asymmetry() {
@@ -39,7 +44,8 @@ EffectSpec friction_asymmetry() {
           compile,
           EffectPlan::fit({"dT_Nm"}, {{-0.005, -0.0015, -0.0003, 0.0003, 0.0015, 0.005}},
                           EffectPlan::Needs::both_directions)
-              .as_friction(start_from_data)};
+              .as_friction(start_from_data)
+              .scaled_by(grid_scale)};
 }
 
 }  // namespace mcg::model::effects

@@ -2,11 +2,13 @@
 // model's own, as additive levels. A model given without friction (or with too little) has
 // nothing for param_mismatch's scales to multiply; this adds it, with exact stick-slip
 // through the plant's friction (not a torque term). The diagnosis starts the levels at
-// fractions of the motor's own stall torque Kt supply_V / R (Coulomb 0.2 %, 1 %, 4 %: from a
-// precision motor's bearings to a gearmotor's brushes and seals; static excess 0.1 % and 1 %)
-// and the viscous level at 0.1 % and 1 % of stall torque per no-load speed supply_V / Ke, so
-// the grid fits any motor. The starts are not 0: the fit moves positive levels in log
-// coordinates, by ratios.
+// fractions of the torque the drive can apply (a voltage drive's stall torque Kt supply_V / R,
+// a multiple of a current drive's Kt i_max or a torque drive's largest torque, DriveScale):
+// Coulomb 0.2 %, 1 %, 4 %, from a
+// precision motor's bearings to a gearmotor's brushes and seals; static excess 0.1 % and 1 %;
+// the viscous level at 0.1 % and 1 % of that torque per the drive's speed (the no-load speed
+// supply_V / Ke, or the fastest the runs turn), so the grid fits any motor and drive. The starts
+// are not 0: the fit moves positive levels in log coordinates, by ratios.
 #include <algorithm>
 
 #include "model/effects/compiled.hpp"
@@ -26,6 +28,11 @@ std::vector<double> stall_scale(const Params& p) {
   const double stall_Nm = p.motor.Kt_Nm_A * p.supply_V / p.motor.R_ohm;
   const double no_load_rad_s = p.supply_V / p.motor.Ke_V_s_rad;
   return {stall_Nm, stall_Nm, stall_Nm / no_load_rad_s};
+}
+
+/// The grid's scale: the drive's torque, per its speed for the viscous level.
+std::vector<double> drive_torque_scale(const Params& /*nominal*/, const DriveScale& drive) {
+  return {drive.torque_Nm, drive.torque_Nm, drive.torque_Nm / drive.speed_rad_s};
 }
 
 /// The levels the data show, each at least 1e-4 of its motor-sized scale: the fit moves the
@@ -49,7 +56,7 @@ EffectPlan plan() {
                                  {{0.002, 0.01, 0.04}, {0.001, 0.01}, {0.001, 0.01}})
                      .as_friction(start_from_data)
                      .seeded_by_terms({{TermShape::sign, from_sign}});
-  p.grid_scale = stall_scale;
+  p.grid_scale = drive_torque_scale;
   p.supersedes = {"coulomb_scale", "static_scale", "viscous_scale"};
   p.breakaway_key = "Ts_excess_Nm";
   return p;

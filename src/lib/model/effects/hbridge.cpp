@@ -1,6 +1,7 @@
 // hbridge: switch on-resistance and a duty deadband. Default 0.2 ohm per switch and 2 % of
 // the PWM period lost to dead time; the diagnosis starts from MOSFET to bipolar on-resistance
-// and deadbands of 0.5-6 % of the period.
+// (against the rig's armature; scaled by the given motor's R over it) and deadbands of 0.5-6 %
+// of the period.
 // It acts in the bridge: a current-driven drive's loop overrides it, the diagnosis does not try it there.
 #include "model/effects/compiled.hpp"
 
@@ -20,6 +21,10 @@ std::vector<std::pair<std::string, double>> from_dead_band(const TermValues& t, 
   return {{"deadband", t.coefficient / nominal.supply_V}};
 }
 
+std::vector<double> grid_scale(const Params& nominal, const DriveScale& drive) {
+  return builtin_grid_scale("R1", nominal, drive);
+}
+
 }  // namespace
 
 EffectSpec hbridge() {
@@ -30,6 +35,7 @@ EffectSpec hbridge() {
            {"deadband", 0.02, 0.0, 0.3, "1", "duty lost per PWM period"}},
           compile,
           EffectPlan::fit({"R_on_ohm", "deadband"}, {{0.1, 0.5}, {0.005, 0.02, 0.06}})
+              .scaled_by(grid_scale)
               .acting_in(EffectPlan::Acts::motor_circuit)
               .seeded_by_terms({{TermShape::drive_dead_band, from_dead_band}})};
 }

@@ -1,7 +1,8 @@
 // stribeck: kinetic friction falls from the static level to the Coulomb level over a
 // velocity scale. Default v_s 10 rad/s (about 3 % of the rig's no-load speed), shape 1.5
 // between Tustin's exponential (1) and the Gaussian form (2). The diagnosis starts v_s from
-// slow creep (2 rad/s) to a tenth of the no-load speed, with the classical shapes 1 and 2.
+// slow creep (2 rad/s) to a tenth of the no-load speed, with the classical shapes 1 and 2
+// (speeds the rig's, scaled by the drive's speed over the rig's no-load speed).
 #include "model/effects/compiled.hpp"
 
 namespace mcg::model::effects {
@@ -19,18 +20,23 @@ void compile(const Effect& e, Compiled& c) {
   c.friction_terms.push_back({excess, nullptr, {e.get("v_s_rad_s"), e.get("shape_exp"), 0.0, 0.0}});
 }
 
+std::vector<double> grid_scale(const Params& nominal, const DriveScale& drive) {
+  return builtin_grid_scale("w1", nominal, drive);
+}
+
 }  // namespace
 
 EffectSpec stribeck() {
-  return {
-      "stribeck",
-      "kinetic friction falls from the static level to the Coulomb level over a velocity scale",
-      "every friction element: F(w) = sign(w) [Tc + (Ts - Tc) exp(-(|w|/v_s)^shape_exp) + P(|w|)]; "
-      "breakaway level Ts unchanged",
-      {{"v_s_rad_s", 10.0, 0.1, 200.0, "rad/s", "Stribeck velocity"},
-       {"shape_exp", 1.5, 0.5, 3.0, "1", "exponent of the Stribeck curve"}},
-      compile,
-      EffectPlan::fit({"v_s_rad_s", "shape_exp"}, {{2.0, 5.0, 12.0, 30.0, 80.0}, {1.0, 2.0}}).as_friction()};
+  return {"stribeck",
+          "kinetic friction falls from the static level to the Coulomb level over a velocity scale",
+          "every friction element: F(w) = sign(w) [Tc + (Ts - Tc) exp(-(|w|/v_s)^shape_exp) + P(|w|)]; "
+          "breakaway level Ts unchanged",
+          {{"v_s_rad_s", 10.0, 0.1, 200.0, "rad/s", "Stribeck velocity"},
+           {"shape_exp", 1.5, 0.5, 3.0, "1", "exponent of the Stribeck curve"}},
+          compile,
+          EffectPlan::fit({"v_s_rad_s", "shape_exp"}, {{2.0, 5.0, 12.0, 30.0, 80.0}, {1.0, 2.0}})
+              .as_friction()
+              .scaled_by(grid_scale)};
 }
 
 }  // namespace mcg::model::effects
