@@ -47,9 +47,10 @@ void circuit_windows(const model::Compiled& c, const Run& run, std::size_t first
   const double supply = c.p.supply_V;
   // The model's circuit at row n: the bridge's output v_b (held over the sample, as the plant
   // applies it) and the R it uses.
-  auto bridge = [&](std::size_t n, double& R) {
+  auto bridge = [&](std::size_t n, double& R, double& emf_share) {
     const double d = c.circuit.duty(std::clamp(in.v_V[n], -supply, supply) / supply);
     R = mm.R_ohm + c.circuit.R_series_ohm + std::abs(d) * c.circuit.R_duty_ohm;
+    emf_share = c.circuit.emf_share(d);
     return d * supply;
   };
   for (std::size_t a = first; a + width < rows; a += width) {
@@ -62,8 +63,8 @@ void circuit_windows(const model::Compiled& c, const Run& run, std::size_t first
     for (std::size_t n = a; n < b; ++n) {
       const double dt = in.t_s[n + 1] - in.t_s[n];
       const double h = 0.5 * dt;
-      double R = 0.0;
-      const double v_b = bridge(n, R);
+      double R = 0.0, emf_share = 1.0;
+      const double v_b = bridge(n, R, emf_share);
       // The current is sampled about as fast as it settles (L/R near a sample), so the circuit
       // is taken over each sample as the model makes it: i relaxes from i(n) towards the level
       // i_ss it reaches i(n+1) on, and the back-emf it relaxes against is the speed weighted as
@@ -73,7 +74,7 @@ void circuit_windows(const model::Compiled& c, const Run& run, std::size_t first
       const double i_ss = (m.i[n + 1] - decay * m.i[n]) / (1.0 - decay);
       const double f = 1.0 / (1.0 - decay) - mm.L_H / (R * dt);
       const double w_eff = m.w[n] + f * (m.w[n + 1] - m.w[n]);
-      lacking += dt * (R * i_ss + mm.Ke_V_s_rad * w_eff - v_b) +
+      lacking += dt * (R * i_ss + emf_share * mm.Ke_V_s_rad * w_eff - v_b) +
                  h * c.circuit.V_sat_V *
                      (std::tanh(m.i[n] / c.circuit.i_sat_A) + std::tanh(m.i[n + 1] / c.circuit.i_sat_A));
       row[c_offset] -= dt * R;

@@ -389,6 +389,31 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
                      jacobian_se);
 }
 
+/// A level of an added effect that a fit drove to its zero bound is trapped there: the fit moves
+/// positive levels in log coordinates, by ratios, and from 1e-30 no step brings it back when
+/// the other parameters have moved to where it belongs (a friction level first fitted beside a
+/// coasting driver's share that, without friction, had to hold the speeds down). Such a level
+/// (below a hundredth of its plan's smallest start) is set there before a further fit: an
+/// extension's stage 1 from a single fit that ended at 0, or a joint fit after stage 1.
+void lift_trapped_levels(model::Model& m, const std::vector<std::string>& free) {
+  for (const std::string& key : free) {
+    const auto dot = key.find('.');
+    const model::EffectSpec* spec = find_plan(key.substr(0, dot));
+    if (spec == nullptr || spec->plan.grid.empty()) continue;
+    const model::EffectPlan& plan = spec->plan;
+    const auto it = std::find(plan.free.begin(), plan.free.end(), key.substr(dot + 1));
+    if (it == plan.free.end()) continue;
+    const auto k = static_cast<std::size_t>(it - plan.free.begin());
+    const auto param =
+        std::find_if(spec->params.begin(), spec->params.end(), [&](const auto& q) { return q.name == *it; });
+    if (param == spec->params.end() || param->lower != 0.0 || k >= plan.grid.size() || plan.grid[k].empty())
+      continue;
+    const double scale = plan.grid_scale != nullptr ? plan.grid_scale(m.params)[k] : 1.0;
+    const double floor = 0.01 * scale * *std::min_element(plan.grid[k].begin(), plan.grid[k].end());
+    if (floor > 0.0 && model::get_parameter(m, key) < floor) model::set_parameter(m, key, floor);
+  }
+}
+
 GapCandidate run_job(const Job& job, const GapData& data, const std::vector<OutputFloor>& floors,
                      const GapSettings& settings, const std::vector<double>& orders) {
   GapCandidate c;
@@ -482,6 +507,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   // Stage 1: the added effect alone on the refitted nominal model (cheap, and it brings the
   // effect into its basin before the nominal parameters may move to absorb it).
   if (!job.stage1_free.empty()) {
+    lift_trapped_levels(start, job.stage1_free);
     problem.model = start;
     problem.free = job.stage1_free;
     problem.nls.max_evaluations = budget(job.stage1_free.size());
@@ -521,15 +547,25 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
       return c;
     }
   }
+  lift_trapped_levels(start, job.free);
   problem.model = start;
   problem.free = job.free;
   problem.nls.max_evaluations = budget(job.free.size());
   FitResult fit = fit_model(problem);
   // A mixture's members may trade along a long valley (a drive dead band against Coulomb
   // friction: the steady states see only their sum, the coasts and reversals tell them apart):
-  // a joint fit that spent its budget still moving goes on once from where it stopped.
-  if (job.effects.size() > 1 && !fit.nls.converged && !expired()) {
+  // a joint fit that spent its budget still moving goes on from where it stopped, while each
+  // round still takes a tenth off the cost (a coasting driver's share and the friction it hides
+  // climb a valley together), at most k_joint_rounds times.
+  constexpr int k_joint_rounds = 3;
+  double cost_before = std::numeric_limits<double>::infinity();
+  for (int round = 0;
+       round < k_joint_rounds && job.effects.size() > 1 && !fit.nls.converged &&
+       fit.nls.cost < 0.9 * cost_before && !expired();
+       ++round) {
+    cost_before = fit.nls.cost;
     problem.model = fit.model;
+    lift_trapped_levels(problem.model, job.free);
     fit = fit_model(problem);
   }
   take(fit, job.free);
@@ -1071,6 +1107,11 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
     GapCandidate current = *best_single;
     while (current.effects.size() < k_gap_max_mixture) {
       std::vector<Job> round;
+      // The friction the data show beyond the current model's: a friction effect added to a
+      // model that already changes the drive's torque (a coasting driver, a dead band) starts
+      // there too, where its single fit, made without that change, may lie in another valley.
+      const std::map<std::string, std::vector<double>> current_starts =
+          data_friction_starts(current.model, data.train);
       for (const GapCandidate* single : pool) {
         const std::string& added = single->name;
         if (std::find(current.effects.begin(), current.effects.end(), added) != current.effects.end())
@@ -1102,6 +1143,12 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
           for (const auto& c : singles) {
             if (c.name == m) job.other_starts.front().effects.push_back(*c.model.effect(m));
           }
+        }
+        if (const auto point = current_starts.find(added); point != current_starts.end()) {
+          model::Model& from_data = job.other_starts.emplace_back(current.model);
+          from_data.effects.push_back(*single->model.effect(added));
+          for (std::size_t k = 0; k < point->second.size(); ++k)
+            model::set_parameter(from_data, added + "." + find_plan(added)->plan.free[k], point->second[k]);
         }
         for (const auto& key : find_plan(added)->plan.free) {
           job.stage1_free.push_back(added + "." + key);

@@ -143,7 +143,8 @@ class PlantImpl {
       s.v_applied_V = motor_resistance(m_y) * s.i_A + m_c.p.motor.Ke_V_s_rad * m_y[W_M];
       if (m_c.circuit.V_sat_V > 0.0) s.v_applied_V += m_c.circuit.drop(s.i_A);
     } else {
-      s.v_applied_V = v_b - (m_c.circuit.R_series_ohm + std::abs(d) * m_c.circuit.R_duty_ohm) * s.i_A;
+      s.v_applied_V = v_b - (m_c.circuit.R_series_ohm + std::abs(d) * m_c.circuit.R_duty_ohm) * s.i_A +
+                      (1.0 - m_emf_share) * m_c.p.motor.Ke_V_s_rad * m_y[W_M];
     }
     s.temp_rise_K = m_y[X_M];
     s.clutch = m_clutch;
@@ -179,12 +180,14 @@ class PlantImpl {
   }
 
   /// The bridge at the command in force, once per command rather than at every stage: its
-  /// duty d' (m_duty), its output d' supply_V (m_v_bridge), the motor circuit's resistance
-  /// R + R_series + |d'| R_duty without the windings' states (m_R_bridge_ohm), and the rates.
+  /// duty d' (m_duty), its output d' supply_V (m_v_bridge), the back-emf's share of the period
+  /// (m_emf_share), the motor circuit's resistance R + R_series + |d'| R_duty without the
+  /// windings' states (m_R_bridge_ohm), and the rates.
   void set_bridge() {
     const double supply = m_c.p.supply_V;
     m_duty = m_c.circuit.duty(std::clamp(m_v / supply, -1.0, 1.0));
     m_v_bridge = m_duty * supply;
+    m_emf_share = m_c.circuit.emf_share(m_duty);
     m_R_bridge_ohm = m_c.p.motor.R_ohm + m_c.circuit.R_series_ohm + std::abs(m_duty) * m_c.circuit.R_duty_ohm;
     update_rates();
   }
@@ -249,7 +252,7 @@ class PlantImpl {
     if (!m_motor_quasi) return y[I_M];
     double d = 0.0;
     const double v_b = bridge(d);
-    return algebraic_current(v_b - m_c.p.motor.Ke_V_s_rad * y[W_M], motor_resistance(y));
+    return algebraic_current(v_b - m_emf_share * m_c.p.motor.Ke_V_s_rad * y[W_M], motor_resistance(y));
   }
 
   /// Capacity of the clutch plates at time t (CouplingTerms::capacity).
@@ -310,7 +313,7 @@ class PlantImpl {
     if (m_motor_quasi || current_driven()) {
       dy[I_M] = 0.0;
     } else {
-      double vm = v_b - Rm * i_m - mm.Ke_V_s_rad * y[W_M];
+      double vm = v_b - Rm * i_m - m_emf_share * mm.Ke_V_s_rad * y[W_M];
       if (m_c.circuit.V_sat_V > 0.0) vm -= m_c.circuit.drop(i_m);
       dy[I_M] = vm / mm.L_H;
     }
@@ -921,6 +924,7 @@ class PlantImpl {
   double m_v = 0.0;
   double m_duty = 0.0;          ///< the bridge's duty d' at m_v (set_bridge)
   double m_v_bridge = 0.0;      ///< its output d' supply_V, V
+  double m_emf_share = 1.0;     ///< the back-emf's share of the period at m_duty (emf_share)
   double m_R_bridge_ohm = 0.0;  ///< R + R_series + |d'| R_duty, ohm
   Vec m_lam{};                  ///< the circuits' decay rates (update_rates), 1/s
   double m_i_cmd = std::numeric_limits<double>::quiet_NaN();  ///< Drive::i_cmd_A in force

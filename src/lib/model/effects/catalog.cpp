@@ -25,6 +25,7 @@ namespace mcg::model {
   X(dead_time)                \
   X(supply_sag)               \
   X(hbridge)                  \
+  X(pwm_coast)                \
   X(brush_drop)               \
   X(clutch_compliance)        \
   X(clutch_engage_lag)        \

@@ -49,18 +49,22 @@ struct FrictionTerm {
 };
 
 /// Circuit voltage-drop terms. Motor: L di/dt = d' supply_V - (R + R_series + |d'| R_duty) i
-/// - Ke w - drop(i), d' = sign(d) max(0, |d| - deadband), d = v / supply_V clamped to 1;
-/// generator: L di/dt = Ke w - (R + r_load) i - drop(i). drop(i) = V_sat tanh(i / i_sat).
+/// - emf_share(d') Ke w - drop(i), d' = sign(d) max(0, |d| - deadband), d = v / supply_V clamped
+/// to 1; generator: L di/dt = Ke w - (R + r_load) i - drop(i). drop(i) = V_sat tanh(i / i_sat).
 struct CircuitTerms {
   double R_series_ohm = 0.0;  ///< in series with the motor at any duty
   double R_duty_ohm = 0.0;    ///< in series with the motor in proportion to the duty
   double deadband = 0.0;      ///< duty lost per period
   double V_sat_V = 0.0;       ///< saturating drop in both circuits (0: none)
   double i_sat_A = 1.0;       ///< its current scale
+  double coast = 0.0;         ///< share of the PWM off-time the motor current is zero
 
   double duty(double d) const {
     return deadband > 0.0 ? std::copysign(std::max(0.0, std::abs(d) - deadband), d) : d;
   }
+  /// Share of the period the back-EMF opposes the current at duty d': 1 - coast (1 - |d'|)
+  /// (in the coasting share the open terminals carry Ke w and no current).
+  double emf_share(double d) const { return coast > 0.0 ? 1.0 - coast * (1.0 - std::abs(d)) : 1.0; }
   double drop(double i_A) const { return V_sat_V * std::tanh(i_A / i_sat_A); }
 };
 

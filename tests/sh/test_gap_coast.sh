@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# A small 12 V motor (speed only, 1 kHz, 16384 counts/rev) behind a driver that coasts in the
+# PWM off-time (pwm_coast 0.85: the current dies out in most of it, as behind a DRV8833 in
+# coast mode) AND Coulomb friction worth 0.6 V of drive, described from its datasheet without
+# either, driven by staircases both ways. The back-emf acts only while the current flows, so at
+# 1 V the motor runs at 110 rad/s where a braking drive would give 26 (and the datasheet model
+# 67): the speed rises far faster than the duty at low duty, and at duty 0 the shaft coasts.
+#  - mcg-fit gap names the coasting driver and the friction together (pwm_coast+
+#    friction_levels), shrink >= 60 % on the held-out run, the share and the Coulomb level
+#    within 5 % of the truth. Friction alone cannot bend the static curve that way.
+# Args: TOOL_DIR SOURCE_DIR.
+set -euo pipefail
+tools=$1
+export PATH="$tools:$PATH"
+source "$(dirname "$0")/lib.sh"
+require_tools mcg-sim mcg-fit
+
+# motor_ini TS TC C1: the motor alone, its friction in N m (1 V of drive = 0.006 N m)
+motor_ini() {
+  printf '[motor]\nR_ohm = 2.5\nL_H = 0.001\nKt_Nm_A = 0.015\nKe_V_s_rad = 0.015\nJ_kg_m2 = 3e-6\n'
+  printf 'Ts_Nm = %s\nTc_Nm = %s\nvisc1_Nm_s_rad = %s\n' "$1" "$2" "$3"
+  printf 'visc2_Nm_s2_rad2 = 0\nvisc3_Nm_s3_rad3 = 0\n'
+  printf '[drive]\nsupply_V = 12\n'
+}
+motor_ini 0.0045 0.0036 2e-6 >"$work/truth.ini"
+printf '[effect.pwm_coast]\ncoast = 0.85\n' >>"$work/truth.ini"
+motor_ini 0 0 0 >"$work/given.ini"
+
+# program SEGMENTS: the inputs at 1 kHz (segments in lib.sh)
+program() { segments 0.001 "$1"; }
+# measure SEED: the truth's run of the inputs on stdin, measured by the encoder, speed only
+measure() {
+  mcg-sim --config "$work/truth.ini" --encoder --window 0.001 --counts-per-rev 16384 --seed "$1" |
+    awk -F, -v OFS=, '/^#/ { print; next } { print $1, $2, $3, $4, $6 }'
+}
+program "hold 0 0.2;hold 1 0.6;hold 2 0.6;hold 3.5 0.6;hold 6 0.6;hold 10 0.6;hold 0 0.6;\
+hold -1 0.6;hold -2.5 0.6;hold -5 0.6;hold -9 0.6;hold 0 0.6;ramp 0 2 3;hold 0 0.5;ramp 0 -2 3;\
+hold 0 0.5" | measure 1 >"$work/train.csv"
+program "hold 0 0.2;hold 1.5 0.6;hold 4 0.6;hold 8 0.6;hold 0 0.6;hold -1.5 0.6;hold -4 0.6;\
+hold -8 0.6;hold 0 0.6;ramp 0 1.8 2;hold 0 0.5" | measure 2 >"$work/validate.csv"
+
+# near NAME VALUE TRUTH TOL: VALUE within TOL (relative) of TRUTH
+near() {
+  if awk -v v="$2" -v w="$3" -v t="$4" 'BEGIN { d = v - w; if (d < 0) d = -d; exit !(d <= t * w) }'; then
+    pass
+    echo "ok   $1 = $2 (truth $3)"
+  else
+    fail "$1 = $2, truth $3 (tolerance $4)"
+  fi
+}
+
+mcg-fit gap --budget 900 --config "$work/given.ini" \
+  --train "$work/train.csv" --validate "$work/validate.csv" \
+  >"$work/gap.csv" 2>"$work/gap.err" || fail "gap: exit $?: $(tail -1 "$work/gap.err")"
+row=$(grep -v '^#' "$work/gap.csv" | sed -n 2p)
+echo "gap: $(cut -d, -f1,4,15 <<<"$row")"
+if [[ "$(cut -d, -f1 <<<"$row")" != pwm_coast+friction_levels ]]; then
+  fail "gap: diagnosis $(cut -d, -f1 <<<"$row"), expected pwm_coast+friction_levels"
+else
+  pass
+  shrink=$(cut -d, -f4 <<<"$row")
+  if awk -v s="$shrink" 'BEGIN { exit !(s >= 60) }'; then pass; else fail "gap: shrink $shrink % < 60 %"; fi
+  param() { grep -o "$1=[^+ ,]*" <<<"$row" | cut -d= -f2; }
+  near "gap: pwm_coast.coast" "$(param pwm_coast.coast)" 0.85 0.05
+  near "gap: friction_levels.Tc_Nm" "$(param friction_levels.Tc_Nm)" 0.0036 0.05
+fi
+finish gap_coast
