@@ -728,7 +728,7 @@ TEST(GapDrive, EffectsTheCurrentLoopOverridesAreNotApplicable) {
   const GapData data = current_driven_data();
   const auto spec = [](std::string_view name) { return model::find_effect(name)->plan; };
   const std::string why = "not applicable to a current-driven drive";
-  for (const char* name : {"supply_sag", "hbridge", "brush_drop", "thermal"})
+  for (const char* name : {"supply_sag", "hbridge", "pwm_coast", "brush_drop", "thermal"})
     EXPECT_EQ(gap_detail::not_applicable(spec(name), data.train), why) << name;
   for (const char* name : {"dead_time", "friction_levels", "cogging", "stribeck"})
     EXPECT_EQ(gap_detail::not_applicable(spec(name), data.train), "") << name;
@@ -755,7 +755,7 @@ TEST(GapDrive, EffectsTheCurrentLoopOverridesAreNotApplicable) {
     EXPECT_FALSE(c.evaluated) << c.name;
     ++listed;
   }
-  EXPECT_EQ(listed, 4U);
+  EXPECT_EQ(listed, 5U);
   EXPECT_EQ(report.drive_input, "i");
   // The residual series carry the drive's own column, the command in A (not a v of zeros).
   std::ostringstream series;
