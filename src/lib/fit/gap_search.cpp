@@ -392,26 +392,42 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
 /// A level of an added effect that a fit drove to its zero bound is trapped there: the fit moves
 /// positive levels in log coordinates, by ratios, and from 1e-30 no step brings it back when
 /// the other parameters have moved to where it belongs (a friction level first fitted beside a
-/// coasting driver's share that, without friction, had to hold the speeds down). Such a level
-/// (below a hundredth of its plan's smallest start) is set there before a further fit: an
-/// extension's stage 1 from a single fit that ended at 0, or a joint fit after stage 1.
+/// coasting driver's share that, without friction, had to hold the speeds down). The level
+/// below which `key` is trapped: a hundredth of its plan's smallest start (0: not a level).
+double trap_floor(const model::Model& m, const std::string& key) {
+  const auto dot = key.find('.');
+  const model::EffectSpec* spec = find_plan(key.substr(0, dot));
+  if (spec == nullptr || spec->plan.grid.empty()) return 0.0;
+  const model::EffectPlan& plan = spec->plan;
+  const auto it = std::find(plan.free.begin(), plan.free.end(), key.substr(dot + 1));
+  if (it == plan.free.end()) return 0.0;
+  const auto k = static_cast<std::size_t>(it - plan.free.begin());
+  const auto param =
+      std::find_if(spec->params.begin(), spec->params.end(), [&](const auto& q) { return q.name == *it; });
+  if (param == spec->params.end() || param->lower != 0.0 || k >= plan.grid.size() || plan.grid[k].empty())
+    return 0.0;
+  const double scale = plan.grid_scale != nullptr ? plan.grid_scale(m.params)[k] : 1.0;
+  return 0.01 * scale * *std::min_element(plan.grid[k].begin(), plan.grid[k].end());
+}
+
+/// Sets each trapped level of `free` at its trap_floor() before a further fit.
 void lift_trapped_levels(model::Model& m, const std::vector<std::string>& free) {
   for (const std::string& key : free) {
-    const auto dot = key.find('.');
-    const model::EffectSpec* spec = find_plan(key.substr(0, dot));
-    if (spec == nullptr || spec->plan.grid.empty()) continue;
-    const model::EffectPlan& plan = spec->plan;
-    const auto it = std::find(plan.free.begin(), plan.free.end(), key.substr(dot + 1));
-    if (it == plan.free.end()) continue;
-    const auto k = static_cast<std::size_t>(it - plan.free.begin());
-    const auto param =
-        std::find_if(spec->params.begin(), spec->params.end(), [&](const auto& q) { return q.name == *it; });
-    if (param == spec->params.end() || param->lower != 0.0 || k >= plan.grid.size() || plan.grid[k].empty())
-      continue;
-    const double scale = plan.grid_scale != nullptr ? plan.grid_scale(m.params)[k] : 1.0;
-    const double floor = 0.01 * scale * *std::min_element(plan.grid[k].begin(), plan.grid[k].end());
+    const double floor = trap_floor(m, key);
     if (floor > 0.0 && model::get_parameter(m, key) < floor) model::set_parameter(m, key, floor);
   }
+}
+
+/// True when `free` has levels and every one is trapped: the fit switched the effect off.
+bool switched_off(const model::Model& m, const std::vector<std::string>& free) {
+  bool any = false;
+  for (const std::string& key : free) {
+    const double floor = trap_floor(m, key);
+    if (floor <= 0.0) continue;
+    if (model::get_parameter(m, key) >= floor) return false;
+    any = true;
+  }
+  return any;
 }
 
 GapCandidate run_job(const Job& job, const GapData& data, const std::vector<OutputFloor>& floors,
@@ -507,7 +523,12 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   // Stage 1: the added effect alone on the refitted nominal model (cheap, and it brings the
   // effect into its basin before the nominal parameters may move to absorb it).
   if (!job.stage1_free.empty()) {
-    lift_trapped_levels(start, job.stage1_free);
+    // An added effect its single fit switched off (supply_sag's R_s at 0) starts off its zero
+    // bound, or its stage 1 removes nothing and the extension is rejected. One still on starts
+    // where that fit put it: lifting only the level the data hold at 0 (hbridge's R_on beside
+    // its dead band of 0.1) ended the stage-1 fit beside friction_levels at a dead band of 0.01
+    // that removed nothing, and hbridge+friction_levels was rejected.
+    if (switched_off(start, job.stage1_free)) lift_trapped_levels(start, job.stage1_free);
     problem.model = start;
     problem.free = job.stage1_free;
     problem.nls.max_evaluations = budget(job.stage1_free.size());
