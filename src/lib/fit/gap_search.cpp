@@ -568,7 +568,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
       return c;
     }
   }
-  lift_trapped_levels(start, job.free);
+  // A single's own level at 0 after stage 1 is its fit's word (a gauge may hold it there).
+  if (job.effects.size() > 1) lift_trapped_levels(start, job.free);
   problem.model = start;
   problem.free = job.free;
   problem.nls.max_evaluations = budget(job.free.size());
