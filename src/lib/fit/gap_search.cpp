@@ -393,8 +393,9 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
 /// positive levels in log coordinates, by ratios, and from 1e-30 no step brings it back when
 /// the other parameters have moved to where it belongs (a friction level first fitted beside a
 /// coasting driver's share that, without friction, had to hold the speeds down). The level
-/// below which `key` is trapped: a hundredth of its plan's smallest start (0: not a level).
-double trap_floor(const model::Model& m, const std::string& key) {
+/// below which `key` is trapped: a hundredth of its plan's smallest start on the drive of `runs`
+/// (0: not a level).
+double trap_floor(const model::Model& m, const std::string& key, const std::vector<Run>& runs) {
   const auto dot = key.find('.');
   const model::EffectSpec* spec = find_plan(key.substr(0, dot));
   if (spec == nullptr || spec->plan.grid.empty()) return 0.0;
@@ -406,23 +407,25 @@ double trap_floor(const model::Model& m, const std::string& key) {
       std::find_if(spec->params.begin(), spec->params.end(), [&](const auto& q) { return q.name == *it; });
   if (param == spec->params.end() || param->lower != 0.0 || k >= plan.grid.size() || plan.grid[k].empty())
     return 0.0;
-  const double scale = plan.grid_scale != nullptr ? plan.grid_scale(m.params)[k] : 1.0;
+  const double scale =
+      plan.grid_scale != nullptr ? plan.grid_scale(m.params, drive_scale(m.params, runs))[k] : 1.0;
   return 0.01 * scale * *std::min_element(plan.grid[k].begin(), plan.grid[k].end());
 }
 
 /// Sets each trapped level of `free` at its trap_floor() before a further fit.
-void lift_trapped_levels(model::Model& m, const std::vector<std::string>& free) {
+void lift_trapped_levels(model::Model& m, const std::vector<std::string>& free,
+                         const std::vector<Run>& runs) {
   for (const std::string& key : free) {
-    const double floor = trap_floor(m, key);
+    const double floor = trap_floor(m, key, runs);
     if (floor > 0.0 && model::get_parameter(m, key) < floor) model::set_parameter(m, key, floor);
   }
 }
 
 /// True when `free` has levels and every one is trapped: the fit switched the effect off.
-bool switched_off(const model::Model& m, const std::vector<std::string>& free) {
+bool switched_off(const model::Model& m, const std::vector<std::string>& free, const std::vector<Run>& runs) {
   bool any = false;
   for (const std::string& key : free) {
-    const double floor = trap_floor(m, key);
+    const double floor = trap_floor(m, key, runs);
     if (floor <= 0.0) continue;
     if (model::get_parameter(m, key) >= floor) return false;
     any = true;
@@ -528,7 +531,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     // where that fit put it: lifting only the level the data hold at 0 (hbridge's R_on beside
     // its dead band of 0.1) ended the stage-1 fit beside friction_levels at a dead band of 0.01
     // that removed nothing, and hbridge+friction_levels was rejected.
-    if (switched_off(start, job.stage1_free)) lift_trapped_levels(start, job.stage1_free);
+    if (switched_off(start, job.stage1_free, data.train))
+      lift_trapped_levels(start, job.stage1_free, data.train);
     problem.model = start;
     problem.free = job.stage1_free;
     problem.nls.max_evaluations = budget(job.stage1_free.size());
@@ -569,7 +573,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     }
   }
   // A single's own level at 0 after stage 1 is its fit's word (a gauge may hold it there).
-  if (job.effects.size() > 1) lift_trapped_levels(start, job.free);
+  if (job.effects.size() > 1) lift_trapped_levels(start, job.free, data.train);
   problem.model = start;
   problem.free = job.free;
   problem.nls.max_evaluations = budget(job.free.size());
@@ -587,7 +591,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
        ++round) {
     cost_before = fit.nls.cost;
     problem.model = fit.model;
-    lift_trapped_levels(problem.model, job.free);
+    lift_trapped_levels(problem.model, job.free, data.train);
     fit = fit_model(problem);
   }
   take(fit, job.free);
