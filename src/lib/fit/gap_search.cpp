@@ -585,9 +585,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   // climb a valley together), at most k_joint_rounds times.
   constexpr int k_joint_rounds = 3;
   double cost_before = std::numeric_limits<double>::infinity();
-  for (int round = 0;
-       round < k_joint_rounds && job.effects.size() > 1 && !fit.nls.converged &&
-       fit.nls.cost < 0.9 * cost_before && !expired();
+  for (int round = 0; round < k_joint_rounds && job.effects.size() > 1 && !fit.nls.converged &&
+                      fit.nls.cost < 0.9 * cost_before && !expired();
        ++round) {
     cost_before = fit.nls.cost;
     problem.model = fit.model;
