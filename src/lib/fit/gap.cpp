@@ -178,6 +178,8 @@ std::string alike_both_ways(const GapReport& report) {
   };
   std::string mine;
   for (const std::string& name : diagnosis.effects) {
+    // A diagnosis holding two of the class (a dead band beside a Coulomb level): the runs told them apart.
+    if (shape_of(name) != Shape::none && !mine.empty() && shape_of(name) != shape_of(mine)) return {};
     if (shape_of(name) != Shape::none) mine = name;
   }
   if (mine.empty()) return {};

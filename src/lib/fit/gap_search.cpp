@@ -94,6 +94,82 @@ bool carries_weight(const GapCandidate& c, const std::string& effect, const GapD
   return improves(c.score, evaluate(without, data, floors).score, outputs);
 }
 
+/// The steady-state offset an effect puts on a turning shaft, by its plan's seeding shape: a
+/// Coulomb level (sign), a brush drop (current_drop) or a drive's dead band (drive_dead_band);
+/// none for any other effect. Two effects of different such shapes are one constant torque while
+/// the shaft turns: only the coasts at zero drive and the reversals tell them apart.
+model::TermShape offset_shape(std::string_view name) {
+  using Shape = model::TermShape;
+  const model::EffectSpec* spec = model::find_effect(name);
+  if (spec == nullptr) return Shape::none;
+  for (const model::TermSeed& rule : spec->plan.seeded_by) {
+    if (rule.shape == Shape::sign || rule.shape == Shape::current_drop ||
+        rule.shape == Shape::drive_dead_band)
+      return rule.shape;
+  }
+  return Shape::none;
+}
+
+/// True when `added` holds a steady-state offset of another shape than one that a member of
+/// `effects` holds already (a dead band added to a Coulomb level).
+bool alike_offset(const std::vector<std::string>& effects, const std::string& added) {
+  const model::TermShape shape = offset_shape(added);
+  return shape != model::TermShape::none &&
+         std::any_of(effects.begin(), effects.end(), [&](const std::string& e) {
+           const model::TermShape own = offset_shape(e);
+           return own != model::TermShape::none && own != shape;
+         });
+}
+
+/// Validation rows at least where two models must disagree for those rows to decide between
+/// them (where_they_differ).
+constexpr std::size_t k_min_disagreeing_rows = 10;
+
+/// The validation scores of models `a` and `b` on the scored rows where their simulations differ
+/// by more than the output's noise floor: per output the mean of r^2 / floor^2 over those rows,
+/// summed over the outputs, and how many rows that is.
+struct Disagreement {
+  double score_a = 0.0;
+  double score_b = 0.0;
+  std::size_t rows = 0;
+};
+Disagreement where_they_differ(const model::Model& a, const model::Model& b, const GapData& data,
+                               const std::vector<OutputFloor>& floors) {
+  const Evaluation ea = evaluate(a, data, floors);
+  const Evaluation eb = evaluate(b, data, floors);
+  std::vector<double> sum_a(floors.size(), 0.0);
+  std::vector<double> sum_b(floors.size(), 0.0);
+  std::vector<std::size_t> count(floors.size(), 0);
+  for (std::size_t r = 0; r < data.validate.size(); ++r) {
+    const ScoredRun& sr = data.validate[r];
+    for (std::size_t o = 0; o < sr.run.outputs.size(); ++o) {
+      const std::size_t f = floor_index(floors, sr.run.outputs[o]);
+      if (f == std::string::npos) continue;
+      const auto& y = sr.run.measured[o];
+      const auto& ya = ea.simulated[r][o];
+      const auto& yb = eb.simulated[r][o];
+      for (std::size_t n = sr.first_scored; n < y.size(); ++n) {
+        const double ra = y[n] - ya[n];
+        const double rb = y[n] - yb[n];
+        if (!std::isfinite(ra) || !std::isfinite(rb) || !(std::abs(ya[n] - yb[n]) > floors[f].floor))
+          continue;
+        sum_a[f] += ra * ra;
+        sum_b[f] += rb * rb;
+        ++count[f];
+      }
+    }
+  }
+  Disagreement d;
+  for (std::size_t f = 0; f < floors.size(); ++f) {
+    if (count[f] == 0) continue;
+    const double norm = static_cast<double>(count[f]) * floors[f].floor * floors[f].floor;
+    d.score_a += sum_a[f] / norm;
+    d.score_b += sum_b[f] / norm;
+    d.rows += count[f];
+  }
+  return d;
+}
+
 struct Job {
   std::string name;
   std::vector<std::string> effects;
@@ -1159,7 +1235,9 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
                 {},
                 {base},
                 {}};
-        job.extension = true;
+        // An offset alike one the model holds (a dead band beside a Coulomb level) removes nothing
+        // fitted alone: the member holds its share, which only the joint refit moves.
+        job.extension = !alike_offset(current.effects, added);
         for (const auto& f : current.free) {
           if (!f.starts_with("param_mismatch.")) job.free.push_back(f);
         }
@@ -1182,13 +1260,63 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         round.push_back(std::move(job));
       }
       if (round.empty()) break;
+      // Those first, so that a time budget leaves them fitted: without them the model's level
+      // holds an offset it does not have.
+      std::stable_partition(round.begin(), round.end(), [](const Job& j) { return !j.extension; });
       total = done + round.size();
       std::vector<GapCandidate> fitted = run_jobs(round, data, floors, settings, orders, done, total);
       for (auto& c : fitted) c.fpe = fpe(c.score, c.free.size());
       std::sort(fitted.begin(), fitted.end(), [](const auto& x, const auto& y) { return x.fpe < y.fpe; });
       for (auto& c : fitted) {
-        c.significant = c.evaluated && !rejected(c) && c.determined() &&
-                        improves(c.score, current.score, outputs) && improves(c.score, ref_score, outputs);
+        c.significant =
+            c.evaluated && !rejected(c) && c.determined() && improves(c.score, ref_score, outputs);
+        if (!c.significant || improves(c.score, current.score, outputs)) continue;
+        // An offset alike a member's differs from the model it extends only in the coasts at zero
+        // drive and the reversals, a few rows of the held-out runs whose score it barely moves:
+        // those rows decide, where the two disagree by more than the noise.
+        bool alike = false;
+        for (const auto& e : c.effects) {
+          if (std::find(current.effects.begin(), current.effects.end(), e) == current.effects.end())
+            alike = alike_offset(current.effects, e);
+        }
+        const Disagreement d = alike && c.score < current.score
+                                   ? where_they_differ(c.model, current.model, data, floors)
+                                   : Disagreement{};
+        c.significant = d.rows >= k_min_disagreeing_rows && improves(d.score_a, d.score_b, outputs);
+        if (c.significant) {
+          c.status += fmt::format(
+              "; on the {} held-out rows where it and {} disagree beyond the noise it "
+              "scores {:.3g} against {:.3g}",
+              d.rows, current.name, d.score_a, d.score_b);
+        }
+      }
+      // Such an extension may rank below one that is not significant: it is then the one tried.
+      if (!fitted.empty() && !fitted.front().significant) {
+        const auto judged = std::find_if(fitted.begin(), fitted.end(), [&](const GapCandidate& c) {
+          return c.significant && !improves(c.score, current.score, outputs);
+        });
+        if (judged != fitted.end()) std::rotate(fitted.begin(), judged, judged + 1);
+      }
+      // Two offsets of other shapes (a dead band, a brush drop) may each complete the model: where
+      // the two mixtures disagree beyond the noise, the held-out rows pick one.
+      const auto offset_added = [&](const GapCandidate& c) {
+        return std::any_of(c.effects.begin(), c.effects.end(), [&](const std::string& e) {
+          return std::find(current.effects.begin(), current.effects.end(), e) == current.effects.end() &&
+                 alike_offset(current.effects, e);
+        });
+      };
+      if (!fitted.empty() && fitted.front().significant && offset_added(fitted.front())) {
+        for (std::size_t k = 1; k < fitted.size(); ++k) {
+          if (!fitted[k].significant || !offset_added(fitted[k])) continue;
+          const Disagreement d = where_they_differ(fitted[k].model, fitted.front().model, data, floors);
+          if (d.rows >= k_min_disagreeing_rows && improves(d.score_a, d.score_b, outputs)) {
+            fitted[k].status += fmt::format(
+                "; on the {} held-out rows where it and {} disagree beyond the noise "
+                "it scores {:.3g} against {:.3g}",
+                d.rows, fitted.front().name, d.score_a, d.score_b);
+            std::swap(fitted.front(), fitted[k]);
+          }
+        }
       }
       // The best extension's gain must come from the effect it adds, not from the nominal
       // values refitted beside it.
