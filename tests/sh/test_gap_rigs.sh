@@ -7,6 +7,13 @@
 # were named friction_levels alone: the asymmetry, fitted alone without a Coulomb level beneath
 # it, ranked below the pool of effects mixtures are made from, and the breakaway excess, left at
 # 0 by the fit on the regularised stick, could not be profiled (0 +- inf).
+# And two small motors behind a duty dead band with Coulomb friction, speed only at 2 kHz (seeds 1
+# and 4: 12 V and 24 V): gap must name hbridge+friction_levels, each parameter within 3 standard
+# errors and 10 % of the truth (the breakaway excess 30 %). Before, both were named
+# friction_levels alone, its Coulomb level holding the dead band too (+225 and +498 standard
+# errors): the dead band, fitted alone beside that level, removed nothing and was rejected
+# before its joint fit, and the held-out runs' score, near the noise already, could not drop by
+# the margin of significance however well the mixture fits the coasts that tell the two apart.
 # Args: TOOL_DIR SOURCE_DIR.
 set -euo pipefail
 tools=$1
@@ -15,50 +22,57 @@ source "$(dirname "$0")/lib.sh"
 source "$(dirname "$0")/rigs_lib.sh"
 require_tools mcg-fit
 
-# near NAME VALUE_SE TRUTH TOL: VALUE (VALUE_SE is "VALUE+-SE") within TOL (relative) of TRUTH,
-# with a finite standard error.
+# near NAME VALUE_SE TRUTH TOL [K]: VALUE (VALUE_SE is "VALUE+-SE") within TOL (relative) of TRUTH,
+# with a finite standard error (and, given K, within K of it).
 near() {
-  local v=${2%%+-*} s=${2##*+-}
-  if awk -v v="$v" -v s="$s" -v w="$3" -v t="$4" \
+  local v=${2%%+-*} s=${2##*+-} k=${5:-0}
+  if awk -v v="$v" -v s="$s" -v w="$3" -v t="$4" -v k="$k" \
     'BEGIN { d = v - w; if (d < 0) d = -d; a = w < 0 ? -w : w
-             exit !(s + 0 > 0 && s != "inf" && d <= t * a) }'; then
+             exit !(s + 0 > 0 && s != "inf" && d <= t * a && (k == 0 || d <= k * s)) }'; then
     pass
     echo "ok   $1 = $2 (truth $3)"
   else
-    fail "$1 = $2, truth $3 (tolerance $4, a finite error)"
+    fail "$1 = $2, truth $3 (tolerance $4${5:+ and $5 standard errors}, a finite error)"
   fi
 }
 
-for seed in 7 9; do
-  dir="$work/current-$seed"
-  rig current "$seed" "$dir"
-  mcg-fit gap --current --config "$dir/given.ini" --train "$dir/train.csv" --validate "$dir/validate.csv" \
-    >"$dir/gap.csv" 2>"$dir/gap.err" || fail "current $seed: gap: exit $?: $(tail -1 "$dir/gap.err")"
+for spec in current:7 current:9 deadband:1 deadband:4; do
+  kind=${spec%%:*} seed=${spec##*:} dir="$work/$kind-$seed"
+  rig "$kind" "$seed" "$dir"
+  mapfile -t drive <"$dir/args"
+  # The dead band's mixture comes after every single fit: a budget the verdict does not hang on.
+  [[ $kind == deadband ]] && drive+=(--budget 900)
+  mcg-fit gap "${drive[@]}" --config "$dir/given.ini" --train "$dir/train.csv" \
+    --validate "$dir/validate.csv" \
+    >"$dir/gap.csv" 2>"$dir/gap.err" || fail "$kind $seed: gap: exit $?: $(tail -1 "$dir/gap.err")"
   row=$(grep -v '^#' "$dir/gap.csv" | sed -n 2p)
-  echo "current $seed: $(cut -d, -f1,4,15 <<<"$row")"
+  echo "$kind $seed: $(cut -d, -f1,4,15 <<<"$row")"
   want=$(awk '$1 == "effects" { print $2 }' "$dir/truth")
   if [[ "$(cut -d, -f1 <<<"$row")" != "$want" ]]; then
-    fail "current $seed: diagnosis $(cut -d, -f1 <<<"$row"), expected $want"
+    fail "$kind $seed: diagnosis $(cut -d, -f1 <<<"$row"), expected $want"
     continue
   fi
   pass
   shrink=$(cut -d, -f4 <<<"$row")
-  awk -v s="$shrink" 'BEGIN { exit !(s >= 60) }' && pass || fail "current $seed: shrink $shrink % < 60 %"
+  awk -v s="$shrink" 'BEGIN { exit !(s >= 60) }' && pass || fail "$kind $seed: shrink $shrink % < 60 %"
   while read -r key truth; do
     [[ $key == effects ]] && continue
-    case $key in
-      *Ts_excess*) tol=0.1 ;;
-      *dT_Nm) tol=0.05 ;;
-      *) tol=0.02 ;;
+    ses=
+    case $kind:$key in
+      current:*Ts_excess*) tol=0.1 ;;
+      current:*dT_Nm) tol=0.05 ;;
+      current:*) tol=0.02 ;;
+      deadband:*Ts_excess*) tol=0.3 ses=3 ;;
+      deadband:*) tol=0.1 ses=3 ;;
     esac
     value=$(grep -o "$key=[^ ,]*" <<<"$row" | cut -d= -f2 || true)
     # A breakaway whose exact-stick profile stays open is pinned, and the status must say so.
     if [[ -z $value && $key == *Ts_excess* ]] && grep -q "$key pinned at 0" <<<"$row"; then
       pass
-      echo "ok   current $seed: $key pinned at 0 and said so (truth $truth)"
+      echo "ok   $kind $seed: $key pinned at 0 and said so (truth $truth)"
       continue
     fi
-    near "current $seed: $key" "$value" "$truth" "$tol"
+    near "$kind $seed: $key" "$value" "$truth" "$tol" $ses
   done <"$dir/truth"
 done
 finish gap_rigs
