@@ -9,14 +9,14 @@ if wanted gap_rigs; then
   read -ra rigs <<<"${GAP_RIGS:-deadband:1 gearmotor:2 current:3}"
   bash "$root/bench/bench_gap_rigs.sh" "$tools" "$rigs_budget" "${rigs[@]}" >"$work/gap_rigs.txt" 2>&1 || true
   cat "$work/gap_rigs.txt" >>"$raw"
-  # A line: "KIND:SEED | want W | got G | shrink S | exit E | T s | parameters".
+  # A line: "KIND:SEED | want W | got G | shrink S | exit E | T s, cpu C s | parameters".
   while IFS='|' read -r spec want got shrink status seconds params; do
     want=${want# want } want=${want% } got=${got# got } got=${got% }
-    seconds=${seconds# } seconds=${seconds% s }
+    cpu=${seconds#*, } cpu=${cpu% } seconds=${seconds# } seconds=${seconds%% s*}
     ok=$(met "$seconds" "<=" "$(awk -v b="$rigs_budget" 'BEGIN {print b * 1.1}')")
     [[ $got == "$want" ]] || ok="missed (named $got)"
     row "\`mcg-fit gap\` on the self-made rig ${spec% } (\`bench/bench_gap_rigs.sh\`, one thread)" whole-process \
       "the withheld effects named, <= budget ${rigs_budget} s + 10 %" \
-      "${seconds} s, named ${got} (withheld ${want}),${shrink% } %,${status% };${params}" "$ok"
+      "${seconds} s (${cpu}), named ${got} (withheld ${want}),${shrink% } %,${status% };${params}" "$ok"
   done <"$work/gap_rigs.txt"
 fi
