@@ -107,3 +107,19 @@ warnings_hold_values() {
     fail "a warning names a value the report does not hold: $bad"
   fi
 }
+
+# small_motor_ini TS TC C1: a small 12 V motor alone (2.5 ohm, 1 mH, Kt = Ke = 0.015, J 3e-6 kg m^2),
+# its friction in N m (1 V of drive = 0.006 N m).
+small_motor_ini() {
+  printf '[motor]\nR_ohm = 2.5\nL_H = 0.001\nKt_Nm_A = 0.015\nKe_V_s_rad = 0.015\nJ_kg_m2 = 3e-6\n'
+  printf 'Ts_Nm = %s\nTc_Nm = %s\nvisc1_Nm_s_rad = %s\n' "$1" "$2" "$3"
+  printf 'visc2_Nm_s2_rad2 = 0\nvisc3_Nm_s3_rad3 = 0\n'
+  printf '[drive]\nsupply_V = 12\n'
+}
+
+# encoder_speed_only CONFIG DT SEED: CONFIG's run of the inputs on stdin, its speed counted by a
+# 16384-count encoder over one sample of DT; the drive and the measured rpm only.
+encoder_speed_only() {
+  mcg-sim --config "$1" --encoder --window "$2" --counts-per-rev 16384 --seed "$3" |
+    awk -F, -v OFS=, '/^#/ { print; next } { print $1, $2, $3, $4, $6 }'
+}

@@ -16,24 +16,14 @@ export PATH="$tools:$PATH"
 source "$(dirname "$0")/lib.sh"
 require_tools mcg-sim mcg-fit
 
-# motor_ini TS TC C1: the motor alone, its friction in N m (1 V of drive = 0.006 N m)
-motor_ini() {
-  printf '[motor]\nR_ohm = 2.5\nL_H = 0.001\nKt_Nm_A = 0.015\nKe_V_s_rad = 0.015\nJ_kg_m2 = 3e-6\n'
-  printf 'Ts_Nm = %s\nTc_Nm = %s\nvisc1_Nm_s_rad = %s\n' "$1" "$2" "$3"
-  printf 'visc2_Nm_s2_rad2 = 0\nvisc3_Nm_s3_rad3 = 0\n'
-  printf '[drive]\nsupply_V = 12\n'
-}
-motor_ini 0.0051 0.0036 2e-6 >"$work/truth.ini"
+small_motor_ini 0.0051 0.0036 2e-6 >"$work/truth.ini"
 printf '[effect.hbridge]\nR_on_ohm = 0\ndeadband = 0.05\n' >>"$work/truth.ini"
-motor_ini 0 0 0 >"$work/given.ini"
+small_motor_ini 0 0 0 >"$work/given.ini"
 
 # program SEGMENTS: the inputs at 2 kHz (segments in lib.sh)
 program() { segments 0.0005 "$1"; }
 # measure SEED: the truth's run of the inputs on stdin, measured by the encoder, speed only
-measure() {
-  mcg-sim --config "$work/truth.ini" --encoder --window 0.0005 --counts-per-rev 16384 --seed "$1" |
-    awk -F, -v OFS=, '/^#/ { print; next } { print $1, $2, $3, $4, $6 }'
-}
+measure() { encoder_speed_only "$work/truth.ini" 0.0005 "$1"; }
 program "hold 0 0.2;hold 3 0.5;hold 6 0.5;hold 9 0.5;hold 0 0.5;hold -3 0.5;hold -6 0.5;hold 0 0.5;\
 ramp 0 2 3;hold 0 0.5;ramp 0 -2 3;hold 0 0.5" | measure 1 >"$work/train.csv"
 program "hold 0 0.2;hold 4 0.5;hold 8 0.5;hold 0 0.5;hold -4 0.5;hold -8 0.5;hold 0 0.5;\
