@@ -39,12 +39,9 @@ using Vec = std::array<double, k_states>;
 /// are solved as algebraic: the current follows within 50 us, far below any mechanical time
 /// constant, and a step resolving it would be microseconds (with a saturating drop's slope, less).
 constexpr double k_quasi_static_rate = 2e4;
-/// Shortest step the motor circuit is integrated at: half the time constant of a circuit fast
-/// enough to be algebraic. A circuit a saturating drop's slope makes that fast (L / R_eff under
-/// 1 / k_quasi_static_rate, near zero current) is solved as algebraic for that step, as the
-/// nominal circuit would be: resolving it took thousands of RK4 steps per 10 ms row while a
-/// gearmotor stood still with a brush drop.
-constexpr double k_min_circuit_step_s = 0.5 / k_quasi_static_rate;
+/// Shortest step the motor circuit is integrated at; a circuit a saturating drop's slope makes
+/// faster than this (L / R_eff under 4 us) is solved as algebraic for that step.
+constexpr double k_min_circuit_step_s = 2e-6;
 /// Events handled inside one integration step before the step is accepted as is.
 constexpr int k_max_events_per_step = 16;
 /// The regularised stick's breakaway (SimOptions::smooth_stick): a stuck motor breaks away at
