@@ -106,16 +106,10 @@ std::string alike_one_way(const GapReport& report, const GapData& data) {
     }
   }
   if ((forward && reverse) || (i_forward && i_reverse)) return {};
-  const auto alike = [current](Shape s) {
-    return s == Shape::current_drop || s == Shape::drive_dead_band || (!current && s == Shape::sign);
-  };
   const auto shape_of = [&](std::string_view name) {
     const model::EffectSpec* spec = model::find_effect(name);
     if (spec == nullptr || !not_applicable(spec->plan, data.train).empty()) return Shape::none;
-    for (const model::TermSeed& rule : spec->plan.seeded_by) {
-      if (alike(rule.shape)) return rule.shape;
-    }
-    return Shape::none;
+    return offset_shape(name, !current);
   };
   const GapCandidate& diagnosis = report.candidates.front();
   std::string mine;
@@ -156,16 +150,7 @@ std::string alike_one_way(const GapReport& report, const GapData& data) {
 std::string alike_both_ways(const GapReport& report) {
   using Shape = model::TermShape;
   const bool current = floor_index(report.floors, "i") != std::string::npos;
-  const auto shape_of = [&](std::string_view name) {
-    const model::EffectSpec* spec = model::find_effect(name);
-    if (spec == nullptr) return Shape::none;
-    for (const model::TermSeed& rule : spec->plan.seeded_by) {
-      if (rule.shape == Shape::drive_dead_band || rule.shape == Shape::current_drop ||
-          (!current && rule.shape == Shape::sign))
-        return rule.shape;
-    }
-    return Shape::none;
-  };
+  const auto shape_of = [&](std::string_view name) { return offset_shape(name, !current); };
   const GapCandidate& diagnosis = report.candidates.front();
   const auto none = std::find_if(report.candidates.begin(), report.candidates.end(),
                                  [](const GapCandidate& c) { return c.name == "none"; });

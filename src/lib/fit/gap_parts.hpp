@@ -112,6 +112,13 @@ std::map<std::string, std::vector<double>> data_friction_starts(const model::Mod
 /// undetermined).
 std::string not_applicable(const model::EffectPlan& plan, const std::vector<Run>& runs);
 
+/// The steady-state offset an effect puts on a turning shaft, by its plan's seeding shape: a
+/// drive's dead band (drive_dead_band), a brush drop (current_drop) or, with `with_sign`, a
+/// Coulomb level (sign); none for any other effect. Offsets of different shapes are one constant
+/// torque while the shaft turns: only the coasts at zero drive, the reversals and a measured
+/// current (which a Coulomb level does not move) tell them apart.
+model::TermShape offset_shape(std::string_view name, bool with_sign = true);
+
 /// Throws unless every name is a candidate effect of the catalog (--exclude).
 void check_excluded(const std::vector<std::string>& excluded);
 

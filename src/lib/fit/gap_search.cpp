@@ -94,22 +94,6 @@ bool carries_weight(const GapCandidate& c, const std::string& effect, const GapD
   return improves(c.score, evaluate(without, data, floors).score, outputs);
 }
 
-/// The steady-state offset an effect puts on a turning shaft, by its plan's seeding shape: a
-/// Coulomb level (sign), a brush drop (current_drop) or a drive's dead band (drive_dead_band);
-/// none for any other effect. Two effects of different such shapes are one constant torque while
-/// the shaft turns: only the coasts at zero drive and the reversals tell them apart.
-model::TermShape offset_shape(std::string_view name) {
-  using Shape = model::TermShape;
-  const model::EffectSpec* spec = model::find_effect(name);
-  if (spec == nullptr) return Shape::none;
-  for (const model::TermSeed& rule : spec->plan.seeded_by) {
-    if (rule.shape == Shape::sign || rule.shape == Shape::current_drop ||
-        rule.shape == Shape::drive_dead_band)
-      return rule.shape;
-  }
-  return Shape::none;
-}
-
 /// True when `added` holds a steady-state offset of another shape than one that a member of
 /// `effects` holds already (a dead band added to a Coulomb level).
 bool alike_offset(const std::vector<std::string>& effects, const std::string& added) {
@@ -812,6 +796,18 @@ std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& 
 
 namespace gap_detail {
 
+model::TermShape offset_shape(std::string_view name, bool with_sign) {
+  using Shape = model::TermShape;
+  const model::EffectSpec* spec = model::find_effect(name);
+  if (spec == nullptr) return Shape::none;
+  for (const model::TermSeed& rule : spec->plan.seeded_by) {
+    if ((with_sign && rule.shape == Shape::sign) || rule.shape == Shape::current_drop ||
+        rule.shape == Shape::drive_dead_band)
+      return rule.shape;
+  }
+  return Shape::none;
+}
+
 std::map<std::string, std::vector<double>> data_friction_starts(const model::Model& model,
                                                                 const std::vector<Run>& runs) {
   std::map<std::string, std::vector<double>> out;
@@ -1267,6 +1263,20 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       std::vector<GapCandidate> fitted = run_jobs(round, data, floors, settings, orders, done, total);
       for (auto& c : fitted) c.fpe = fpe(c.score, c.free.size());
       std::sort(fitted.begin(), fitted.end(), [](const auto& x, const auto& y) { return x.fpe < y.fpe; });
+      // An extension whose added member is an offset alike one the model holds.
+      const auto offset_added = [&](const GapCandidate& c) {
+        return std::any_of(c.effects.begin(), c.effects.end(), [&](const std::string& e) {
+          return std::find(current.effects.begin(), current.effects.end(), e) == current.effects.end() &&
+                 alike_offset(current.effects, e);
+        });
+      };
+      const auto decided_where_they_differ = [](GapCandidate& c, const std::string& other,
+                                                const Disagreement& d) {
+        c.status += fmt::format(
+            "; on the {} held-out rows where it and {} disagree beyond the noise it scores {:.3g} against "
+            "{:.3g}",
+            d.rows, other, d.score_a, d.score_b);
+      };
       for (auto& c : fitted) {
         c.significant =
             c.evaluated && !rejected(c) && c.determined() && improves(c.score, ref_score, outputs);
@@ -1274,21 +1284,11 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         // An offset alike a member's differs from the model it extends only in the coasts at zero
         // drive and the reversals, a few rows of the held-out runs whose score it barely moves:
         // those rows decide, where the two disagree by more than the noise.
-        bool alike = false;
-        for (const auto& e : c.effects) {
-          if (std::find(current.effects.begin(), current.effects.end(), e) == current.effects.end())
-            alike = alike_offset(current.effects, e);
-        }
-        const Disagreement d = alike && c.score < current.score
+        const Disagreement d = offset_added(c) && c.score < current.score
                                    ? where_they_differ(c.model, current.model, data, floors)
                                    : Disagreement{};
         c.significant = d.rows >= k_min_disagreeing_rows && improves(d.score_a, d.score_b, outputs);
-        if (c.significant) {
-          c.status += fmt::format(
-              "; on the {} held-out rows where it and {} disagree beyond the noise it "
-              "scores {:.3g} against {:.3g}",
-              d.rows, current.name, d.score_a, d.score_b);
-        }
+        if (c.significant) decided_where_they_differ(c, current.name, d);
       }
       // Such an extension may rank below one that is not significant: it is then the one tried.
       if (!fitted.empty() && !fitted.front().significant) {
@@ -1299,21 +1299,12 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       }
       // Two offsets of other shapes (a dead band, a brush drop) may each complete the model: where
       // the two mixtures disagree beyond the noise, the held-out rows pick one.
-      const auto offset_added = [&](const GapCandidate& c) {
-        return std::any_of(c.effects.begin(), c.effects.end(), [&](const std::string& e) {
-          return std::find(current.effects.begin(), current.effects.end(), e) == current.effects.end() &&
-                 alike_offset(current.effects, e);
-        });
-      };
       if (!fitted.empty() && fitted.front().significant && offset_added(fitted.front())) {
         for (std::size_t k = 1; k < fitted.size(); ++k) {
           if (!fitted[k].significant || !offset_added(fitted[k])) continue;
           const Disagreement d = where_they_differ(fitted[k].model, fitted.front().model, data, floors);
           if (d.rows >= k_min_disagreeing_rows && improves(d.score_a, d.score_b, outputs)) {
-            fitted[k].status += fmt::format(
-                "; on the {} held-out rows where it and {} disagree beyond the noise "
-                "it scores {:.3g} against {:.3g}",
-                d.rows, fitted.front().name, d.score_a, d.score_b);
+            decided_where_they_differ(fitted[k], fitted.front().name, d);
             std::swap(fitted.front(), fitted[k]);
           }
         }
