@@ -174,8 +174,8 @@ model::DriveScale drive_scale(const model::Params& p, const std::vector<Run>& ru
   double torque_Nm = 0.0;
   double speed_rad_s = 0.0;
   for (const Run& run : runs) {
-    const bool current = drive_kind(run) == model::DriveKind::current;
-    for (double u : current ? run.inputs.i_cmd_A : run.inputs.T_cmd_Nm) {
+    const bool current = drive_kind(run.inputs) == model::DriveKind::current;
+    for (double u : drive_command(run.inputs)) {
       if (std::isfinite(u)) torque_Nm = std::max(torque_Nm, std::abs(current ? p.motor.Kt_Nm_A * u : u));
     }
     for (std::size_t o = 0; o < run.outputs.size(); ++o) {
