@@ -44,7 +44,8 @@ static int32_t MCG_XDATA s_next_u_min, s_next_u_max; /* limits in Q(F+8) */
 static int32_t MCG_XDATA s_next_u_bias;              /* bias in Q(F+8) */
 static int32_t MCG_XDATA s_next_r;                   /* R once the command is settled */
 static uint16_t MCG_XDATA s_next_bp[3];              /* operands of arith_pid_sum */
-static uint8_t MCG_XDATA s_staged; /* a shadow register written since the last commit or discard */
+/* The MCG_WRITER_* that wrote the shadow set since the last commit or discard, or 0. */
+static uint8_t MCG_XDATA s_staged;
 /* Two commands a PRBS on rpm_cmd alternates between (control_levels), the command before them, and the
  * R each combination of the command and the two before it gives with the active set (refresh_r's sums):
  *   r0[k 8 + h] = c0 q_k + c1 q_k1 + c2 q_k2, h = k1 2 + k2 (k1, k2 < 2) or 4 + k1 (k2 = 2);
@@ -312,14 +313,18 @@ static void next_r(void) {
   }
 }
 
-void control_staged(void) {
+void control_staged(uint8_t writer) {
   s_next_scale = (int16_t)(1 << g_ctl_shadow.coef_frac);
   s_next_u_min = scale_next(g_ctl_shadow.duty_min);
   s_next_u_max = scale_next(g_ctl_shadow.duty_max);
   s_next_u_bias = scale_next(g_ctl_shadow.duty_bias);
   next_r();
-  s_staged = 1;
+  if (!s_staged) {
+    s_staged = writer;
+  }
 }
+
+uint8_t control_owner(void) { return s_staged; }
 
 /* The gains the mode uses, all zero: a closed-loop mode would hold its output where it is, or at the
  * bias, whatever the speed (the 3221 rpm runaway of a PI entered with gains never written). */

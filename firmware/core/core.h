@@ -43,19 +43,32 @@ extern uint16_t MCG_XDATA g_tx_drops;  /* frames not sent for lack of room */
 /* regs.c: the register map ------------------------------------------------------------------- */
 /* MCG_ST_OK and the value in *value, or MCG_ST_BAD_REG. */
 uint8_t regs_read(uint8_t reg, int16_t* value) MCG_REENTRANT;
-/* Range-checked write with its side effects (log interval, outputs, commit, ...); an MCG_RS register
- * is written into the shadow set. MCG_ST_OK or the reason it was refused, the register then unchanged. */
+/* Who writes a register. The shadow set belongs to the writer that staged into it first until a
+ * commit or discard: another writer's staged write or commit is refused with MCG_ST_BUSY, so no
+ * writer commits a set another left half-written. Only the link may drop another's set (commit 0),
+ * and not a playing sequence's (it would commit the rest of its set alone). */
+#define MCG_WRITER_LINK 1u
+#define MCG_WRITER_SEQ 2u
+#define MCG_WRITER_KEYPAD 3u
+/* Range-checked write with its side effects (log interval, outputs, commit, ...) by `writer`; an
+ * MCG_RS register is written into the shadow set. MCG_ST_OK or the reason it was refused, the
+ * register then unchanged. */
+uint8_t regs_write_by(uint8_t writer, uint8_t reg, int16_t value);
+/* regs_write_by(MCG_WRITER_LINK, ...): the link's write, and the power-on defaults. */
 uint8_t regs_write(uint8_t reg, int16_t value);
 /* As regs_read, but an MCG_RS register shows its shadow value (what a write left there). */
 uint8_t regs_read_staged(uint8_t reg, int16_t* value);
 /* A write as one atomic change, as the keypad makes it: an MCG_RS register is written into a fresh
- * copy of the active set and committed; any other is written. MCG_ST_OK or the refusal. */
+ * copy of the active set and committed; any other is written. MCG_ST_OK or the refusal (MCG_ST_BUSY
+ * while another writer has a set staged). */
 uint8_t regs_apply(uint8_t reg, int16_t value);
 /* The static range of register reg (which must exist). */
 int16_t regs_min(uint8_t reg);
 int16_t regs_max(uint8_t reg);
 /* 1 if the register exists and is writable. */
 uint8_t regs_writable(uint8_t reg);
+/* 1 if a write of reg stages into, commits or discards the controller's shadow set. */
+uint8_t regs_staging(uint8_t reg);
 void regs_init(void);
 extern uint8_t g_mode;                 /* MCG_MODE_* */
 extern int16_t MCG_XDATA g_rpm_cmd;    /* rpm */
@@ -99,9 +112,11 @@ extern CtlSet MCG_XDATA g_ctl_shadow;
 uint8_t control_commit(void);
 /* The shadow set becomes a copy of the active one. */
 void control_discard(void);
-/* After a write into the shadow set: recomputes what it derives (limits, bias, R in its format), so
- * that a commit only copies. */
-void control_staged(void);
+/* After a write into the shadow set by `writer` (MCG_WRITER_*): recomputes what it derives (limits,
+ * bias, R in its format), so that a commit only copies; the first such write makes writer its owner. */
+void control_staged(uint8_t writer);
+/* The writer that owns the shadow set (it staged since the last commit or discard), or 0. */
+uint8_t control_owner(void);
 /* 1 if the shadow set differs from the active one. */
 uint8_t control_pending(void);
 void control_set_rpm_cmd(int16_t rpm);
@@ -146,7 +161,12 @@ void seq_tick(void);
 /* Stores n entries (5 bytes each) at index; MCG_ST_OK, BUSY, RANGE, BAD_REG or READ_ONLY. */
 uint8_t seq_write(uint8_t index, const uint8_t MCG_XDATA* entries, uint8_t n);
 uint8_t seq_clear(void);
+/* Play, loop or stop. A sequence with entries that stage (regs_staging) owns the shadow set from
+ * its start to its stop: it starts only when no other writer has a set staged (else MCG_ST_BUSY),
+ * and a set it leaves staged at its stop is discarded. */
 uint8_t seq_set_state(uint8_t state);
+/* 1 while a playing sequence owns the shadow set. */
+extern uint8_t MCG_XDATA g_seq_owns_set;
 extern uint8_t MCG_XDATA g_seq_len;
 extern uint8_t MCG_XDATA g_seq_state;
 

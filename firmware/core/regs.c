@@ -51,6 +51,9 @@ static uint8_t flags(void) {
   if (g_seq_state != MCG_SEQ_STOP) {
     f |= MCG_FLAG_SEQ;
   }
+  if (g_seq_owns_set) {
+    f |= MCG_FLAG_SEQ_SET;
+  }
   return f;
 }
 
@@ -221,9 +224,23 @@ static uint8_t in_range(int16_t v, int16_t lo, int16_t hi) { return v >= lo && v
 int16_t regs_min(uint8_t reg) { return k_min[reg - 1u]; }
 int16_t regs_max(uint8_t reg) { return k_max[reg - 1u]; }
 
-uint8_t regs_write(uint8_t reg, int16_t v) {
+uint8_t regs_staging(uint8_t reg) {
+  return (uint8_t)(reg == MCG_REG_COMMIT || (regs_writable(reg) && k_access[reg - 1u] == MCG_RS));
+}
+
+/* The writer the shadow set belongs to now, or 0 (core.h: MCG_WRITER_*). */
+static uint8_t set_owner(void) { return g_seq_owns_set ? MCG_WRITER_SEQ : control_owner(); }
+
+static uint8_t owned_by_another(uint8_t writer) {
+  MCG_SLOW uint8_t owner = set_owner();
+  return (uint8_t)(owner != 0 && owner != writer);
+}
+
+uint8_t regs_write(uint8_t reg, int16_t v) { return regs_write_by(MCG_WRITER_LINK, reg, v); }
+
+uint8_t regs_write_by(uint8_t writer, uint8_t reg, int16_t v) {
   if (reg == MCG_REG_COMMIT && v == 1) { /* first: the commit's pass and the next update share a tick */
-    return control_commit();
+    return owned_by_another(writer) ? MCG_ST_BUSY : control_commit();
   }
   if (reg < MCG_REG_MODE || reg >= MCG_REG_COUNT) { /* the table has a row for every id between */
     return MCG_ST_BAD_REG;
@@ -233,6 +250,9 @@ uint8_t regs_write(uint8_t reg, int16_t v) {
   }
   if (!in_range(v, k_min[reg - 1u], k_max[reg - 1u])) {
     return MCG_ST_RANGE;
+  }
+  if (regs_staging(reg) && owned_by_another(writer)) {
+    return MCG_ST_BUSY;
   }
   switch (reg) {
     case MCG_REG_MODE:
@@ -315,7 +335,7 @@ uint8_t regs_write(uint8_t reg, int16_t v) {
       break;
   }
   if (k_access[reg - 1u] == MCG_RS) {
-    control_staged();
+    control_staged(writer);
   }
   return MCG_ST_OK;
 }
@@ -323,10 +343,13 @@ uint8_t regs_write(uint8_t reg, int16_t v) {
 uint8_t regs_apply(uint8_t reg, int16_t v) {
   MCG_SLOW uint8_t st;
   if (!regs_writable(reg) || k_access[reg - 1u] != MCG_RS) {
-    return regs_write(reg, v);
+    return regs_write_by(MCG_WRITER_KEYPAD, reg, v);
+  }
+  if (owned_by_another(MCG_WRITER_KEYPAD)) {
+    return MCG_ST_BUSY;
   }
   control_discard();
-  st = regs_write(reg, v);
+  st = regs_write_by(MCG_WRITER_KEYPAD, reg, v);
   if (st != MCG_ST_OK) {
     return st;
   }

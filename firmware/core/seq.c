@@ -13,6 +13,7 @@
 static uint8_t MCG_XDATA MCG_AT(MCG_SEQ_XADDR) s_table[MCG_SEQ_MAX * MCG_SEQ_ENTRY_BYTES];
 uint8_t MCG_XDATA g_seq_len;
 uint8_t MCG_XDATA g_seq_state;
+uint8_t MCG_XDATA g_seq_owns_set;
 static MCG_XDATA uint8_t s_index;
 static MCG_XDATA uint16_t s_wait_ms;
 static MCG_XDATA uint8_t s_starting; /* started, waiting for a tick that opens a stream sample */
@@ -22,9 +23,30 @@ static uint16_t entry_delay(uint8_t k) {
   return (uint16_t)(e[0] | ((uint16_t)e[1] << 8));
 }
 
+/* 1 if an entry stages into, commits or discards the controller's shadow set. */
+static uint8_t stages(void) {
+  MCG_SLOW uint8_t k;
+  for (k = 0; k < g_seq_len; ++k) {
+    if (regs_staging(s_table[(uint16_t)k * MCG_SEQ_ENTRY_BYTES + 2])) {
+      return 1;
+    }
+  }
+  return 0;
+}
+
+/* The sequence stops: a set it staged and did not commit is dropped, not left for another writer. */
+static void stopped(void) {
+  g_seq_state = MCG_SEQ_STOP;
+  if (control_owner() == MCG_WRITER_SEQ) {
+    control_discard();
+  }
+  g_seq_owns_set = 0;
+}
+
 void seq_init(void) {
   g_seq_len = 0;
   g_seq_state = MCG_SEQ_STOP;
+  g_seq_owns_set = 0;
   s_index = 0;
   s_wait_ms = 0;
   s_starting = 0;
@@ -67,8 +89,18 @@ uint8_t seq_clear(void) {
 }
 
 uint8_t seq_set_state(uint8_t state) {
-  if (state != MCG_SEQ_STOP && g_seq_len == 0) {
-    return MCG_ST_RANGE;
+  if (state == MCG_SEQ_STOP) {
+    stopped();
+  } else {
+    if (g_seq_len == 0) {
+      return MCG_ST_RANGE;
+    }
+    if (stages()) {
+      if (control_owner() != 0 && control_owner() != MCG_WRITER_SEQ) {
+        return MCG_ST_BUSY;
+      }
+      g_seq_owns_set = 1;
+    }
   }
   g_seq_state = state;
   s_index = 0;
@@ -89,11 +121,11 @@ void seq_tick(void) {
   }
   while (s_wait_ms == 0) {
     const uint8_t MCG_XDATA* e = s_table + (uint16_t)s_index * MCG_SEQ_ENTRY_BYTES;
-    regs_write(e[2], (int16_t)(e[3] | ((uint16_t)e[4] << 8)));
+    regs_write_by(MCG_WRITER_SEQ, e[2], (int16_t)(e[3] | ((uint16_t)e[4] << 8)));
     if (++s_index == g_seq_len) {
       s_index = 0;
       if (g_seq_state != MCG_SEQ_LOOP) {
-        g_seq_state = MCG_SEQ_STOP;
+        stopped();
         return;
       }
       s_wait_ms = entry_delay(0);

@@ -126,7 +126,9 @@ typedef struct {
 #define MCG_ST_BAD_REG 7u    /* unknown register */
 #define MCG_ST_READ_ONLY 8u  /* register cannot be written */
 #define MCG_ST_RANGE 9u      /* value outside the register's range; register unchanged */
-#define MCG_ST_BUSY 10u      /* not now: log busy, sequence playing, or an excitation setting while it runs */
+#define MCG_ST_BUSY                                                                                          \
+  10u                        /* not now: log busy, sequence playing, an excitation setting while it runs, or \
+                                the controller's set staged by another writer */
 #define MCG_ST_OWNED 11u     /* duty written in a closed-loop mode: the controller owns it */
 #define MCG_ST_NO_GAINS 12u  /* commit of a closed-loop mode whose every gain is zero; nothing changed */
 #define MCG_ST_LIMITS 13u    /* commit of duty_min above duty_max; nothing changed */
@@ -283,8 +285,8 @@ typedef struct {
     MCG_CAP_NO, MCG_NO_KEY, "command sequence entries stored") \
   X(SEQ_STATE, "seq_state", MCG_RW, MCG_SEQ_STOP, MCG_SEQ_LOOP, MCG_SEQ_STOP, MCG_UNIT_SEQ, \
     MCG_CAP_NO, MCG_NO_KEY, "sequence playback: stop, play, loop") \
-  X(FLAGS, "flags", MCG_RO, 0, 15, 0, MCG_UNIT_FLAGS, \
-    MCG_CAP_NO, MCG_NO_KEY, "saturated, logging, log_full, seq") \
+  X(FLAGS, "flags", MCG_RO, 0, 31, 0, MCG_UNIT_FLAGS, \
+    MCG_CAP_NO, MCG_NO_KEY, "saturated, logging, log_full, seq, seq_set") \
   X(RX_ERRORS, "rx_errors", MCG_RW, 0, 0, 0, MCG_UNIT_COUNT, \
     MCG_CAP_NO, MCG_NO_KEY, "frames the board dropped; write 0 clears") \
   X(TX_DROPS, "tx_drops", MCG_RW, 0, 0, 0, MCG_UNIT_COUNT, \
@@ -343,6 +345,7 @@ typedef struct {
 #define MCG_FLAG_LOGGING 0x02u   /* RAM log recording */
 #define MCG_FLAG_LOG_FULL 0x04u  /* RAM log holds MCG_LOG_POINTS points */
 #define MCG_FLAG_SEQ 0x08u       /* sequence playing */
+#define MCG_FLAG_SEQ_SET 0x10u   /* the playing sequence owns the controller's set (stages into it) */
 
 /* ---- RAM log ---------------------------------------------------------------------------------- */
 #define MCG_LOG_XADDR 0x9500u  /* external RAM address of the log */

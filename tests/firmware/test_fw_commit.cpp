@@ -221,3 +221,95 @@ TEST(FwCommit, SequenceCommitsOnItsTick) {
   EXPECT_EQ(duty[9], 0);
   EXPECT_GT(duty[10], 0);
 }
+
+namespace {
+
+// A sequence's table of (delay, reg, value) entries, written to the board.
+struct Sequence {
+  Bytes entries{0};
+  Sequence& add(int delay, std::uint8_t reg, int value) {
+    const Bytes d = fwtest::le16(delay), v = fwtest::le16(value);
+    entries.insert(entries.end(), d.begin(), d.end());
+    entries.push_back(reg);
+    entries.insert(entries.end(), v.begin(), v.end());
+    return *this;
+  }
+};
+
+// A PI swapped in by a sequence over nine ticks: b0, then the mode, then the commit.
+void load_pi_swap(Board& b) {
+  Sequence s;
+  s.add(2, MCG_REG_B0, 4000).add(3, MCG_REG_MODE, MCG_MODE_PI).add(4, MCG_REG_COMMIT, 1);
+  ASSERT_EQ(b.request(MCG_CMD_SEQ_WRITE, s.entries)->payload, (Bytes{MCG_ST_OK, 3}));
+}
+
+std::int16_t active(std::uint8_t reg) {
+  std::int16_t v = 0;
+  EXPECT_EQ(regs_read(reg, &v), MCG_ST_OK);
+  return v;
+}
+
+}  // namespace
+
+// The link's half-staged set is never committed by a sequence: one that stages does not start.
+TEST(FwCommit, ASequenceDoesNotStartOnTheLinksStagedSet) {
+  Board b;
+  load_pi_swap(b);
+  ASSERT_EQ(b.write(MCG_REG_B1, -3900), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_SEQ_STATE, MCG_SEQ_PLAY), MCG_ST_BUSY);
+  ASSERT_EQ(b.write(MCG_REG_COMMIT, 0), MCG_ST_OK);
+  EXPECT_EQ(b.write(MCG_REG_SEQ_STATE, MCG_SEQ_PLAY), MCG_ST_OK);
+}
+
+// While a sequence owns the set, the link can neither stage into it, nor commit nor drop it half
+// done, nor the keypad change a gain; the sequence's whole set becomes active at its commit.
+TEST(FwCommit, NoOtherWriterTouchesASequencesSet) {
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_RPM_CMD, k_rpm), MCG_ST_OK);
+  load_pi_swap(b);
+  ASSERT_EQ(b.write(MCG_REG_SEQ_STATE, MCG_SEQ_PLAY), MCG_ST_OK);
+  for (int t = 1; t <= 4; ++t) host_board_tick(0);  // b0 staged on tick 3
+  EXPECT_EQ(active(MCG_REG_FLAGS), MCG_FLAG_SEQ | MCG_FLAG_SEQ_SET);
+  EXPECT_EQ(b.write(MCG_REG_B1, -3900), MCG_ST_BUSY);
+  EXPECT_EQ(b.write(MCG_REG_COMMIT, 1), MCG_ST_BUSY);
+  EXPECT_EQ(b.write(MCG_REG_COMMIT, 0), MCG_ST_BUSY);
+  EXPECT_EQ(regs_apply(MCG_REG_B1, -3900), MCG_ST_BUSY);
+  EXPECT_EQ(active(MCG_REG_MODE), MCG_MODE_OPEN);
+  for (int t = 5; t <= 10; ++t) host_board_tick(0);
+  EXPECT_EQ(active(MCG_REG_MODE), MCG_MODE_PI);
+  EXPECT_EQ(active(MCG_REG_B0), 4000);
+  EXPECT_EQ(active(MCG_REG_B1), 0);
+  EXPECT_EQ(active(MCG_REG_FLAGS), 0);
+  EXPECT_EQ(b.write(MCG_REG_B1, -3900), MCG_ST_OK);  // the sequence has ended: the set is free
+}
+
+// A sequence stopped between its staged writes and its commit leaves nothing staged for another
+// writer to commit: the link's commit then changes nothing.
+TEST(FwCommit, AStoppedSequenceDropsItsHalfSet) {
+  Board b;
+  load_pi_swap(b);
+  ASSERT_EQ(b.write(MCG_REG_SEQ_STATE, MCG_SEQ_PLAY), MCG_ST_OK);
+  for (int t = 1; t <= 4; ++t) host_board_tick(0);
+  std::int16_t pending = 0;
+  ASSERT_EQ(regs_read(MCG_REG_COMMIT, &pending), MCG_ST_OK);
+  ASSERT_EQ(pending, 1);
+  ASSERT_EQ(b.write(MCG_REG_SEQ_STATE, MCG_SEQ_STOP), MCG_ST_OK);
+  ASSERT_EQ(regs_read(MCG_REG_COMMIT, &pending), MCG_ST_OK);
+  EXPECT_EQ(pending, 0);
+  EXPECT_EQ(b.write(MCG_REG_COMMIT, 1), MCG_ST_OK);
+  EXPECT_EQ(active(MCG_REG_B0), 0);
+  EXPECT_EQ(active(MCG_REG_MODE), MCG_MODE_OPEN);
+}
+
+// The keypad's change is one commit; it waits for the link's staged set rather than drop it.
+TEST(FwCommit, TheKeypadDoesNotDropTheLinksStagedSet) {
+  Board b;
+  ASSERT_EQ(b.write(MCG_REG_B0, 4000), MCG_ST_OK);
+  EXPECT_EQ(regs_apply(MCG_REG_DUTY_BIAS, 100), MCG_ST_BUSY);
+  std::int16_t b0 = 0;
+  ASSERT_EQ(regs_read_staged(MCG_REG_B0, &b0), MCG_ST_OK);
+  EXPECT_EQ(b0, 4000);
+  ASSERT_EQ(b.write(MCG_REG_COMMIT, 0), MCG_ST_OK);
+  EXPECT_EQ(regs_apply(MCG_REG_DUTY_BIAS, 100), MCG_ST_OK);
+  EXPECT_EQ(active(MCG_REG_DUTY_BIAS), 100);
+}

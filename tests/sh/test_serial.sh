@@ -104,6 +104,14 @@ check "send --then play" eval 'S send "$work/seq.csv" --then play > "$work/out" 
   same "$work/out" "sequence: 4 entries over 0.5 s loaded, playing"'
 sleep 0.8
 check "the sequence ran" eval 'S get rpm_cmd clutch seq_len > "$work/v" && same "$work/v" "$(printf "520\n1\n4")"'
+# A playing sequence with a controller row owns the board's controller set until it stops.
+printf 't,duty_bias,rpm_cmd\n0,0,420\n20,0,500\n' > "$work/owns.csv"
+check "a sequence that changes the controller plays" eval 'S send "$work/owns.csv" --then play > /dev/null &&
+  S get flags | grep -q "seq,seq_set$"'
+check "set is refused while that sequence plays" eval '! S set kp 1.5 2> "$work/err" &&
+  same "$work/err" "mcg-serial: error: $tty: staging a controller: a playing sequence owns the controller'"'"'s set until it stops (seq_state 0); nothing was written"'
+check "stopping the sequence frees the set" eval 'S set seq_state stop && S set kp 1.5 && S set rpm_cmd 520 &&
+  S get kp > "$work/v" && same "$work/v" 1.5 && ! S get flags | grep -q seq'
 printf 't,rpm_cmd\n0,400\n0.1,900\n' > "$work/bad.csv"
 check "send names the row of a value out of range" eval '! S send "$work/bad.csv" 2> "$work/err" &&
   same "$work/err" "mcg-serial: error: $work/bad.csv:3: rpm_cmd: 900 rpm is outside 120..720 rpm"'

@@ -118,7 +118,8 @@ TEST(LinkSession, RefusalCarriesTheBoardsReason) {
   });
   Session s(line, quick());
   EXPECT_EQ(error_of([&] { s.request(MCG_CMD_LOG_START, {}, "starting the log"); }),
-            "line: starting the log: board busy (log recording, dump or sequence playing)");
+            "line: starting the log: board busy (log recording, dump, sequence playing, or a set another "
+            "writer staged)");
   EXPECT_EQ(line.requests(), 1);  // a refusal is an answer: not sent again
 }
 

@@ -35,7 +35,7 @@ static_assert(ids_in_table_order(), "MCG_REGISTERS: one row per id 0x01..MCG_REG
 constexpr const auto& k_modes = boardunits::k_board_modes;
 constexpr std::array<std::string_view, 3> k_seq_states{"stop", "play", "loop"};
 constexpr std::array<std::string_view, 4> k_excitations{"none", "prbs", "staircase", "chirp"};
-constexpr std::array<std::string_view, 4> k_flags{"saturated", "logging", "log_full", "seq"};
+constexpr std::array<std::string_view, 5> k_flags{"saturated", "logging", "log_full", "seq", "seq_set"};
 
 std::string normalise(std::string_view name) {
   std::string out(name);
@@ -212,7 +212,7 @@ std::string_view status_text(std::uint8_t status) {
     case MCG_ST_RANGE:
       return "value outside the register's range";
     case MCG_ST_BUSY:
-      return "board busy (log recording, dump or sequence playing)";
+      return "board busy (log recording, dump, sequence playing, or a set another writer staged)";
     case MCG_ST_OWNED:
       return "the controller owns duty in a closed-loop mode; set mode open first";
     case MCG_ST_NO_GAINS:

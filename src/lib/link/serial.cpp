@@ -82,6 +82,19 @@ constexpr double k_stage_wait_s = k_stage_idle_s + 1.0;
 /// register the shadow value its answer reports, else the register read back. Returns the raw value
 /// held. Notes a rounded value on `diag`; throws when the board holds something else, and names the
 /// mode when the board refuses a duty its controller owns.
+/// A sequence plays on the board that owns the controller's shadow set (it has entries of it):
+/// the board refuses every other writer's staging until the sequence stops.
+bool sequence_owns_set(Connection& c) {
+  return (static_cast<unsigned>(c.session->read(require_register("flags"))) & MCG_FLAG_SEQ_SET) != 0;
+}
+
+[[noreturn]] void fail_sequence_owns_set(Connection& c, std::string_view what) {
+  fail(
+      "{}: {}: a playing sequence owns the controller's set until it stops (seq_state 0); nothing was "
+      "written",
+      c.port->name(), what);
+}
+
 std::int16_t write_verified(Connection& c, const RegisterInfo& reg, double value, std::string_view where,
                             Diagnostics& diag) {
   if (!reg.writable) fail("{}: {} is read-only", where, reg.name);
@@ -92,6 +105,7 @@ std::int16_t write_verified(Connection& c, const RegisterInfo& reg, double value
     held = c.session->write(reg, raw);
   } catch (const Refused& e) {
     if (e.status() == MCG_ST_BUSY && reg.staged) {
+      if (sequence_owns_set(c)) fail_sequence_owns_set(c, fmt::format("writing {}", reg.name));
       fail(
           "{}: writing {}: the port's owner discarded this writer's staged set (silent over {} s); "
           "nothing was committed",
@@ -129,6 +143,7 @@ void discard_staged(Connection& c) {
       break;
     } catch (const Refused& e) {
       if (e.status() != MCG_ST_BUSY) throw;
+      if (sequence_owns_set(c)) fail_sequence_owns_set(c, "staging a controller");
       if (std::chrono::steady_clock::now() > deadline) {
         fail(
             "{}: another client of the port has been staging a controller for {} s without committing it; "
