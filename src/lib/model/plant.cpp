@@ -527,14 +527,15 @@ class PlantImpl {
     const double h_lim = step_limit();
     if (m_c.circuit.V_sat_V > 0.0 && drop_circuits()) {
       // The drop's slope changes by up to V_sat / i_sat where the current crosses zero: the
-      // step follows the state there (drop_step_limit) and spends the interval evenly.
+      // step follows the state there (drop_step_limit), and the interval's last step takes
+      // what is left. So the steps move continuously with the parameters: a step more
+      // appears at length 0, where evenly spread steps would all jump at once.
       double t = m_t;
       double remaining = len;
       while (remaining > 1e-15) {
         Vec k1;
         deriv(m_y, t, k1);
-        const double n = std::max(1.0, std::ceil(remaining / drop_step_limit(h_lim, k1) - 1e-9));
-        const double h = remaining / n;
+        const double h = std::min(remaining, drop_step_limit(h_lim, k1));
         substep(t, h, &k1);
         t += h;
         remaining -= h;
