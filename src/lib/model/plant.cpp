@@ -37,11 +37,8 @@ using Vec = std::array<double, k_states>;
 
 /// Circuits faster than this R/L, 1/s (the generator's R + r_load, the motor's R + series),
 /// are solved as algebraic: the current follows within 50 us, far below any mechanical time
-/// constant, and a step resolving it would be microseconds (with a saturating drop's slope, less).
+/// constant, and a step resolving it would be microseconds.
 constexpr double k_quasi_static_rate = 2e4;
-/// Shortest step the motor circuit is integrated at; a circuit a saturating drop's slope makes
-/// faster than this (L / R_eff under 4 us) is solved as algebraic for that step.
-constexpr double k_min_circuit_step_s = 2e-6;
 /// Events handled inside one integration step before the step is accepted as is.
 constexpr int k_max_events_per_step = 16;
 /// The regularised stick's breakaway (SimOptions::smooth_stick): a stuck motor breaks away at
@@ -66,7 +63,6 @@ class PlantImpl {
     m_y[X_G] = m_c.winding.x0;
     m_clutch = initial_clutch;
     m_motor_quasi = (m_c.p.motor.R_ohm + m_c.circuit.R_series_ohm) / m_c.p.motor.L_H > k_quasi_static_rate;
-    m_exp_circuits = m_c.circuit.V_sat_V <= 0.0;
     m_t_engage = -std::numeric_limits<double>::infinity();
     if (m_clutch == 2) {
       m_coupling = spring() ? Coupling::spring : Coupling::rigid;
@@ -365,16 +361,23 @@ class PlantImpl {
   }
 
   /// Decay rates lambda = -R/L, 1/s, of the armature circuits integrated as states (0 for every
-  /// other state, and for all of them under a saturating drop, whose slope near zero current the
-  /// step bound follows instead): the stiff linear part the exponential step takes exactly.
-  /// The windings' states stay in the rest of the right-hand side. Kept in m_lam, set whenever
-  /// the command, the clutch or the load changes.
+  /// other state): the stiff linear part the exponential step takes exactly. A saturating drop
+  /// adds its local slope at each step's start (drop_rate). The windings' states stay in the
+  /// rest of the right-hand side. Kept in m_lam, set whenever the command, the clutch or the
+  /// load changes.
   void update_rates() {
     m_lam.fill(0.0);
-    if (!m_exp_circuits) return;
     if (!m_motor_quasi && !current_driven()) m_lam[I_M] = -m_R_bridge_ohm / m_c.p.motor.L_H;
     if (gen_circuit() && !gen_quasi_static())
       m_lam[I_G] = -(m_c.p.generator.R_ohm + m_r_load) / m_c.p.generator.L_H;
+  }
+
+  /// The saturating drop's slope at current i over the circuit's inductance L, 1/s:
+  /// d/di [V_sat tanh(i / i_sat)] / L = V_sat / (i_sat L) (1 - tanh^2(i / i_sat)); 100 ohm per
+  /// volt of a brush drop near zero current, exactly 0 far from it.
+  double drop_rate(double i_A, double L_H) const {
+    const double th = std::tanh(i_A / m_c.circuit.i_sat_A);
+    return m_c.circuit.V_sat_V / (m_c.circuit.i_sat_A * L_H) * (1.0 - th * th);
   }
 
   /// The coefficients of one step of h for one circuit of rate lambda (z = lambda h): the
@@ -446,10 +449,17 @@ class PlantImpl {
   /// b = e^(z/2) y0 + h/2 phi1(z/2) N(a), c = e^(z/2) a + h/2 phi1(z/2) (2 N(b) - N(y0)),
   /// y1 = e^z y0 + h (phi1 - 3 phi2 + 4 phi3) N(y0) + 2 h (phi2 - 2 phi3) (N(a) + N(b))
   ///      + h (4 phi3 - phi2) N(c); exact for a constant N, RK4 at lambda = 0.
+  /// Under a saturating drop lambda is the circuit's whole slope at y0, -(R + drop'(i0)) / L
+  /// (an exponential Rosenbrock linearisation): the stiff mode near zero current decays
+  /// exactly at any step, with no switch, so the step is smooth in every parameter.
   /// The circuits (I_M, I_G) come first in the state and take the exponential step where their
   /// rate is not 0; the loops over the other states have no branch.
   Vec step_once(const Vec& y0, double t0, double h, const Vec& k1) const {
-    const Vec& lam = m_lam;
+    Vec lam = m_lam;
+    if (m_c.circuit.V_sat_V > 0.0) {
+      if (lam[I_M] != 0.0) lam[I_M] -= drop_rate(y0[I_M], m_c.p.motor.L_H);
+      if (lam[I_G] != 0.0) lam[I_G] -= drop_rate(y0[I_G], m_c.p.generator.L_H);
+    }
     if (lam[I_M] == 0.0 && lam[I_G] == 0.0) return rk4(y0, t0, h, k1);
     constexpr std::size_t k_circuits = 2;
     std::array<const ExpCoef*, k_circuits> coef{};
@@ -490,13 +500,16 @@ class PlantImpl {
   }
 
   /// Largest step for accuracy: a fraction of the spring's time scale, and of the electrical
-  /// ones where the circuits take RK4 (under a saturating drop).
+  /// ones where asked (SimOptions::circuit_bound), under a saturating drop (whose slope the
+  /// step takes at its start only) and under a torque of the shaft angle. The bound holds R/L
+  /// without the drop: it depends on the parameters alone, not on the state.
   double step_limit() const {
     double h = m_opt.max_step_s;
     const Machine& mm = m_c.p.motor;
     // A torque of the shaft angle (a ripple, a discrepancy term) varies within a millisecond at
     // speed: its model keeps the electrical bound, which resolves the angle as it always did.
-    const bool electrical_bound = m_opt.circuit_bound || !m_exp_circuits || !m_c.motor_torque.empty();
+    const bool electrical_bound =
+        m_opt.circuit_bound || m_c.circuit.V_sat_V > 0.0 || !m_c.motor_torque.empty();
     if (electrical_bound && !m_motor_quasi && !current_driven())
       h = std::min(h, 0.5 * mm.L_H / (mm.R_ohm + m_c.circuit.R_series_ohm + m_c.circuit.R_duty_ohm));
     if (electrical_bound && gen_circuit() && !gen_quasi_static()) {
@@ -512,60 +525,61 @@ class PlantImpl {
 
   void integrate(double len) {
     const double h_lim = step_limit();
-    if (m_c.circuit.V_sat_V <= 0.0 ||
-        ((m_motor_quasi || current_driven()) && !(gen_circuit() && !gen_quasi_static()))) {
-      const std::optional<long> steps =
-          to_integer(std::ceil(len / h_lim - 1e-9), 0L, std::numeric_limits<long>::max());
-      if (!steps)
-        fail("an interval of {} s between rows is more steps of {} s than the integrator counts", len, h_lim);
-      const long n = *steps;
-      const double h = len / static_cast<double>(std::max(1L, n));
+    if (m_c.circuit.V_sat_V > 0.0 && drop_circuits()) {
+      // The drop's slope changes by up to V_sat / i_sat where the current crosses zero: the
+      // step follows the state there (drop_step_limit), and the interval's last step takes
+      // what is left. So the steps move continuously with the parameters: a step more
+      // appears at length 0, where evenly spread steps would all jump at once.
       double t = m_t;
-      for (long k = 0; k < std::max(1L, n); ++k) {
-        substep(t, h);
+      double remaining = len;
+      while (remaining > 1e-15) {
+        Vec k1;
+        deriv(m_y, t, k1);
+        const double h = std::min(remaining, drop_step_limit(h_lim, k1));
+        substep(t, h, &k1);
         t += h;
+        remaining -= h;
       }
       return;
     }
-    // A saturating drop's slope V_sat/i_sat (100 ohm per volt of a brush drop) near zero current:
-    // a stiff mode only while |i| is small, so the step follows the state.
-    // Where that slope makes the motor circuit faster than k_min_circuit_step_s can follow
-    // (a low-inductance motor with a strong drop, near zero current), the current is
-    // algebraic for the step: it follows the EMF within microseconds anyway.
-    const bool algebraic = m_motor_quasi;
+    const std::optional<long> steps =
+        to_integer(std::ceil(len / h_lim - 1e-9), 0L, std::numeric_limits<long>::max());
+    if (!steps)
+      fail("an interval of {} s between rows is more steps of {} s than the integrator counts", len, h_lim);
+    const long n = std::max(1L, *steps);
+    const double h = len / static_cast<double>(n);
     double t = m_t;
-    double remaining = len;
-    while (remaining > 1e-15) {
-      double h_state = std::min(h_lim, drop_step_limit(h_lim));
-      if (!algebraic && h_state < k_min_circuit_step_s) {
-        m_motor_quasi = true;
-        m_y[I_M] = motor_current(m_y);
-        h_state = std::min(h_lim, drop_step_limit(h_lim));
-      }
-      const double n = std::max(1.0, std::ceil(remaining / h_state - 1e-9));
-      const double h = remaining / n;
+    for (long k = 0; k < n; ++k) {
       substep(t, h);
-      m_motor_quasi = algebraic;
       t += h;
-      remaining -= h;
     }
   }
 
-  /// Step bound from the saturating drop's local slope, R_eff = R + (V_sat/i_sat) sech^2(i/i_sat),
-  /// evaluated at the smallest |i| the current may reach within a step of h_max.
-  double drop_step_limit(double h_max) const {
-    Vec k;
-    deriv(m_y, m_t, k);
-    auto limit = [&](double i, double di, double R, double L) {
-      const double i_min = std::max(0.0, std::abs(i) - std::abs(di) * h_max);
-      const double c = std::cosh(std::min(i_min / m_c.circuit.i_sat_A, 30.0));
-      return 0.5 * L / (R + m_c.circuit.V_sat_V / m_c.circuit.i_sat_A / (c * c));
+  /// Whether a circuit is integrated as a state (and so carries a saturating drop's slope).
+  bool drop_circuits() const { return m_lam[I_M] != 0.0 || m_lam[I_G] != 0.0; }
+
+  /// Step bound under a saturating drop, at most h_max. The exponential step takes the drop's
+  /// slope s(i) = V_sat / i_sat sech^2(i / i_sat) at the step's start i0; the rest of it,
+  /// (s(i) - s(i0)) / L, is stepped explicitly, so the step is held to half L over the
+  /// largest change of the slope over the currents i0 +- |di/dt| h_max the step may reach: the
+  /// full h_max where the current rests near zero or runs far from it, a few microseconds
+  /// while it crosses zero. k = f(y) at the start.
+  double drop_step_limit(double h_max, const Vec& k) const {
+    const double V_sat = m_c.circuit.V_sat_V, i_sat = m_c.circuit.i_sat_A;
+    auto slope = [&](double i) {
+      const double th = std::tanh(i / i_sat);
+      return V_sat / i_sat * (1.0 - th * th);
     };
-    const Machine& mm = m_c.p.motor;
-    double h = m_motor_quasi || current_driven()
-                   ? h_max
-                   : limit(m_y[I_M], k[I_M], mm.R_ohm + m_c.circuit.R_series_ohm, mm.L_H);
-    if (gen_circuit() && !gen_quasi_static()) {
+    auto limit = [&](double i, double di, double R, double L) {
+      const double reach = std::abs(di) * h_max;
+      const double nearest = std::max(0.0, std::abs(i) - reach);
+      const double s0 = slope(i);
+      const double change = std::max(slope(nearest) - s0, s0 - slope(std::abs(i) + reach));
+      return 0.5 * L / (R + change);
+    };
+    double h = h_max;
+    if (m_lam[I_M] != 0.0) h = std::min(h, limit(m_y[I_M], k[I_M], m_R_bridge_ohm, m_c.p.motor.L_H));
+    if (m_lam[I_G] != 0.0) {
       const Machine& mg = m_c.p.generator;
       h = std::min(h, limit(m_y[I_G], k[I_G], mg.R_ohm + m_r_load, mg.L_H));
     }
@@ -621,12 +635,18 @@ class PlantImpl {
   }
   double gen_breakaway() const { return m_c.breakaway(m_c.gen); }
 
-  void substep(double t0, double h_total) {
+  /// Steps h_total from the state, handling the events within it; k_start = f(y) at the start
+  /// when the caller has it.
+  void substep(double t0, double h_total, const Vec* k_start = nullptr) {
     double t = t0;
     double remaining = h_total;
     for (int events = 0; remaining > 0.0; ++events) {
       Vec k1;
-      deriv(m_y, t, k1);
+      if (events == 0 && k_start != nullptr) {
+        k1 = *k_start;
+      } else {
+        deriv(m_y, t, k1);
+      }
       Vec y1 = step_once(m_y, t, remaining, k1);
       if (events >= k_max_events_per_step) {
         accept(y1, t + remaining);
@@ -915,8 +935,7 @@ class PlantImpl {
   double m_r_load = k_open_circuit;
   bool m_gen_circuit = false;
   bool m_gen_quasi = false;
-  bool m_motor_quasi = false;  ///< the motor current solved as algebraic (see motor_current)
-  bool m_exp_circuits = true;  ///< the circuits stepped exponentially (update_rates)
+  bool m_motor_quasi = false;                ///< the motor current solved as algebraic (see motor_current)
   mutable std::array<CoefMemo, 2> m_coef{};  ///< per circuit, the coefficients of recent steps
   double m_v = 0.0;
   double m_duty = 0.0;          ///< the bridge's duty d' at m_v (set_bridge)
