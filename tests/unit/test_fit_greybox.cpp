@@ -93,6 +93,31 @@ TEST(FitGreybox, ChangedParametersComeBack) {
   EXPECT_GT(result.runs[0].fit_percent[1], 90.0);
 }
 
+// A caller that needs only the model and its statistics (each fit of the gap search) skips
+// the simulation of the runs at the optimum: the fit itself is the same to the last bit.
+TEST(FitGreybox, SkippingTheRunsAtTheOptimumChangesNothingElse) {
+  FitProblem problem;
+  const auto table = measure(model::Model{}, identification_run(), 23);
+  problem.runs.push_back(make_run(table, {}, problem.model.params));
+  problem.free = {"motor.J_kg_m2", "motor.R_ohm", "motor.Tc_Nm"};
+  problem.model.params.motor.J_kg_m2 *= 1.3;
+  problem.model.params.motor.R_ohm *= 0.9;
+  const FitResult with_runs = fit_model(problem);
+  problem.evaluate_runs = false;
+  const FitResult without = fit_model(problem);
+  ASSERT_EQ(with_runs.runs.size(), 1U);
+  EXPECT_TRUE(without.runs.empty());
+  ASSERT_TRUE(with_runs.nls.converged) << with_runs.nls.reason;
+  EXPECT_EQ(without.nls.simulations, with_runs.nls.simulations);
+  EXPECT_EQ(without.nls.cost, with_runs.nls.cost);
+  for (Eigen::Index i = 0; i < with_runs.nls.values.size(); ++i) {
+    EXPECT_EQ(without.nls.values[i], with_runs.nls.values[i]);
+    EXPECT_EQ(without.nls.std_errors[i], with_runs.nls.std_errors[i]);
+  }
+  EXPECT_EQ(without.se_widening, with_runs.se_widening);
+  EXPECT_EQ(without.warnings, with_runs.warnings);
+}
+
 using test::error_of;
 
 TEST(FitGreybox, BudgetSpentSaysNotConverged) {

@@ -527,6 +527,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   problem.nls.xtol = 1e-4;
   problem.nls.ftol = 1e-5;
   problem.nls.check_smoothness = false;
+  problem.evaluate_runs = false;  // the candidate is scored by evaluate() and training_speed_rms()
   // Jacobians by finite differences throughout: Broyden's updates between them (NlsOptions::
   // broyden) saved a fifth of the public cases' time but lost a two-effect mixture, whose
   // single fits stopped early on updated Jacobians.

@@ -673,7 +673,8 @@ FitResult fit_model(const FitProblem& problem) {
   }
   apply_ties(result.model, problem.ties);
   // A fit its time budget stopped starts no further simulation: the caller reports it cut short.
-  if (!result.nls.stopped) result.runs = evaluate_model(result.model, problem.runs, problem.sim);
+  if (!result.nls.stopped && problem.evaluate_runs)
+    result.runs = evaluate_model(result.model, problem.runs, problem.sim);
   fit_warnings(result.nls, bounds, units, result);
   // Lag-1 autocorrelation of the residuals within each (run, output) block.
   double lag0 = 0.0;

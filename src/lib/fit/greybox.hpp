@@ -172,6 +172,9 @@ struct FitProblem {
   /// Contiguous stretches of the runs the delete-one-stretch jackknife leaves out in turn
   /// (FitResult::se_jackknife); 0: no jackknife (each stretch costs a refit).
   std::size_t jackknife_stretches = 0;
+  /// Simulate the runs once more at the optimum for FitResult::runs (a caller that only needs
+  /// the model and its statistics saves that simulation).
+  bool evaluate_runs = true;
 };
 
 /// The constant bias of a drive, N m at the motor shaft (N on a linear axis): the part of the
