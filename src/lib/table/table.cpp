@@ -31,11 +31,13 @@ constexpr int k_default_digits = 10;
 
 /// Exact powers of ten (every one up to 1e22 is a double); format_general scales by up to 1e18
 /// (15 digits of a value from 1e-4).
-constexpr std::array<double, 23> k_pow10{1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
-                                         1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+constexpr std::array<double, 23> k_pow10{1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                         1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                         1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
 
 constexpr std::string_view k_digit_pairs =
-    "00010203040506070809101112131415161718192021222324252627282930313233343536373839404142434445464748495051525354555657585960616263646566676869707172737475767778798081828384858687888990919293949596979899";
+    "00010203040506070809101112131415161718192021222324252627282930313233343536373839404142434445464748495051"
+    "525354555657585960616263646566676869707172737475767778798081828384858687888990919293949596979899";
 
 /// Writes the `count` lowest decimal digits of v, zero-padded, so that they end at `end`.
 void put_digits(char* end, std::uint32_t v, int count) {
@@ -48,6 +50,13 @@ void put_digits(char* end, std::uint32_t v, int count) {
   if (count == 1) end[-1] = static_cast<char>('0' + v);
 }
 
+/// Writes the `count` lowest decimal digits of n (count <= 17), zero-padded, ending at `end`.
+void put_digits64(char* end, std::uint64_t n, int count) {
+  for (; count > 8; count -= 8, end -= 8, n /= 100000000U)
+    put_digits(end, static_cast<std::uint32_t>(n % 100000000U), 8);
+  put_digits(end, static_cast<std::uint32_t>(n), count);
+}
+
 /// Writes v (finite, not zero) as printf's "%.{digits}g" (general, trailing zeros dropped), the
 /// same characters as std::to_chars(general, digits). Values printed in fixed notation with at
 /// most 15 digits take a fast path: v scaled by an exact power of ten to a `digits`-digit integer,
@@ -57,8 +66,10 @@ void put_digits(char* end, std::uint32_t v, int count) {
 /// fast on a simulator's columns.
 char* format_general(char* p, double v, int digits) {
   const double a = std::fabs(v);
-  if (a < 1e9 && a < k_pow10[static_cast<std::size_t>(digits)] && std::trunc(a) == a) {
-    // An integer of at most `digits` digits prints as itself (a clutch state, a voltage level).
+  // An integer of at most `digits` digits prints as itself (a clutch state, a voltage level); below
+  // 1e9 the conversion to 32 bits is exact for it and truncates anything else.
+  if (a < 1e9 && a < k_pow10[static_cast<std::size_t>(digits)] &&
+      static_cast<double>(static_cast<std::uint32_t>(a)) == a) {
     auto n = static_cast<std::uint32_t>(a);
     int count = 1;
     while (count < 9 && n >= static_cast<std::uint32_t>(k_pow10[static_cast<std::size_t>(count)])) ++count;
@@ -78,7 +89,8 @@ char* format_general(char* p, double v, int digits) {
       if (x < -1 && a * k_pow10[static_cast<std::size_t>(-x - 1)] >= 1.0) ++x;
     }
     const int k = digits - 1 - x;
-    const double s = k >= 0 ? a * k_pow10[static_cast<std::size_t>(k)] : a / k_pow10[static_cast<std::size_t>(-k)];
+    const double s =
+        k >= 0 ? a * k_pow10[static_cast<std::size_t>(k)] : a / k_pow10[static_cast<std::size_t>(-k)];
     // s < 10^15 < 2^53: the conversion truncates, the floor of a positive s, and is exact.
     const auto whole = static_cast<std::uint64_t>(s);
     const double frac = s - static_cast<double>(whole);
@@ -90,29 +102,29 @@ char* format_general(char* p, double v, int digits) {
         ++x;
       }
       if (n >= top / 10 && n < top && x < digits && x >= -4) {
-        std::array<char, 16> dig{};
+        // The digits without their trailing zeros (n > 0), printed in place.
         int nd = digits;
-        if (digits > 8) {  // the low eight digits and the rest, each in 32-bit arithmetic
-          put_digits(dig.data() + digits, static_cast<std::uint32_t>(n % 100000000U), 8);
-          put_digits(dig.data() + digits - 8, static_cast<std::uint32_t>(n / 100000000U), digits - 8);
-        } else {
-          put_digits(dig.data() + digits, static_cast<std::uint32_t>(n), digits);
+        while (n % 10U == 0) {
+          n /= 10U;
+          --nd;
         }
-        while (nd > 1 && dig[static_cast<std::size_t>(nd - 1)] == '0') --nd;
         if (v < 0) *p++ = '-';
         if (x < 0) {
           *p++ = '0';
           *p++ = '.';
           p = std::fill_n(p, -x - 1, '0');
-          return std::copy_n(dig.data(), nd, p);
+          put_digits64(p + nd, n, nd);
+          return p + nd;
         }
         if (nd <= x + 1) {
-          p = std::copy_n(dig.data(), nd, p);
-          return std::fill_n(p, x + 1 - nd, '0');
+          put_digits64(p + nd, n, nd);
+          return std::fill_n(p + nd, x + 1 - nd, '0');
         }
-        p = std::copy_n(dig.data(), x + 1, p);
-        *p++ = '.';
-        return std::copy_n(dig.data() + x + 1, nd - x - 1, p);
+        // One place to the right, then the integer part moved back over the point's place.
+        put_digits64(p + 1 + nd, n, nd);
+        for (int d = 0; d <= x; ++d) p[d] = p[d + 1];
+        p[x + 1] = '.';
+        return p + 1 + nd;
       }
     }
   }
@@ -177,12 +189,14 @@ std::string Metadata::where(std::string_view source, std::string_view key) const
 
 namespace {
 
-/// Reads [first, last) when it is a plain decimal, -?[0-9]+(.[0-9]+)?, of at most 19 digits
-/// whose integer m (the digits without the point) is at most 2^53 and whose fraction has at
+/// Reads the plain decimal, -?[0-9]+(.[0-9]+)?, at the start of [first, last) when it has at most
+/// 19 digits, its integer m (the digits without the point) is at most 2^53 and its fraction has at
 /// most 22 digits: then m and 10^f are exact doubles and m / 10^f, one rounding, is the correctly
-/// rounded value (Clinger's fast path), the value std::from_chars gives. False for anything
-/// else, which from_chars reads. Three times as fast on a simulator's columns.
-bool plain_decimal(const char* first, const char* last, double& value) {
+/// rounded value (Clinger's fast path), the value std::from_chars gives. Returns the end of the
+/// number, or nullptr for anything else, which from_chars reads. Three times as fast on a
+/// simulator's columns.
+const char* scan_decimal(const char* first, const char* last, double& value) {
+  if (first == last) return nullptr;
   const bool negative = *first == '-';
   const char* p = first + (negative ? 1 : 0);
   std::uint64_t m = 0;
@@ -190,19 +204,19 @@ bool plain_decimal(const char* first, const char* last, double& value) {
   const char* int_start = p;
   for (; p < last && *p >= '0' && *p <= '9'; ++p, ++digits)
     m = m * 10U + static_cast<std::uint64_t>(*p - '0');
-  if (p == int_start) return false;
+  if (p == int_start) return nullptr;
   int frac = 0;
   if (p < last && *p == '.') {
     const char* frac_start = ++p;
     for (; p < last && *p >= '0' && *p <= '9'; ++p, ++digits)
       m = m * 10U + static_cast<std::uint64_t>(*p - '0');
     frac = static_cast<int>(p - frac_start);
-    if (frac == 0) return false;
+    if (frac == 0) return nullptr;
   }
-  if (p != last || digits > 19 || frac > 22 || m > (std::uint64_t{1} << 53)) return false;
+  if (digits > 19 || frac > 22 || m > (std::uint64_t{1} << 53)) return nullptr;
   const double x = static_cast<double>(m) / k_pow10[static_cast<std::size_t>(frac)];
   value = negative ? -x : x;
-  return true;
+  return p;
 }
 
 }  // namespace
@@ -215,7 +229,7 @@ bool parse_number(std::string_view text, double& value) {
   }
   const char* first = text.data();
   const char* last = text.data() + text.size();
-  if (plain_decimal(first, last, value)) return true;
+  if (scan_decimal(first, last, value) == last) return true;
   if (*first == '+') ++first;
   const auto [ptr, ec] = std::from_chars(first, last, value);
   if (ec == std::errc() && ptr == last) return true;
@@ -231,7 +245,22 @@ namespace {
 
 /// Parses data line `line` (its '\r' removed) into `row` (one value a column); false with the
 /// message for "source:line: " in `error` when it is no row of this header.
-bool parse_line(std::string_view line, const std::vector<std::string>& columns, double* row, std::string& error) {
+bool parse_line(std::string_view line, const std::vector<std::string>& columns, double* row,
+                std::string& error) {
+  // A row of plain decimals (what the tools write) is read in one pass, each field as
+  // parse_number reads it; any other line, and every error, takes the field-by-field path.
+  const char* p = line.data();
+  const char* const last = p + line.size();
+  std::size_t read = 0;
+  while (read < columns.size() && (p = scan_decimal(p, last, row[read])) != nullptr) {
+    if (++read == columns.size()) {
+      if (p == last) return true;
+    } else if (p != last && *p == ',') {
+      ++p;
+    } else {
+      break;
+    }
+  }
   const std::string_view t = trim_line(line);
   if (!t.empty() && t.front() == '#') {
     error = "metadata line after the header";
@@ -245,7 +274,8 @@ bool parse_line(std::string_view line, const std::vector<std::string>& columns, 
   std::size_t start = 0;
   while (true) {
     const auto comma = line.find(',', start);
-    const std::string_view field = line.substr(start, comma == std::string_view::npos ? line.npos : comma - start);
+    const std::string_view field =
+        line.substr(start, comma == std::string_view::npos ? line.npos : comma - start);
     if (column >= columns.size()) {
       error = fmt::format("more fields than the {} columns of the header", columns.size());
       return false;
@@ -259,7 +289,8 @@ bool parse_line(std::string_view line, const std::vector<std::string>& columns, 
     start = comma + 1;
   }
   if (column != columns.size()) {
-    error = fmt::format("{} field{}, the header has {} columns", column, column == 1 ? "" : "s", columns.size());
+    error =
+        fmt::format("{} field{}, the header has {} columns", column, column == 1 ? "" : "s", columns.size());
     return false;
   }
   return true;
@@ -414,7 +445,8 @@ Table read(std::istream& in, std::string source) {
     parallel::for_each(filled, 0, [&](std::size_t k) { parse_part(parts[k], table.names); });
     for (std::size_t k = 0; k < filled; ++k) {
       const Part& p = parts[k];
-      if (p.bad_line != 0) fail("{}:{}: {}", table.source, table.line_of(table.rows()) + p.bad_line - 1, p.error);
+      if (p.bad_line != 0)
+        fail("{}:{}: {}", table.source, table.line_of(table.rows()) + p.bad_line - 1, p.error);
       for (std::size_t c = 0; c < table.columns.size(); ++c) {
         table.columns[c].insert(table.columns[c].end(), p.columns[c].begin(), p.columns[c].end());
       }
@@ -488,8 +520,8 @@ void require_increasing(const Table& table, std::string_view name) {
   const auto& v = table.col(name);
   for (std::size_t r = 1; r < v.size(); ++r) {
     if (!(v[r] > v[r - 1])) {
-      fail("{}:{}: column {}: {} does not increase (previous row: {})", table.source, table.line_of(r), quote(name),
-           fmt::format("{:.10g}", v[r]), fmt::format("{:.10g}", v[r - 1]));
+      fail("{}:{}: column {}: {} does not increase (previous row: {})", table.source, table.line_of(r),
+           quote(name), fmt::format("{:.10g}", v[r]), fmt::format("{:.10g}", v[r - 1]));
     }
   }
 }
@@ -532,6 +564,7 @@ void Writer::meta(std::string_view key, std::string_view value) {
 void Writer::header(const std::vector<std::string>& names) {
   m_names = names;
   m_digits.assign(names.size(), k_default_digits);
+  m_cells.assign(names.size(), Cell{});
   // Every name, as it is: column_list() is the shortened form for messages.
   for (std::size_t c = 0; c < names.size(); ++c) {
     MCG_DEMAND(names[c].find_first_of(",\n\r") == std::string::npos);
@@ -545,6 +578,7 @@ void Writer::header(const std::vector<std::string>& names) {
 void Writer::set_digits(std::size_t column, int digits) {
   MCG_DEMAND(column < m_digits.size() && digits >= 1 && digits <= 17);
   m_digits[column] = digits;
+  m_cells[column] = Cell{};
 }
 
 void Writer::set_digits(std::string_view name, int digits) {
@@ -555,13 +589,23 @@ void Writer::set_digits(std::string_view name, int digits) {
 
 void Writer::row(std::span<const double> values) {
   MCG_DEMAND(values.size() == m_names.size());
-  // Formatted straight into the buffer's tail: at most 25 characters a number ("%.17g" of a
-  // negative subnormal), a separator each, as printf's "%.Ng" (format_general).
-  char* const start = room(values.size() * 26 + 1);
+  // Formatted straight into the buffer's tail, as printf's "%.Ng" (format_general): at most 25
+  // characters a number ("%.17g" of a negative subnormal) and a separator each. A field is kept
+  // and copied as a whole Cell, so each has a Cell's room.
+  constexpr std::size_t k_field_room = std::tuple_size_v<decltype(Cell::text)>;
+  char* const start = room(values.size() * k_field_room + 1);
   char* p = start;
   for (std::size_t c = 0; c < values.size(); ++c) {
     if (c) *p++ = ',';
     const double v = values[c];
+    Cell& cell = m_cells[c];
+    const auto bits = std::bit_cast<std::uint64_t>(v);
+    if (cell.size != 0 && cell.bits == bits) {
+      std::memcpy(p, cell.text.data(), cell.text.size());
+      p += cell.size;
+      continue;
+    }
+    char* const field = p;
     if (std::isnan(v)) {
       p = std::copy_n("nan", 3, p);
     } else if (std::isinf(v)) {
@@ -571,6 +615,9 @@ void Writer::row(std::span<const double> values) {
     } else {
       p = format_general(p, v, m_digits[c]);
     }
+    cell.bits = bits;
+    cell.size = static_cast<std::size_t>(p - field);
+    std::memcpy(cell.text.data(), field, cell.text.size());
   }
   *p++ = '\n';
   m_used += static_cast<std::size_t>(p - start);

@@ -1,7 +1,9 @@
 // CSV tables per the data contract (man/mcg-csv.5): metadata, header, rows of numbers.
 #pragma once
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <iosfwd>
 #include <optional>
@@ -155,7 +157,9 @@ class Writer {
   void set_digits(std::size_t column, int digits);
   void set_digits(std::string_view name, int digits);
   void row(std::span<const double> values);
-  void row(std::initializer_list<double> values) { row(std::span<const double>(values.begin(), values.size())); }
+  void row(std::initializer_list<double> values) {
+    row(std::span<const double>(values.begin(), values.size()));
+  }
   /// A row of cells already written as text (a report's names and numbers side by side), each as
   /// it is: one line and no comma (a comma in a cell would shift every column after it).
   void text_row(const std::vector<std::string>& cells);
@@ -174,8 +178,17 @@ class Writer {
   std::string m_dest;
   std::string m_buffer;  ///< its first m_used bytes wait to be written
   std::size_t m_used = 0;
+  /// A column's last number and its text: a value that repeats (an input passed on, a shaft
+  /// at rest) is copied, not formatted again.
+  struct Cell {
+    std::uint64_t bits = 0;
+    std::size_t size = 0;  ///< 0: nothing written yet with the column's digits
+    std::array<char, 32> text{};
+  };
+
   std::vector<std::string> m_names;
   std::vector<int> m_digits;
+  std::vector<Cell> m_cells;
 };
 
 /// Writes a whole table (metadata, header, rows).
