@@ -10,10 +10,12 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <sstream>
 
 #include "common/error.hpp"
+#include "common/text.hpp"
 #include "table/table.hpp"
 #include "test_support_error.hpp"
 
@@ -159,6 +161,78 @@ TEST(TableRead, LargeTableInPartsMatchesTheStreamingReader) {
   EXPECT_FALSE(r.next());
 }
 
+// A row of plain decimals is read in one pass; every other row field by field. Either way each
+// field reads as parse_number reads it alone, and a bad row gets the message of its first fault:
+// rows of plain, padded, exponent, signed, empty, malformed fields, too few and too many.
+TEST(TableRead, RowsReadAsTheirFieldsAlone) {
+  const std::vector<std::string> forms{"0",
+                                       "-0",
+                                       "12.5",
+                                       "-3",
+                                       "0.001",
+                                       "5.6",
+                                       " 7",
+                                       "8 ",
+                                       "1e3",
+                                       "+4",
+                                       "inf",
+                                       "",
+                                       "nan",
+                                       "12345678901234567890",
+                                       "0.12345678901234567890123",
+                                       "5.",
+                                       ".5",
+                                       "3a",
+                                       "-",
+                                       "1.2.3",
+                                       "9007199254740993",
+                                       "#"};
+  std::mt19937_64 rng(22);
+  for (int n = 0; n < 4000; ++n) {
+    // Mostly plain rows, which take the one-pass path up to the field that leaves it.
+    const std::size_t fields = n % 10 == 0 ? 1 + rng() % 5 : 3;
+    std::vector<std::string> cells;
+    std::string line;
+    for (std::size_t k = 0; k < fields; ++k) {
+      cells.push_back(forms[rng() % (n % 3 == 0 ? forms.size() : 6)]);
+      line += (k ? "," : "") + cells.back();
+    }
+    // The message of the row's first fault, field by field as the contract states them.
+    std::string fault;
+    std::vector<double> want(3);
+    const std::string_view trimmed = trim_line(line);
+    if (!trimmed.empty() && trimmed.front() == '#') {
+      fault = "metadata line after the header";
+    } else if (trimmed.empty()) {
+      fault = "empty line, the header has 3 columns";
+    } else {
+      for (std::size_t k = 0; k < fields && fault.empty(); ++k) {
+        if (k >= 3) {
+          fault = "more fields than the 3 columns of the header";
+        } else if (!parse_number(cells[k], want[k])) {
+          fault = fmt::format("column '{}': invalid number '{}'", "abc"[k], trim_line(cells[k]));
+        }
+      }
+      if (fault.empty() && fields != 3)
+        fault = fmt::format("{} field{}, the header has 3 columns", fields, fields == 1 ? "" : "s");
+    }
+    const std::string text = "a,b,c\n" + line + "\n";
+    if (!fault.empty()) {
+      ASSERT_EQ(error_of(text), "in.csv:2: " + fault) << line;
+      continue;
+    }
+    const Table t = parse(text);
+    ASSERT_EQ(t.rows(), 1U) << line;
+    for (std::size_t c = 0; c < 3; ++c) {
+      ASSERT_EQ(std::isnan(t.columns[c][0]), std::isnan(want[c])) << line;
+      if (!std::isnan(want[c])) {
+        ASSERT_EQ(std::bit_cast<std::uint64_t>(t.columns[c][0]), std::bit_cast<std::uint64_t>(want[c]))
+            << line;
+      }
+    }
+  }
+}
+
 // A line longer than a part (5 MiB of blanks before a value) is read whole.
 TEST(TableRead, LineLongerThanAPart) {
   const std::string text = "t,v\n0,1\n" + std::string(5U << 20, ' ') + "1,2\n2,3\n";
@@ -223,9 +297,24 @@ TEST(TableWrite, DigitsPerColumn) {
 TEST(TableWrite, NumbersAreExactlyPrintfG) {
   std::mt19937_64 rng(15);
   std::uniform_real_distribution<double> decade(-8.0, 18.0);
-  std::vector<double> values{1.0, -1.0, 0.5, 9.9999999995, 9.9999999994999, 99999.999995, 1e-4, 9.99999999995e-5,
-                             0.00010000000005, 1e10, 9999999999.5, 9999999999.4999, 123456789012345.0, 1e15,
-                             0.1 + 0.2, 1e-300, 5e-324, -1.7976931348623157e308};
+  std::vector<double> values{1.0,
+                             -1.0,
+                             0.5,
+                             9.9999999995,
+                             9.9999999994999,
+                             99999.999995,
+                             1e-4,
+                             9.99999999995e-5,
+                             0.00010000000005,
+                             1e10,
+                             9999999999.5,
+                             9999999999.4999,
+                             123456789012345.0,
+                             1e15,
+                             0.1 + 0.2,
+                             1e-300,
+                             5e-324,
+                             -1.7976931348623157e308};
   // Integers, printed on their own path: every width, and at each power of ten.
   for (double x = 1.0; x <= 1e10; x *= 10.0) {
     for (double v : {x - 1.0, x, x + 1.0, 2.0 * x, 9.0 * x + 7.0}) {
@@ -239,7 +328,8 @@ TEST(TableWrite, NumbersAreExactlyPrintfG) {
     std::memcpy(&any, &bits, sizeof any);
     if (std::isfinite(any) && any != 0.0) values.push_back(any);
     // a 10-digit midpoint times a power of ten, and its neighbours
-    const double mid = (static_cast<double>(rng() % 10000000000ULL) + 0.5) * std::pow(10.0, static_cast<double>(rng() % 20) - 14.0);
+    const double mid = (static_cast<double>(rng() % 10000000000ULL) + 0.5) *
+                       std::pow(10.0, static_cast<double>(rng() % 20) - 14.0);
     values.push_back(mid);
     values.push_back(std::nextafter(mid, 0.0));
     values.push_back(std::nextafter(mid, 1e300));
@@ -257,10 +347,61 @@ TEST(TableWrite, NumbersAreExactlyPrintfG) {
     for (double v : values) {
       std::getline(in, line);
       std::array<char, 40> want{};
-      char* end = std::to_chars(want.data(), want.data() + want.size(), v, std::chars_format::general, digits).ptr;
-      ASSERT_EQ(line, std::string(want.data(), end)) << "digits " << digits << ", value " << fmt::format("{}", v);
+      char* end =
+          std::to_chars(want.data(), want.data() + want.size(), v, std::chars_format::general, digits).ptr;
+      ASSERT_EQ(line, std::string(want.data(), end))
+          << "digits " << digits << ", value " << fmt::format("{}", v);
     }
   }
+}
+
+// A column keeps its last number's text and copies it when the number repeats: each row is
+// still every value's own "%.Ng", through runs of repeats, a -0 after a 0, a value back after
+// another, nan and inf, and digits changed between rows.
+TEST(TableWrite, RepeatedNumbersWriteAsTheirOwnText) {
+  const auto g = [](double v, int digits) {
+    std::array<char, 40> buf{};
+    if (std::isnan(v)) return std::string("nan");
+    if (v == 0.0) return std::string("0");  // -0 too: the contract writes a zero as 0
+    return std::string(
+        buf.data(),
+        std::to_chars(buf.data(), buf.data() + buf.size(), v, std::chars_format::general, digits).ptr);
+  };
+  std::mt19937_64 rng(8);
+  const std::vector<double> pool{0.0,
+                                 -0.0,
+                                 1.0,
+                                 -2.5,
+                                 12.0,
+                                 0.1 + 0.2,
+                                 1234.56789012345,
+                                 -1e-300,
+                                 5.6,
+                                 std::numeric_limits<double>::infinity(),
+                                 std::numeric_limits<double>::quiet_NaN(),
+                                 -std::numeric_limits<double>::infinity(),
+                                 123456789012.0,
+                                 9.87654321e-5};
+  std::ostringstream out;
+  Writer w(out);
+  w.header({"a", "b", "c"});
+  std::string want = "a,b,c\n";
+  std::array<double, 3> row{};
+  std::array<int, 3> digits{10, 10, 10};
+  for (int n = 0; n < 20000; ++n) {
+    for (std::size_t c = 0; c < row.size(); ++c) {
+      if (rng() % 4 == 0) row[c] = pool[rng() % pool.size()];  // else the value above repeats
+    }
+    if (n % 997 == 0) {
+      const std::size_t c = rng() % row.size();
+      digits[c] = 1 + static_cast<int>(rng() % 17);
+      w.set_digits(c, digits[c]);
+    }
+    w.row(row);
+    want += fmt::format("{},{},{}\n", g(row[0], digits[0]), g(row[1], digits[1]), g(row[2], digits[2]));
+  }
+  w.finish();
+  EXPECT_EQ(out.str(), want);
 }
 
 TEST(TableWrite, FullDeviceIsAnError) {
