@@ -1,17 +1,18 @@
 // Grey-box fit: parameters changed in a simulation, measured like the rig, fitted back.
-#include "fit/greybox.hpp"
-
-#include "common/error.hpp"
-#include "config/ini.hpp"
-#include "test_fit_support.hpp"
-#include "test_support_error.hpp"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <functional>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+#include "common/error.hpp"
+#include "config/ini.hpp"
+#include "fit/greybox.hpp"
+#include "test_fit_support.hpp"
+#include "test_support_error.hpp"
 
 namespace mcg::fit {
 namespace {
@@ -249,6 +250,63 @@ TEST(FitGreybox, AParameterAtItsBoundIsFlagged) {
   ASSERT_EQ(r.flags.size(), 1U);
   EXPECT_EQ(r.flags[0].kind, FitFlag::Kind::at_bound);
   EXPECT_FALSE(r.flags[0].undetermined());
+}
+
+// What the runs do not set is pinned: a value at a lower bound of 0 at 0, an infinite error at
+// the given value (when there is one); a bound that is not 0, a correlation or an undetermined
+// parameter without a given value stay flagged.
+TEST(FitGreybox, UndeterminedParametersArePinnedAtTheGivenValueOrTheirZeroBound) {
+  using Kind = FitFlag::Kind;
+  const std::vector<FitFlag> flags{{Kind::at_bound, {"hbridge.R_on_ohm"}, 0.0},
+                                   {Kind::at_bound, {"param_mismatch.R_scale"}, 0.5},
+                                   {Kind::undetermined, {"param_mismatch.static_scale"}},
+                                   {Kind::undetermined, {"stribeck.v_s_rad_s"}},
+                                   {Kind::correlated, {"motor.J_kg_m2", "motor.Kt_Nm_A"}},
+                                   {Kind::impossible, {"motor.visc1_Nm_s_rad"}},
+                                   {Kind::at_bound, {"param_mismatch.J_scale"}, 5.0},
+                                   {Kind::at_bound, {"param_mismatch.Kt_scale"}, 2.0}};
+  // J_scale drifted to its upper bound with an infinite error; Kt_scale's bound is the data's word.
+  const std::vector<std::string> names{"param_mismatch.J_scale", "param_mismatch.Kt_scale"};
+  const std::vector<double> errors{std::numeric_limits<double>::infinity(), 0.01};
+  const auto pins =
+      undetermined_pins(flags, names, errors, [](const std::string& name) -> std::optional<double> {
+        if (name.starts_with("param_mismatch.")) return 1.0;
+        return std::nullopt;
+      });
+  ASSERT_EQ(pins.size(), 3U);
+  EXPECT_EQ(pins[0].name, "hbridge.R_on_ohm");
+  EXPECT_EQ(pins[0].value, 0.0);
+  EXPECT_EQ(pins[0].why, k_pinned_bound);
+  EXPECT_EQ(pins[1].name, "param_mismatch.static_scale");
+  EXPECT_EQ(pins[1].value, 1.0);
+  EXPECT_EQ(pins[1].why, k_pinned_given);
+  EXPECT_EQ(pins[2].name, "param_mismatch.J_scale");
+  EXPECT_EQ(pins[2].value, 1.0);
+  EXPECT_EQ(pins[2].why, k_pinned_given);
+}
+
+// A driver's on-resistance the speed-only runs do not see (the truth has none): fit_model drives
+// it towards its bound 0 in log coordinates (1e-11 +- inf, flagged); fit_model_pinned holds it at
+// 0, refits the rest without it and reports a trustworthy fit that names it pinned.
+TEST(FitGreybox, AResistanceAtItsZeroBoundIsPinnedThereAndTheRestRefitted) {
+  model::Model truth;
+  truth.effects.push_back(model::default_effect("hbridge"));
+  model::set_parameter(truth, "hbridge.R_on_ohm", 0.0);
+  model::set_parameter(truth, "hbridge.deadband", 0.04);
+  FitProblem problem;
+  problem.model.effects.push_back(model::default_effect("hbridge"));
+  problem.runs.push_back(make_run(measure(truth, speed_only_run(), 36, false), {}, problem.model.params));
+  problem.free = {"motor.J_kg_m2", "hbridge.R_on_ohm", "hbridge.deadband"};
+  const FitResult plain = fit_model(problem);
+  EXPECT_FALSE(plain.trustworthy());
+  const FitResult r = fit_model_pinned(problem);
+  ASSERT_EQ(r.pinned.size(), 1U);
+  EXPECT_EQ(r.pinned[0].name, "hbridge.R_on_ohm");
+  EXPECT_EQ(r.pinned[0].why, k_pinned_bound);
+  EXPECT_EQ(model::get_parameter(r.model, "hbridge.R_on_ohm"), 0.0);
+  EXPECT_EQ(r.nls.names, (std::vector<std::string>{"motor.J_kg_m2", "hbridge.deadband"}));
+  EXPECT_TRUE(r.trustworthy()) << (r.warnings.empty() ? r.nls.reason : r.warnings[0]);
+  EXPECT_NEAR(model::get_parameter(r.model, "hbridge.deadband"), 0.04, 0.002);
 }
 
 // Bounds follow the given model: a motor 1000 times the rig's inertia can be fitted.

@@ -452,8 +452,9 @@ std::string impossible(std::string_view name, double v) {
 /// The honest-numbers checks of FitResult::warnings and ::flags.
 void fit_warnings(const NlsResult& n, const std::vector<std::pair<double, double>>& bounds,
                   const std::vector<std::string>& units, FitResult& result) {
-  auto add = [&](FitFlag::Kind kind, std::vector<std::string> names, std::string text) {
-    result.flags.push_back({kind, std::move(names)});
+  auto add = [&](FitFlag::Kind kind, std::vector<std::string> names, std::string text,
+                 double bound = std::numeric_limits<double>::quiet_NaN()) {
+    result.flags.push_back({kind, std::move(names), bound});
     result.warnings.push_back(std::move(text));
   };
   using Kind = FitFlag::Kind;
@@ -477,11 +478,13 @@ void fit_warnings(const NlsResult& n, const std::vector<std::pair<double, double
     // by orders of magnitude, so only a value that is 0 in all but name is at it.
     const double lo_margin = lo == 0.0 && v > 0.0 ? 1e-6 * span : k_at_bound * span;
     if (std::isfinite(span) && from_lo <= lo_margin) {
-      add(Kind::at_bound, {n.names[k]}, fmt::format("{} = {:.6g}{} is at its lower bound", n.names[k], v, unit));
+      add(Kind::at_bound, {n.names[k]},
+          fmt::format("{} = {:.6g}{} is at its lower bound", n.names[k], v, unit), lo);
       continue;
     }
     if (std::isfinite(span) && from_hi <= k_at_bound * span) {
-      add(Kind::at_bound, {n.names[k]}, fmt::format("{} = {:.6g}{} is at its upper bound", n.names[k], v, unit));
+      add(Kind::at_bound, {n.names[k]},
+          fmt::format("{} = {:.6g}{} is at its upper bound", n.names[k], v, unit), hi);
       continue;
     }
     const double se = n.std_errors[i];
@@ -694,6 +697,61 @@ FitResult fit_model(const FitProblem& problem) {
   const double rho = lag0 > 0.0 ? std::clamp(lag1 / lag0, 0.0, 0.9999) : 0.0;
   result.se_widening = std::sqrt((1.0 + rho) / (1.0 - rho));
   return result;
+}
+
+std::vector<PinnedParameter> undetermined_pins(
+    const std::vector<FitFlag>& flags, const std::vector<std::string>& names,
+    const std::vector<double>& std_errors,
+    const std::function<std::optional<double>(const std::string&)>& given) {
+  const auto infinite_error = [&](const std::string& name) {
+    const auto it = std::find(names.begin(), names.end(), name);
+    const auto k = static_cast<std::size_t>(it - names.begin());
+    return it != names.end() && k < std_errors.size() && !std::isfinite(std_errors[k]);
+  };
+  std::vector<PinnedParameter> pins;
+  const auto pinned = [&](const std::string& name) {
+    return std::any_of(pins.begin(), pins.end(), [&](const PinnedParameter& p) { return p.name == name; });
+  };
+  for (const FitFlag& f : flags) {
+    if (f.names.size() != 1 || pinned(f.names.front())) continue;
+    const std::string& name = f.names.front();
+    if (f.kind == FitFlag::Kind::at_bound && f.bound == 0.0) {
+      pins.push_back({name, 0.0, std::string(k_pinned_bound)});
+    } else if (f.kind == FitFlag::Kind::undetermined ||
+               (f.kind == FitFlag::Kind::at_bound && infinite_error(name))) {
+      if (const std::optional<double> value = given(name))
+        pins.push_back({name, *value, std::string(k_pinned_given)});
+    }
+  }
+  return pins;
+}
+
+bool pin_costs_nothing(const FitResult& free, const FitResult& held) {
+  const auto residuals = static_cast<double>(free.nls.residuals.size());
+  if (!(residuals > 0.0) || !std::isfinite(held.nls.cost)) return false;
+  return held.nls.cost <= free.nls.cost * (1.0 + free.se_widening * free.se_widening / residuals);
+}
+
+FitResult fit_model_pinned(const FitProblem& problem) {
+  FitResult first = fit_model(problem);
+  if (first.nls.stopped) return first;
+  std::vector<double> se;
+  for (std::size_t k = 0; k < first.nls.names.size(); ++k) se.push_back(first.reported_se(k));
+  std::vector<PinnedParameter> pins = undetermined_pins(
+      first.flags, first.nls.names, se, [&](const std::string& name) -> std::optional<double> {
+        return model::get_parameter(problem.model, name);
+      });
+  if (pins.empty() || pins.size() >= problem.free.size()) return first;
+  FitProblem held = problem;
+  held.model = first.model;
+  for (const PinnedParameter& pin : pins) {
+    model::set_parameter(held.model, pin.name, pin.value);
+    std::erase(held.free, pin.name);
+  }
+  FitResult refit = fit_model(held);
+  if (!pin_costs_nothing(first, refit)) return first;
+  refit.pinned = std::move(pins);
+  return refit;
 }
 
 double rms_finite(std::span<const double> x) {

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <functional>
+#include <limits>
 #include <map>
 #include <optional>
 #include <span>
@@ -190,9 +192,10 @@ inline constexpr std::string_view k_drive_offset = "friction_asymmetry.dT_Nm";
 void add_free_effects(model::Model& model, const std::vector<std::string>& free);
 
 /// The [bounds] section of an INI: "NAME = LOWER UPPER" per parameter name as
-/// model::parameters() spells it (or any catalog effect's "EFFECT.key"). Throws mcg::Error naming the file and line for an unknown
-/// name, not two numbers, or lower >= upper.
-std::map<std::string, std::pair<double, double>> read_bounds(const config::Ini& ini, const model::Model& model);
+/// model::parameters() spells it (or any catalog effect's "EFFECT.key"). Throws mcg::Error naming the file
+/// and line for an unknown name, not two numbers, or lower >= upper.
+std::map<std::string, std::pair<double, double>> read_bounds(const config::Ini& ini,
+                                                             const model::Model& model);
 
 /// The parameters a fit frees by default, chosen from what the runs excite:
 ///   a measured current: J, R, Kt, Ke and Tc of the motor (the current separates R from Kt);
@@ -223,10 +226,38 @@ struct FitFlag {
     impossible,    ///< a physically impossible value (negative viscous, inertia, resistance, ...)
   } kind;
   std::vector<std::string> names;  ///< the parameters involved (two for `correlated`)
+  /// For `at_bound`: the bound the value sits at (NaN for the other kinds).
+  double bound = std::numeric_limits<double>::quiet_NaN();
   /// The data do not determine the parameters (every kind but at_bound): a fit carrying such a
   /// flag cannot stand as a result.
   bool undetermined() const { return kind != Kind::at_bound; }
 };
+
+/// A parameter a fit was asked to free but that the runs do not set, held at a value and refitted
+/// without it, the way a measured parameter is held (--fix): printed as pinned, not as a number
+/// with an infinite or meaningless standard error.
+struct PinnedParameter {
+  std::string name;
+  double value = 0.0;
+  std::string why;  ///< k_pinned_given or k_pinned_bound
+};
+
+/// Why a parameter is pinned: an infinite standard error (the runs leave it where it started)...
+inline constexpr std::string_view k_pinned_given = "pinned at the given value: not set by these runs";
+/// ... or a value the fit drove to a lower bound of 0 that is physical (a resistance, a friction
+/// level, a dead band, a delay cannot be negative): in log coordinates it only nears 0 by orders of
+/// magnitude (R_on = 1e-15 +- inf), so the number printed would be the solver's, not the data's.
+inline constexpr std::string_view k_pinned_bound = "pinned at its bound: the fit drove it there";
+
+/// The parameters the runs do not set, each with the value it is pinned at: one `flags` put at a
+/// lower bound of 0 (FitFlag::bound) at 0; one without a finite standard error (`undetermined`,
+/// or at another bound it drifted to with an infinite error in `std_errors`, per name of
+/// `names`) at `given(name)`, unless that has no value (then it stays free and flagged). The
+/// caller pins nothing on a fit the time budget cut short (its errors are missing, not infinite).
+std::vector<PinnedParameter> undetermined_pins(
+    const std::vector<FitFlag>& flags, const std::vector<std::string>& names,
+    const std::vector<double>& std_errors,
+    const std::function<std::optional<double>(const std::string&)>& given);
 
 /// The outcome: the fitted model (free parameters replaced) and the solver's statistics
 /// (nls.names = free parameter names, values, std_errors, correlation, converged, reason,
@@ -242,6 +273,9 @@ struct FitResult {
   std::vector<std::string> warnings;
   /// The same findings, one per warning (same order), for code that decides on them.
   std::vector<FitFlag> flags;
+  /// Free parameters the runs did not set, held and refitted without (fit_model_pinned()); the
+  /// solver's statistics (nls) are those of the refit, which no longer names them.
+  std::vector<PinnedParameter> pinned;
   /// The solver met a convergence test and nothing above was found.
   bool trustworthy() const { return nls.converged && warnings.empty(); }
   /// Factor the solver's standard errors are widened by in the reports of mcg-fit model: a
@@ -289,5 +323,18 @@ std::vector<RunFit> evaluate_model(const model::Model& model, const std::vector<
 /// parameter whose initial value is outside its bounds, or runs with no excitation of the
 /// outputs (a constant measured series).
 FitResult fit_model(const FitProblem& problem);
+
+/// True when `held` (a refit with some parameters pinned) fits no worse than `free` by more than
+/// one standard error's worth of cost (as a profile likelihood counts it: cost / M for M residuals,
+/// times the AR(1) widening squared). A parameter with an infinite error may still act away from
+/// where the fit left it (a static level below every start's drive, that sticks at the given
+/// value): then the runs do set it, and it is not pinned.
+bool pin_costs_nothing(const FitResult& free, const FitResult& held);
+
+/// fit_model(), then each free parameter undetermined_pins() finds pinned (at its value in
+/// problem.model, or at its bound 0) and the rest refitted once without them; the result lists
+/// them in FitResult::pinned. The fit as it came when nothing is pinned, every parameter would
+/// be, the budget stopped it, or the pins cost (pin_costs_nothing()).
+FitResult fit_model_pinned(const FitProblem& problem);
 
 }  // namespace mcg::fit

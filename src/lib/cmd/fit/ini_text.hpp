@@ -9,8 +9,9 @@
 
 namespace mcg::cmd {
 
-/// Six significant digits: what the data supports, and readable in an INI file.
-inline std::string num6(double x) { return fmt::format("{:.6g}", x); }
+/// Six significant digits: what the data supports, and readable in an INI file. A zero reached
+/// from below is written 0, not -0.
+inline std::string num6(double x) { return fmt::format("{:.6g}", x == 0.0 ? 0.0 : x); }
 
 /// "+- SE UNIT", or why there is none.
 inline std::string se_comment(double se, std::string_view unit) {

@@ -68,6 +68,10 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, const measur
       ini.set(place->first, place->second, num6(n.values[k]),
               "fitted, " + se_comment(r.reported_se(i), unit) + beside);
   }
+  for (const PinnedParameter& pin : r.pinned) {
+    if (const auto place = ini_place(ini, pin.name))
+      ini.set(place->first, place->second, num6(pin.value), pin.why);
+  }
   for (const auto& [follower, leader] : problem.ties) {
     if (const auto place = ini_place(ini, follower)) {
       ini.set(place->first, place->second, num6(model::get_parameter(r.model, follower)),
@@ -95,6 +99,13 @@ void write_model_ini(const FitResult& r, const FitProblem& problem, const measur
   std::string free;
   for (const auto& name : n.names) free += (free.empty() ? "" : " ") + name;
   ini.set(sec, "free", free);
+  if (!r.pinned.empty()) {
+    std::string pinned;
+    for (const PinnedParameter& pin : r.pinned) pinned += (pinned.empty() ? "" : " ") + pin.name;
+    ini.set(sec, "pinned", pinned,
+            "asked free, not set by the runs: held and the rest refitted without them");
+    for (const PinnedParameter& pin : r.pinned) ini.set(sec, pin.name, num6(pin.value), pin.why);
+  }
   for (const auto& [follower, leader] : problem.ties) ini.set(sec, "tie." + follower, leader);
   for (std::size_t i = 0; i < n.names.size(); ++i) {
     const auto k = static_cast<Eigen::Index>(i);
@@ -148,6 +159,8 @@ std::vector<std::pair<std::string, std::string>> parse_ties(const std::vector<st
 }
 
 void report_untrustworthy(const FitResult& r, const std::string& what, Diagnostics& diag) {
+  for (const PinnedParameter& pin : r.pinned)
+    diag.note(fmt::format("{}{} = {} {}", what, pin.name, num6(pin.value), pin.why));
   for (const auto& w : r.warnings) diag.warning(what + w);
 }
 
@@ -196,7 +209,7 @@ void fit_joint(const model::Model& base, FitProblem problem, const std::vector<s
   add_free_effects(problem.model, problem.free);
   problem.jackknife_stretches = options.jackknife;
   problem.nls.threads = parallel::worker_count(options.threads, problem.free.size());
-  const FitResult result = fit_model(problem);
+  const FitResult result = fit_model_pinned(problem);
   write_model_ini(result, problem, speed, io);
   report_untrustworthy(result, "", io.diag);
   if (!result.nls.converged) {
