@@ -252,6 +252,23 @@ TEST(FitGreybox, AParameterAtItsBoundIsFlagged) {
   EXPECT_FALSE(r.flags[0].undetermined());
 }
 
+// A small viscous level the data fix to well within its size is not "at its lower bound" of 0,
+// although it is below 1e-6 of the catalog's range (sized for large motors): flagging it would
+// have the pinning hold it at 0.
+TEST(FitGreybox, ASmallDeterminedLevelIsNotAtItsZeroBound) {
+  model::Model truth;
+  truth.effects.push_back(model::parse_effect("friction_levels:Tc_Nm=0.001,c1_Nm_s_rad=5e-7"));
+  FitProblem problem;
+  problem.model.effects.push_back(model::parse_effect("friction_levels:Tc_Nm=0.001,c1_Nm_s_rad=1e-6"));
+  problem.runs.push_back(make_run(measure(truth, speed_only_run(), 36, false), {}, problem.model.params));
+  problem.free = {"friction_levels.c1_Nm_s_rad"};
+  const FitResult r = fit_model(problem);
+  ASSERT_EQ(r.nls.values.size(), 1);
+  EXPECT_NEAR(r.nls.values[0], 5e-7, 2e-8);
+  EXPECT_LT(r.nls.std_errors[0], 0.1 * r.nls.values[0]);
+  EXPECT_TRUE(r.flags.empty()) << r.warnings[0];
+}
+
 // What the runs do not set is pinned: a value at a lower bound of 0 at 0, an infinite error at
 // the given value (when there is one); a bound that is not 0, a correlation or an undetermined
 // parameter without a given value stay flagged.

@@ -475,9 +475,14 @@ void fit_warnings(const NlsResult& n, const std::vector<std::pair<double, double
     const double from_hi = logs ? std::log(hi / v) : hi - v;
     // At a bound the Jacobian steps out of the range: its standard error says nothing more.
     // A positive parameter bounded by 0 is fitted in log coordinates: it nears the bound only
-    // by orders of magnitude, so only a value that is 0 in all but name is at it.
-    const double lo_margin = lo == 0.0 && v > 0.0 ? 1e-6 * span : k_at_bound * span;
-    if (std::isfinite(span) && from_lo <= lo_margin) {
+    // by orders of magnitude, so only a value that is 0 in all but name is at it, and only
+    // when the data cannot tell it from 0 (a standard error at least its size). A small
+    // motor's viscous level, 1e-6 of a range sized for a large one, is not at the bound when
+    // the data fix it to a few per cent.
+    const bool positive_near_0 = lo == 0.0 && v > 0.0;
+    const double lo_margin = positive_near_0 ? 1e-6 * span : k_at_bound * span;
+    const bool told_from_0 = positive_near_0 && n.std_errors[i] < v;
+    if (std::isfinite(span) && from_lo <= lo_margin && !told_from_0) {
       add(Kind::at_bound, {n.names[k]},
           fmt::format("{} = {:.6g}{} is at its lower bound", n.names[k], v, unit), lo);
       continue;
