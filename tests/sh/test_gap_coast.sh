@@ -8,6 +8,9 @@
 #  - mcg-fit gap names the coasting driver and the friction together (pwm_coast+
 #    friction_levels), shrink >= 60 % on the held-out run, the share and the Coulomb level
 #    within 5 % of the truth. Friction alone cannot bend the static curve that way.
+#  - The viscous term, small beside the coasting driver's, is driven to its bound 0, where the
+#    runs do not set it: it is pinned there and said so (row, status, summary note), not printed
+#    as 6.5e-11; the breakaway keeps its profile.
 # Args: TOOL_DIR SOURCE_DIR.
 set -euo pipefail
 tools=$1
@@ -53,5 +56,19 @@ else
   param() { grep -o "$1=[^+ ,]*" <<<"$row" | cut -d= -f2; }
   near "gap: pwm_coast.coast" "$(param pwm_coast.coast)" 0.85 0.05
   near "gap: friction_levels.Tc_Nm" "$(param friction_levels.Tc_Nm)" 0.0036 0.05
+  pin="friction_levels.c1_Nm_s_rad = 0 pinned at its bound: the fit drove it there"
+  if grep -qF "friction_levels.c1_Nm_s_rad=0 (pinned)" <<<"$row" && grep -qF "$pin" <<<"$row" &&
+    grep -qxF "note: $pin" "$work/gap.err" && ! grep -q "c1_Nm_s_rad at a bound" <<<"$row"; then
+    pass
+    echo "ok   gap: $pin"
+  else
+    fail "gap: friction_levels.c1_Nm_s_rad not pinned at its bound: $(param friction_levels.c1_Nm_s_rad)"
+  fi
+  if grep -q "friction_levels.Ts_excess_Nm=[0-9.e-]*+-[0-9]" <<<"$row" &&
+    grep -qF "friction_levels.Ts_excess_Nm profiled on the exact stick" <<<"$row"; then
+    pass
+  else
+    fail "gap: the breakaway lost its profile: $(cut -d, -f15,17 <<<"$row")"
+  fi
 fi
 finish gap_coast

@@ -677,6 +677,131 @@ TEST(GapSearch, EarlyRejectionKeepsTheDiagnosisAndItsParameters) {
   EXPECT_EQ(a.score, b.score);
 }
 
+/// `t` without its current, generator and relay readings: the speed alone, as a small motor's
+/// encoder logs it.
+table::Table speed_only(table::Table t) {
+  for (const char* name : {"i", "i_gen", "v_gen"}) {
+    if (const auto k = t.find(name)) {
+      t.names.erase(t.names.begin() + static_cast<std::ptrdiff_t>(*k));
+      t.columns.erase(t.columns.begin() + static_cast<std::ptrdiff_t>(*k));
+    }
+  }
+  return t;
+}
+
+// What the runs do not set is pinned once the verdict is drawn (pin_diagnosis), as mcg-fit model
+// pins it: on speed-only runs of a drive's dead band whose switches have no resistance, the
+// diagnosis' fit left hbridge's R_on trapped at its bound 0 (1e-12 +- inf, flagged: a number the
+// solver chose, not the data); it is held at 0 and the rest refitted without it. A friction
+// breakaway its profile put at 0 with a profiled error is determined: it keeps its value, error,
+// flag, warning and note, and is held, not refitted.
+TEST(GapPins, AZeroBoundIsPinnedAfterTheVerdictAndAProfiledBreakawayKeepsItsOwn) {
+  const std::vector<std::string> effect{"hbridge:R_on_ohm=0,deadband=0.04"};
+  const table::Table train = speed_only(measure(steps(3.0, -9.0, 9.0, 3, 0, false), effect, 1, "train.csv"));
+  const table::Table validate =
+      speed_only(measure(steps(3.0, -9.0, 9.0, 4, 0, false), effect, 2, "validate.csv"));
+  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+  const std::vector<OutputFloor> floors = gap_detail::noise_floors(data);
+  // The diagnosis as the search leaves it: hbridge with R_on trapped near 0, beside a friction
+  // effect whose levels are 0 and whose breakaway was profiled.
+  FitProblem problem;
+  problem.model.effects = {model::default_effect("param_mismatch"),
+                           model::parse_effect("hbridge:R_on_ohm=1e-12"),
+                           model::parse_effect("friction_levels:Tc_Nm=0,Ts_excess_Nm=0,c1_Nm_s_rad=0")};
+  problem.runs = data.train;
+  problem.free = {"param_mismatch.J_scale", "hbridge.R_on_ohm", "hbridge.deadband"};
+  const FitResult fit = fit_model(problem);
+  GapCandidate c;
+  c.name = "hbridge+friction_levels";
+  c.effects = {"hbridge", "friction_levels"};
+  c.model = fit.model;
+  c.free = fit.nls.names;
+  for (std::size_t k = 0; k < c.free.size(); ++k) {
+    c.values.push_back(fit.nls.values[static_cast<Eigen::Index>(k)]);
+    c.std_errors.push_back(fit.reported_se(k));
+  }
+  c.flags = fit.flags;
+  c.warnings = fit.warnings;
+  const std::string breakaway = "friction_levels.Ts_excess_Nm";
+  const std::string profile =
+      breakaway + " profiled on the exact stick: 0 +- 0.0001 (regularised fit 0 +- inf)";
+  const std::string at_zero = breakaway + " = 0 N m is at its lower bound";
+  c.free.push_back(breakaway);
+  c.values.push_back(0.0);
+  c.std_errors.push_back(1e-4);
+  c.flags.push_back({FitFlag::Kind::at_bound, {breakaway}, 0.0});
+  c.warnings.push_back(at_zero);
+  c.status = "fitted; " + profile;
+  c.evaluated = true;
+  ASSERT_TRUE(std::any_of(c.flags.begin(), c.flags.end(), [](const FitFlag& f) {
+    return f.kind == FitFlag::Kind::at_bound && f.names.front() == "hbridge.R_on_ohm" && f.bound == 0.0;
+  })) << "the fit left R_on off its bound: nothing to pin";
+
+  GapSettings settings;
+  settings.threads = 2;
+  gap_detail::pin_diagnosis(c, model::Model{}, data, floors, settings);
+  EXPECT_EQ(c.name, "hbridge+friction_levels");
+  ASSERT_EQ(c.pinned.size(), 1U) << c.status;
+  EXPECT_EQ(c.pinned[0].name, "hbridge.R_on_ohm");
+  EXPECT_EQ(c.pinned[0].value, 0.0);
+  EXPECT_EQ(c.pinned[0].why, k_pinned_bound);
+  EXPECT_EQ(model::get_parameter(c.model, "hbridge.R_on_ohm"), 0.0);
+  EXPECT_EQ(c.status,
+            "fitted; " + profile + "; hbridge.R_on_ohm = 0 pinned at its bound: the fit drove it there");
+  EXPECT_EQ(c.free, (std::vector<std::string>{"param_mismatch.J_scale", "hbridge.deadband", breakaway}));
+  ASSERT_EQ(c.values.size(), 3U);
+  ASSERT_EQ(c.std_errors.size(), 3U);
+  EXPECT_NEAR(c.values[1], 0.04, 0.004);
+  EXPECT_LT(c.std_errors[1], 0.1 * c.values[1]);
+  EXPECT_EQ(c.values[2], 0.0);
+  EXPECT_EQ(c.std_errors[2], 1e-4);
+  for (const FitFlag& f : c.flags) EXPECT_NE(f.names.front(), "hbridge.R_on_ohm");
+  EXPECT_TRUE(std::any_of(c.flags.begin(), c.flags.end(), [&](const FitFlag& f) {
+    return f.kind == FitFlag::Kind::at_bound && f.names.front() == breakaway;
+  }));
+  EXPECT_NE(std::find(c.warnings.begin(), c.warnings.end(), at_zero), c.warnings.end());
+  EXPECT_TRUE(std::isfinite(c.score));
+}
+
+// A static level below the Coulomb level acts as the Coulomb level does: the runs of a rig whose
+// static friction is that low leave the nominal static scale where the fit left it (an infinite
+// error), and holding it at the given 1 would put a stiction in the model that the runs do not
+// have. It is pinned where the fit left it, and said so.
+TEST(GapPins, AnInfiniteErrorWhoseGivenValueCostsIsPinnedWhereTheFitLeftIt) {
+  const std::vector<std::string> effect{"param_mismatch:static_scale=0.3"};
+  const table::Table train = measure(steps(3.0, 0.2, 0.35, 5, 0, false), effect, 1, "train.csv");
+  const table::Table validate = measure(steps(3.0, 0.2, 0.35, 6, 0, false), effect, 2, "validate.csv");
+  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+  FitProblem problem;
+  problem.model.effects = {model::parse_effect("param_mismatch:static_scale=0.3")};
+  problem.runs = data.train;
+  problem.free = {"param_mismatch.J_scale", "param_mismatch.static_scale"};
+  const FitResult fit = fit_model(problem);
+  GapCandidate c;
+  c.name = "param_mismatch";
+  c.model = fit.model;
+  c.free = fit.nls.names;
+  for (std::size_t k = 0; k < c.free.size(); ++k) {
+    c.values.push_back(fit.nls.values[static_cast<Eigen::Index>(k)]);
+    c.std_errors.push_back(fit.reported_se(k));
+  }
+  c.flags = fit.flags;
+  c.warnings = fit.warnings;
+  c.status = "fitted";
+  c.evaluated = true;
+  ASSERT_FALSE(std::isfinite(c.std_errors[1])) << c.values[1] << " +- " << c.std_errors[1];
+  GapSettings settings;
+  settings.threads = 2;
+  gap_detail::pin_diagnosis(c, model::Model{}, data, gap_detail::noise_floors(data), settings);
+  ASSERT_EQ(c.pinned.size(), 1U) << c.status;
+  EXPECT_EQ(c.pinned[0].name, "param_mismatch.static_scale");
+  EXPECT_EQ(c.pinned[0].value, fit.nls.values[1]);
+  EXPECT_EQ(c.pinned[0].why, k_pinned_left);
+  EXPECT_EQ(c.free, std::vector<std::string>{"param_mismatch.J_scale"});
+  EXPECT_NE(c.status.find("pinned at the value the fit left: not set by these runs"), std::string::npos);
+  EXPECT_TRUE(c.flags.empty()) << c.warnings.front();
+}
+
 /// A current-driven motor alone as a servo logs it: the current loop's command `i` held at
 /// `levels_A` for `hold_s` each, the speed as omega with 0.5 rad/s of white noise (seeded).
 table::Table current_driven(const model::Model& rig, const std::vector<double>& levels_A, double hold_s,

@@ -297,6 +297,9 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   if (reverted) before = evaluate(model, data, report.floors);
   const bool gap = improves(static_cast<double>(outputs), before.score, outputs);
   decide(search_candidates(model, data, report.floors, before, gap, settings), gap, outputs, report);
+  // Pinned only now: held during the search, a pin changed which candidates were significant.
+  if (report.diagnosis != "none" && report.diagnosis != "unexplained")
+    pin_diagnosis(report.candidates.front(), model, data, report.floors, settings);
 
   const bool diagnosed = report.diagnosis != "unexplained";
   // The discrepancy terms are a fit of their own: one the time budget leaves no room for is not begun.
@@ -329,6 +332,8 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
 
 void warn_flags(const GapReport& report, Diagnostics& diag) {
   const GapCandidate& diagnosis = report.candidates.front();
+  for (const PinnedParameter& pin : diagnosis.pinned)
+    diag.note(fmt::format("{}: {}", diagnosis.name, pinned_text(pin)));
   for (const auto& w : diagnosis.warnings) diag.warning(fmt::format("{}: {}", diagnosis.name, w));
 }
 

@@ -177,6 +177,9 @@ struct GapCandidate {
   /// k_max_correlation with another, or physically impossible.
   std::vector<std::string> warnings;
   std::vector<FitFlag> flags;
+  /// Parameters of the diagnosis' fit that the runs do not set, held once the verdict is drawn
+  /// (pin_diagnosis()) and the rest refitted without them: not in `free`, printed as pinned.
+  std::vector<PinnedParameter> pinned;
   /// False when the data do not determine what the candidate claims: a physically impossible
   /// value anywhere; on a parameter of an added effect, an infinite or too small standard
   /// error; a correlation beyond k_max_correlation that involves an added effect's parameter
@@ -283,8 +286,8 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
 void write_gap_csv(std::ostream& out, const GapReport& report);
 /// The human summary (the same content with the regime tables and residual checks).
 void write_gap_text(std::ostream& out, const GapReport& report);
-/// The diagnosis' honest-numbers findings as warnings on `diag`, "NAME: warning" (with
-/// --format text, whose summary is on stdout).
+/// The diagnosis' honest-numbers findings as warnings on `diag`, "NAME: warning", and its pins as
+/// notes, "NAME: PARAMETER = VALUE pinned at ..." (with --format text, whose summary is on stdout).
 void warn_flags(const GapReport& report, Diagnostics& diag);
 /// The validation time series for plotting: run, t, inputs, measured, before, after and
 /// both residuals per output.

@@ -148,6 +148,19 @@ struct Candidates {
 Candidates search_candidates(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors,
                              const Evaluation& before, bool gap, const GapSettings& settings);
 
+/// After the verdict, the parameters of diagnosis `c`'s fit that the runs do not set are held as
+/// mcg-fit model holds them (pin_undetermined()): one with an infinite error at its value in the
+/// model as given (`as_given`, the nominal scales at 1), else where the fit left it; one at a
+/// lower bound of 0 at 0. The rest is refitted once from `c`'s values, with a friction effect's
+/// breakaway held where its profile put it and the other levels on the exact stick the profile
+/// used (the breakaway's value, error, flags and note stay the profile's: a breakaway near 0 with
+/// a profiled error is determined). The pins stand only when they cost no more than one standard
+/// error's worth of fit; then `c` takes the refit's values, errors and findings, lists the pins
+/// in `pinned` and its status, and is scored again. Which candidate is the diagnosis, and the
+/// verdict, stay as they are. Nothing is done after the time budget.
+void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData& data,
+                   const std::vector<OutputFloor>& floors, const GapSettings& settings);
+
 // --- decision --------------------------------------------------------------------------
 
 /// score_ref - score > max(k_abs, k_rel (score_ref - outputs)).

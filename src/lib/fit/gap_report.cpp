@@ -154,6 +154,11 @@ std::string params_text(const GapCandidate& c) {
         fmt::format("{}={}+-{}", c.free[k], number(c.values[k]), number(c.std_errors[k], 2));
     (c.free[k].rfind("param_mismatch.", 0) == 0 ? nominal_part : effect_part).push_back(item);
   }
+  // What the runs do not set is held, not fitted: shown without an error (the status says why).
+  for (const PinnedParameter& pin : c.pinned) {
+    const std::string item = fmt::format("{}={} (pinned)", pin.name, number(pin.value));
+    (pin.name.starts_with("param_mismatch.") ? nominal_part : effect_part).push_back(item);
+  }
   // A harmonic order is picked from the data's spectrum, not fitted: shown without an error.
   for (const auto& name : c.effects) {
     const model::EffectSpec* spec = model::find_effect(name);
@@ -345,6 +350,7 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
     out << (report.diagnosis == "unexplained" ? "best candidate's fitted parameters" : "fitted parameters")
         << " (+- one standard error): " << params_text(diag) << "\n";
   }
+  for (const PinnedParameter& pin : diag.pinned) out << "note: " << pinned_text(pin) << "\n";
   for (const auto& w : diag.warnings) out << "warning: " << w << "\n";
   if (report.discrepancy) {
     const DiscrepancyResult& d = *report.discrepancy;

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <complex>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -493,6 +494,39 @@ bool switched_off(const model::Model& m, const std::vector<std::string>& free, c
   return any;
 }
 
+/// A fit of a candidate with `effects` on the training runs, as the search makes every one (its
+/// model and free parameters to be set).
+FitProblem candidate_problem(const std::vector<std::string>& effects, const GapData& data,
+                             const GapSettings& settings) {
+  FitProblem problem;
+  problem.runs = data.train;
+  problem.nls.threads = 0;  // the search's pool: columns and runs beside the other candidates
+  problem.nls.xtol = 1e-4;
+  problem.nls.ftol = 1e-5;
+  problem.nls.check_smoothness = false;
+  problem.evaluate_runs = false;  // the candidate is scored by evaluate() and training_speed_rms()
+  // Jacobians by finite differences throughout: Broyden's updates between them (NlsOptions::
+  // broyden) saved a fifth of the public cases' time but lost a two-effect mixture, whose
+  // single fits stopped early on updated Jacobians.
+  problem.bounds = settings.bounds;
+  // Friction is fitted on the regularised stick, where the breakaway moves the response
+  // continuously (on the exact stick-slip any level between two drive levels of a staircase
+  // gives the same run, and the fit locks onto a level's edge); evaluate() scores it exact.
+  problem.sim.smooth_stick = std::any_of(effects.begin(), effects.end(), is_friction);
+  if (settings.deadline != std::chrono::steady_clock::time_point::max()) {
+    problem.nls.stop = [deadline = settings.deadline] {
+      return std::chrono::steady_clock::now() >= deadline;
+    };
+  }
+  return problem;
+}
+
+/// The simulation budget of a candidate's fit of `free` parameters: GapSettings::max_evaluations,
+/// else `per_parameter` per parameter and one.
+int fit_budget(const GapSettings& settings, int per_parameter, std::size_t free) {
+  return settings.max_evaluations > 0 ? settings.max_evaluations : per_parameter * static_cast<int>(free + 1);
+}
+
 GapCandidate run_job(const Job& job, const GapData& data, const std::vector<OutputFloor>& floors,
                      const GapSettings& settings, const std::vector<double>& orders) {
   GapCandidate c;
@@ -521,30 +555,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
                          point == job.data_starts.end() ? nullptr : &point->second);
     }
   }
-  FitProblem problem;
-  problem.runs = data.train;
-  problem.nls.threads = 0;  // the search's pool: columns and runs beside the other candidates
-  problem.nls.xtol = 1e-4;
-  problem.nls.ftol = 1e-5;
-  problem.nls.check_smoothness = false;
-  problem.evaluate_runs = false;  // the candidate is scored by evaluate() and training_speed_rms()
-  // Jacobians by finite differences throughout: Broyden's updates between them (NlsOptions::
-  // broyden) saved a fifth of the public cases' time but lost a two-effect mixture, whose
-  // single fits stopped early on updated Jacobians.
-  problem.bounds = settings.bounds;
-  // Friction is fitted on the regularised stick, where the breakaway moves the response
-  // continuously (on the exact stick-slip any level between two drive levels of a staircase
-  // gives the same run, and the fit locks onto a level's edge); evaluate() scores it exact.
-  problem.sim.smooth_stick = std::any_of(job.effects.begin(), job.effects.end(), is_friction);
-  if (settings.deadline != std::chrono::steady_clock::time_point::max()) {
-    problem.nls.stop = [deadline = settings.deadline] {
-      return std::chrono::steady_clock::now() >= deadline;
-    };
-  }
-  auto budget = [&](std::size_t free) {
-    return settings.max_evaluations > 0 ? settings.max_evaluations
-                                        : job.evaluations_per_parameter * static_cast<int>(free + 1);
-  };
+  FitProblem problem = candidate_problem(job.effects, data, settings);
+  auto budget = [&](std::size_t free) { return fit_budget(settings, job.evaluations_per_parameter, free); };
   const auto take = [&](const FitResult& r, const std::vector<std::string>& free) {
     c.model = r.model;
     c.free = free;
@@ -1342,6 +1354,107 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   out.mixtures = std::move(mixtures);
   out.skipped = std::move(skipped);
   return out;
+}
+
+void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData& data,
+                   const std::vector<OutputFloor>& floors, const GapSettings& settings) {
+  const auto expired = [&] { return std::chrono::steady_clock::now() >= settings.deadline; };
+  if (!c.evaluated || c.free.empty() || c.values.size() != c.free.size() ||
+      c.std_errors.size() != c.free.size() || expired())
+    return;
+  // A friction effect's breakaway is its profile's (profile_breakaway()): held where the profile
+  // put it, never pinned.
+  std::vector<std::string> profiled;
+  for (const auto& e : c.effects) {
+    const model::EffectSpec* spec = find_plan(e);
+    if (spec != nullptr && !spec->plan.breakaway_key.empty())
+      profiled.push_back(e + "." + spec->plan.breakaway_key);
+  }
+  const auto is_profiled = [&](const std::string& name) {
+    return std::find(profiled.begin(), profiled.end(), name) != profiled.end();
+  };
+  const auto on_profiled = [&](const FitFlag& f) {
+    return std::any_of(f.names.begin(), f.names.end(), is_profiled);
+  };
+  // Only a diagnosis with something to pin is refitted.
+  std::vector<FitFlag> own;
+  std::copy_if(c.flags.begin(), c.flags.end(), std::back_inserter(own),
+               [&](const FitFlag& f) { return !on_profiled(f); });
+  const auto any_value = [](const std::string&) -> std::optional<double> { return 0.0; };
+  if (undetermined_pins(own, c.free, c.std_errors, any_value).empty()) return;
+  if (settings.progress)
+    settings.progress(fmt::format("refitting {} with what its runs do not set pinned", c.name));
+
+  FitProblem problem = candidate_problem(c.effects, data, settings);
+  problem.model = c.model;
+  std::copy_if(c.free.begin(), c.free.end(), std::back_inserter(problem.free),
+               [&](const std::string& name) { return !is_profiled(name); });
+  // With a breakaway held where its profile on the exact stick put it, the other levels are
+  // refitted on the exact stick too (as the search refits a collapsed breakaway's).
+  if (problem.free.size() < c.free.size()) problem.sim.smooth_stick = false;
+  // The fit once more from the diagnosis' values: what the pins must not cost against.
+  problem.nls.max_evaluations = fit_budget(settings, 10, problem.free.size());
+  const FitResult first = fit_model(problem);
+  model::Model nominal = as_given;
+  add_effect(nominal, "param_mismatch");
+  const auto given = [&](const std::string& name) -> std::optional<double> {
+    const std::string effect = name.substr(0, name.find('.'));
+    if (model::find_effect(effect) != nullptr && nominal.effect(effect) == nullptr) return std::nullopt;
+    return model::get_parameter(nominal, name);
+  };
+  FitResult held = pin_undetermined(problem, first, given);
+  // The given value may cost where the one the fit left does not (k_pinned_left).
+  if (held.pinned.empty() && !expired()) {
+    held = pin_undetermined(problem, first, [&](const std::string& name) -> std::optional<double> {
+      return model::get_parameter(first.model, name);
+    });
+    for (PinnedParameter& pin : held.pinned) {
+      if (pin.why == k_pinned_given) pin.why = std::string(k_pinned_left);
+    }
+  }
+  if (held.pinned.empty() || expired()) return;
+
+  // The refit's values and findings; the profiled breakaway's as the profile left them.
+  std::vector<std::string> free;
+  std::vector<double> values;
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < c.free.size(); ++k) {
+    const std::string& name = c.free[k];
+    if (is_profiled(name)) {
+      free.push_back(name);
+      values.push_back(c.values[k]);
+      errors.push_back(c.std_errors[k]);
+      continue;
+    }
+    const auto it = std::find(held.nls.names.begin(), held.nls.names.end(), name);
+    if (it == held.nls.names.end()) continue;  // pinned
+    const auto i = static_cast<std::size_t>(it - held.nls.names.begin());
+    free.push_back(name);
+    values.push_back(held.nls.values[static_cast<Eigen::Index>(i)]);
+    errors.push_back(held.reported_se(i));
+  }
+  std::vector<FitFlag> flags = held.flags;
+  std::copy_if(c.flags.begin(), c.flags.end(), std::back_inserter(flags),
+               [&](const FitFlag& f) { return std::all_of(f.names.begin(), f.names.end(), is_profiled); });
+  std::vector<std::string> warnings = held.warnings;
+  std::copy_if(c.warnings.begin(), c.warnings.end(), std::back_inserter(warnings), [&](const std::string& w) {
+    return std::any_of(profiled.begin(), profiled.end(), [&](const std::string& key) {
+      return w.starts_with(key + " = ") || w.starts_with(key + ": ");
+    });
+  });
+  c.model = held.model;
+  c.free = std::move(free);
+  c.values = std::move(values);
+  c.std_errors = std::move(errors);
+  c.flags = std::move(flags);
+  c.warnings = std::move(warnings);
+  c.pinned = held.pinned;
+  for (const PinnedParameter& pin : c.pinned) c.status += "; " + pinned_text(pin);
+  const Evaluation ev = evaluate(c.model, data, floors);
+  c.score = ev.score;
+  c.rms = ev.rms;
+  c.fpe = fpe(ev.score, c.free.size(), static_cast<double>(validation_count(data) * floors.size()));
+  c.train_rms_rpm = training_speed_rms(c.model, data.train, problem.sim);
 }
 
 }  // namespace gap_detail

@@ -704,6 +704,10 @@ FitResult fit_model(const FitProblem& problem) {
   return result;
 }
 
+std::string pinned_text(const PinnedParameter& pin) {
+  return fmt::format("{} = {:.6g} {}", pin.name, pin.value == 0.0 ? 0.0 : pin.value, pin.why);
+}
+
 std::vector<PinnedParameter> undetermined_pins(
     const std::vector<FitFlag>& flags, const std::vector<std::string>& names,
     const std::vector<double>& std_errors,
@@ -737,15 +741,12 @@ bool pin_costs_nothing(const FitResult& free, const FitResult& held) {
   return held.nls.cost <= free.nls.cost * (1.0 + free.se_widening * free.se_widening / residuals);
 }
 
-FitResult fit_model_pinned(const FitProblem& problem) {
-  FitResult first = fit_model(problem);
+FitResult pin_undetermined(const FitProblem& problem, FitResult first,
+                           const std::function<std::optional<double>(const std::string&)>& given) {
   if (first.nls.stopped) return first;
   std::vector<double> se;
   for (std::size_t k = 0; k < first.nls.names.size(); ++k) se.push_back(first.reported_se(k));
-  std::vector<PinnedParameter> pins = undetermined_pins(
-      first.flags, first.nls.names, se, [&](const std::string& name) -> std::optional<double> {
-        return model::get_parameter(problem.model, name);
-      });
+  std::vector<PinnedParameter> pins = undetermined_pins(first.flags, first.nls.names, se, given);
   if (pins.empty() || pins.size() >= problem.free.size()) return first;
   FitProblem held = problem;
   held.model = first.model;
@@ -757,6 +758,12 @@ FitResult fit_model_pinned(const FitProblem& problem) {
   if (!pin_costs_nothing(first, refit)) return first;
   refit.pinned = std::move(pins);
   return refit;
+}
+
+FitResult fit_model_pinned(const FitProblem& problem) {
+  return pin_undetermined(problem, fit_model(problem), [&](const std::string& name) -> std::optional<double> {
+    return model::get_parameter(problem.model, name);
+  });
 }
 
 double rms_finite(std::span<const double> x) {

@@ -239,7 +239,7 @@ struct FitFlag {
 struct PinnedParameter {
   std::string name;
   double value = 0.0;
-  std::string why;  ///< k_pinned_given or k_pinned_bound
+  std::string why;  ///< k_pinned_given, k_pinned_bound or k_pinned_left
 };
 
 /// Why a parameter is pinned: an infinite standard error (the runs leave it where it started)...
@@ -248,6 +248,12 @@ inline constexpr std::string_view k_pinned_given = "pinned at the given value: n
 /// level, a dead band, a delay cannot be negative): in log coordinates it only nears 0 by orders of
 /// magnitude (R_on = 1e-15 +- inf), so the number printed would be the solver's, not the data's.
 inline constexpr std::string_view k_pinned_bound = "pinned at its bound: the fit drove it there";
+/// ... or, with an infinite error where the given value would cost fit (a static level anywhere
+/// below the Coulomb level acts alike, but not above it), the value the fit left it at.
+inline constexpr std::string_view k_pinned_left = "pinned at the value the fit left: not set by these runs";
+
+/// "NAME = VALUE why": how the reports say a pin (six significant digits, never -0).
+std::string pinned_text(const PinnedParameter& pin);
 
 /// The parameters the runs do not set, each with the value it is pinned at: one `flags` put at a
 /// lower bound of 0 (FitFlag::bound) at 0; one without a finite standard error (`undetermined`,
@@ -331,10 +337,15 @@ FitResult fit_model(const FitProblem& problem);
 /// value): then the runs do set it, and it is not pinned.
 bool pin_costs_nothing(const FitResult& free, const FitResult& held);
 
-/// fit_model(), then each free parameter undetermined_pins() finds pinned (at its value in
-/// problem.model, or at its bound 0) and the rest refitted once without them; the result lists
-/// them in FitResult::pinned. The fit as it came when nothing is pinned, every parameter would
-/// be, the budget stopped it, or the pins cost (pin_costs_nothing()).
+/// Given `first`, a fit_model() of `problem`: each free parameter undetermined_pins() finds in it
+/// pinned (at `given(name)`, or at its bound 0) and the rest refitted once without them, from
+/// where `first` left them; the result lists them in FitResult::pinned. `first` as it came when
+/// nothing is pinned, every parameter would be, the budget stopped it, or the pins cost
+/// (pin_costs_nothing()).
+FitResult pin_undetermined(const FitProblem& problem, FitResult first,
+                           const std::function<std::optional<double>(const std::string&)>& given);
+
+/// pin_undetermined() of fit_model(problem), each parameter given at its value in problem.model.
 FitResult fit_model_pinned(const FitProblem& problem);
 
 }  // namespace mcg::fit

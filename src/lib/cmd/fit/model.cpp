@@ -159,8 +159,7 @@ std::vector<std::pair<std::string, std::string>> parse_ties(const std::vector<st
 }
 
 void report_untrustworthy(const FitResult& r, const std::string& what, Diagnostics& diag) {
-  for (const PinnedParameter& pin : r.pinned)
-    diag.note(fmt::format("{}{} = {} {}", what, pin.name, num6(pin.value), pin.why));
+  for (const PinnedParameter& pin : r.pinned) diag.note(what + pinned_text(pin));
   for (const auto& w : r.warnings) diag.warning(what + w);
 }
 
