@@ -1006,5 +1006,35 @@ TEST(GapSearch, TrainingRmsUsesTheFitsSimulationAndAnySpeedColumn) {
   EXPECT_NEAR(gap_detail::training_speed_rms(model, data.train), exact * k_rad_s_per_rpm, 1e-9 * exact);
 }
 
+// The search's memo returns the very numbers a simulation gives, and only for the same model, to
+// the bit, with the same options, of the same run: anything else is simulated.
+TEST(GapSearch, SimulationMemoLooksUpOnlyWhatWasSimulated) {
+  const GapData data = current_driven_data();
+  const fit::Run& run = data.train.front();
+  model::Model model;
+  gap_detail::SimulationMemo memo;
+  const auto first = memo.simulate(model, run);
+  EXPECT_EQ(first, simulate_as_measured(model, run));
+  EXPECT_EQ(memo.simulate(model, run), first);
+  EXPECT_EQ(memo.hits(), 1U);
+  model::SimOptions smooth;
+  smooth.smooth_stick = true;
+  EXPECT_EQ(memo.simulate(model, run, smooth), simulate_as_measured(model, run, smooth));
+  model::Model nudged = model;
+  nudged.params.motor.J_kg_m2 = std::nextafter(nudged.params.motor.J_kg_m2, 1.0);
+  memo.simulate(nudged, run);
+  model::Model with_effect = model;
+  with_effect.effects.push_back(model::default_effect("friction_asymmetry"));
+  memo.simulate(with_effect, run);
+  const fit::Run copy = run;
+  memo.simulate(model, copy);
+  EXPECT_EQ(memo.hits(), 1U);
+  EXPECT_EQ(memo.simulations(), 5U);
+  // The training cost through it is the one without it.
+  EXPECT_EQ(gap_detail::training_cost(nudged, data.train, &memo),
+            gap_detail::training_cost(nudged, data.train));
+  EXPECT_EQ(memo.hits(), 2U);
+}
+
 }  // namespace
 }  // namespace mcg::fit

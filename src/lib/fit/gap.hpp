@@ -81,7 +81,10 @@ inline constexpr std::size_t k_gap_max_mixture = 3;
 struct GapSettings {
   unsigned threads = 0;                ///< threads of the diagnosis' one pool; 0 = all cores
   std::size_t pool_effects = 4;        ///< mixtures are formed from this many best single effects
-  int max_evaluations = 0;             ///< simulation budget per candidate fit; 0 = by size
+  /// Simulation budget per candidate fit; 0 = by size. It counts the solver's evaluations: one
+  /// the search's memo looks up (gap_detail::SimulationMemo) simulates nothing but is counted,
+  /// so a fit stops where it would without the memo.
+  int max_evaluations = 0;
   /// Nominal parameters pinned at measured values (--fix): the refit leaves the scale that
   /// would move them at 1 (motor.R_ohm: R_scale, motor.J_kg_m2: J_scale, Kt/Ke: Kt_scale,
   /// Tc: coulomb_scale, Ts: static_scale, visc*: viscous_scale).

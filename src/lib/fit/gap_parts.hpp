@@ -7,13 +7,16 @@
 // Internal to the fit library: tools and tests use gap.hpp.
 #pragma once
 
-#include "fit/gap.hpp"
-
+#include <cstddef>
 #include <limits>
+#include <list>
 #include <map>
+#include <mutex>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "fit/gap.hpp"
 
 namespace mcg::fit::gap_detail {
 
@@ -60,6 +63,40 @@ std::size_t floor_index(const std::vector<OutputFloor>& floors, const std::strin
 
 // --- search ----------------------------------------------------------------------------
 
+/// The search's simulations of its runs at the models simulated last, so that a model simulated
+/// again is looked up instead: a fit starts at the optimum of the fit before it (stage 1, the
+/// joint fit, its further rounds), and a candidate's score simulates its fit's optimum once more.
+/// Keyed on the exact model (every parameter's bits, its effects and terms), the simulation
+/// options and the run by address (the runs stay put while the memo lives: one search), so a
+/// look-up returns the very numbers the simulation would. It holds the k_entries most recently
+/// used (a repeat comes within a few dozen simulations), fewer when their series pass k_bytes.
+class SimulationMemo {
+ public:
+  using Series = std::vector<std::vector<double>>;
+  static constexpr std::size_t k_entries = 64;
+  /// The series held at most, bytes (and never fewer than one entry).
+  static constexpr std::size_t k_bytes = std::size_t{64} << 20;
+
+  /// simulate_as_measured(model, run, options), looked up when held.
+  Series simulate(const model::Model& model, const Run& run, const model::SimOptions& options = {});
+  /// Simulations run and simulations looked up so far.
+  std::size_t simulations() const;
+  std::size_t hits() const;
+
+ private:
+  struct Entry {
+    const Run* run;
+    std::string key;
+    Series series;
+    std::size_t bytes;
+  };
+  mutable std::mutex m_mutex;
+  std::list<Entry> m_entries;  ///< most recently used first
+  std::size_t m_bytes = 0;
+  std::size_t m_simulations = 0;
+  std::size_t m_hits = 0;
+};
+
 /// Validation evaluation of one model: per run, per output (in the run's order) the
 /// simulated series, and per floor output the pooled squared error and count.
 struct Evaluation {
@@ -69,7 +106,9 @@ struct Evaluation {
   double score = 0.0;
   std::vector<double> rms;
 };
-Evaluation evaluate(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors);
+/// `memo`: the search's, or none.
+Evaluation evaluate(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors,
+                    SimulationMemo* memo = nullptr);
 
 /// The measurement noise of `output` seen in the residual of `ev` (the model as given): the
 /// RMS of the residual's second difference over the scored validation rows, divided by
@@ -123,14 +162,14 @@ model::TermShape offset_shape(std::string_view name, bool with_sign = true);
 void check_excluded(const std::vector<std::string>& excluded);
 
 /// The fit objective on the training runs (sum over runs and outputs of the squared NRMSE),
-/// used to pick a starting point on a grid.
-double training_cost(const model::Model& model, const std::vector<Run>& runs);
+/// used to pick a starting point on a grid. `memo`: the search's, or none.
+double training_cost(const model::Model& model, const std::vector<Run>& runs, SimulationMemo* memo = nullptr);
 /// RMS of the speed residual over the training runs, in their measured unit (rpm or omega; the
 /// diagnosis holds every speed in rpm, its report converts), simulated with `options`: those of
 /// the fit the model came from (the regularised stick for friction), so that it is the error that
-/// fit minimised.
+/// fit minimised. `memo`: the search's, or none.
 double training_speed_rms(const model::Model& model, const std::vector<Run>& runs,
-                          const model::SimOptions& options = {});
+                          const model::SimOptions& options = {}, SimulationMemo* memo = nullptr);
 
 /// The candidates of one diagnosis, before the decision orders them.
 struct Candidates {

@@ -13,6 +13,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <type_traits>
 
 #include "common/demand.hpp"
 #include "common/error.hpp"
@@ -89,10 +90,10 @@ std::string not_excited(const model::EffectPlan& plan, const std::vector<Run>& r
 /// the effect carries the gain (an effect fitted to nothing, whose presence merely changed
 /// what else was refitted, does not).
 bool carries_weight(const GapCandidate& c, const std::string& effect, const GapData& data,
-                    const std::vector<OutputFloor>& floors, std::size_t outputs) {
+                    const std::vector<OutputFloor>& floors, std::size_t outputs, SimulationMemo& memo) {
   model::Model without = c.model;
   std::erase_if(without.effects, [&](const model::Effect& e) { return e.name == effect; });
-  return improves(c.score, evaluate(without, data, floors).score, outputs);
+  return improves(c.score, evaluate(without, data, floors, &memo).score, outputs);
 }
 
 /// True when `added` holds a steady-state offset of another shape than one that a member of
@@ -119,9 +120,9 @@ struct Disagreement {
   std::size_t rows = 0;
 };
 Disagreement where_they_differ(const model::Model& a, const model::Model& b, const GapData& data,
-                               const std::vector<OutputFloor>& floors) {
-  const Evaluation ea = evaluate(a, data, floors);
-  const Evaluation eb = evaluate(b, data, floors);
+                               const std::vector<OutputFloor>& floors, SimulationMemo& memo) {
+  const Evaluation ea = evaluate(a, data, floors, &memo);
+  const Evaluation eb = evaluate(b, data, floors, &memo);
   std::vector<double> sum_a(floors.size(), 0.0);
   std::vector<double> sum_b(floors.size(), 0.0);
   std::vector<std::size_t> count(floors.size(), 0);
@@ -245,7 +246,8 @@ std::optional<std::array<double, 4>> seen_friction(const std::vector<table::Tabl
 /// `bases`) on the training cost and returns the best point.
 model::Model grid_start(const std::vector<model::Model>& bases, const model::EffectSpec& effect,
                         const std::vector<Run>& runs, const std::vector<double>& orders,
-                        std::chrono::steady_clock::time_point deadline, const std::vector<double>* data_point) {
+                        std::chrono::steady_clock::time_point deadline, const std::vector<double>* data_point,
+                        SimulationMemo& memo) {
   const model::EffectPlan& plan = effect.plan;
   std::vector<std::vector<double>> axes = plan.grid;
   std::vector<std::string> keys = plan.free;
@@ -295,7 +297,7 @@ model::Model grid_start(const std::vector<model::Model>& bases, const model::Eff
   }
   std::vector<double> costs(trials.size(), std::numeric_limits<double>::infinity());
   parallel::for_each(trials.size(), 0, [&](std::size_t k) {
-    if (std::chrono::steady_clock::now() < deadline) costs[k] = training_cost(trials[k], runs);
+    if (std::chrono::steady_clock::now() < deadline) costs[k] = training_cost(trials[k], runs, &memo);
   });
   const auto best = std::min_element(costs.begin(), costs.end());
   if (!std::isfinite(*best)) return bases.front();
@@ -346,7 +348,8 @@ constexpr int k_profile_scans = 3;
 /// motor's whole Coulomb level above the bound (a breakaway is seldom more than twice the
 /// Coulomb level). Returns the note for the status.
 std::string profile_breakaway(GapCandidate& c, const std::string& key, const FitResult& fit,
-                              const std::vector<Run>& runs, std::chrono::steady_clock::time_point deadline) {
+                              const std::vector<Run>& runs, std::chrono::steady_clock::time_point deadline,
+                              SimulationMemo& memo) {
   const auto it = std::find(c.free.begin(), c.free.end(), key);
   if (it == c.free.end()) return {};
   const auto k = static_cast<std::size_t>(it - c.free.begin());
@@ -384,7 +387,7 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
       if (std::chrono::steady_clock::now() >= deadline) return;
       model::Model m = c.model;
       model::set_parameter(m, key, points[n]);
-      costs[n] = training_cost(m, runs);
+      costs[n] = training_cost(m, runs, &memo);
     });
     const auto centre =
         static_cast<std::size_t>(std::find(points.begin(), points.end(), centre_value) - points.begin());
@@ -528,15 +531,15 @@ int fit_budget(const GapSettings& settings, int per_parameter, std::size_t free)
 }
 
 GapCandidate run_job(const Job& job, const GapData& data, const std::vector<OutputFloor>& floors,
-                     const GapSettings& settings, const std::vector<double>& orders) {
+                     const GapSettings& settings, const std::vector<double>& orders, SimulationMemo& memo) {
   GapCandidate c;
   c.name = job.name;
   c.effects = job.effects;
   model::Model start = job.start;
   if (job.grid_effects.empty() && !job.other_starts.empty()) {
-    double best = training_cost(start, data.train);
+    double best = training_cost(start, data.train, &memo);
     for (const model::Model& other : job.other_starts) {
-      const double cost = training_cost(other, data.train);
+      const double cost = training_cost(other, data.train, &memo);
       if (cost < best) {
         best = cost;
         start = other;
@@ -552,10 +555,15 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
       }
       const auto point = job.data_starts.find(e);
       start = grid_start(bases, *plan, data.train, orders, settings.deadline,
-                         point == job.data_starts.end() ? nullptr : &point->second);
+                         point == job.data_starts.end() ? nullptr : &point->second, memo);
     }
   }
   FitProblem problem = candidate_problem(job.effects, data, settings);
+  // A fit starts at the optimum of the fit before it (stage 1, a further round), simulated then.
+  problem.simulate = [&](const model::Model& m, std::size_t run, const model::SimOptions& options) {
+    return memo.simulate(m, data.train[run], options);
+  };
+  // The solver's evaluations, a look-up in the memo counted as one (GapSettings::max_evaluations).
   auto budget = [&](std::size_t free) { return fit_budget(settings, job.evaluations_per_parameter, free); };
   const auto take = [&](const FitResult& r, const std::vector<std::string>& free) {
     c.model = r.model;
@@ -581,7 +589,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     c.status = fmt::format("{}; fit cut short after {} iterations, scored as it stands", k_out_of_time,
                            r.nls.iterations);
     c.evaluated = true;
-    const Evaluation ev = evaluate(c.model, data, floors);
+    const Evaluation ev = evaluate(c.model, data, floors, &memo);
     c.score = ev.score;
     c.rms = ev.rms;
     c.train_rms_rpm = k_nan;
@@ -591,10 +599,10 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
       if (const model::EffectSpec* plan = find_plan(e)) c.added_parameters += plan->plan.free.size();
     }
     c.evaluated = true;
-    const Evaluation ev = evaluate(c.model, data, floors);
+    const Evaluation ev = evaluate(c.model, data, floors, &memo);
     c.score = ev.score;
     c.rms = ev.rms;
-    c.train_rms_rpm = training_speed_rms(c.model, data.train, problem.sim);
+    c.train_rms_rpm = training_speed_rms(c.model, data.train, problem.sim, &memo);
   };
   // Stage 1: the added effect alone on the refitted nominal model (cheap, and it brings the
   // effect into its basin before the nominal parameters may move to absorb it).
@@ -627,7 +635,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
         return std::any_of(job.stage1_free.begin(), job.stage1_free.end(),
                            [&](const std::string& key) { return key.starts_with(e.name + "."); });
       });
-      before = training_cost(without, data.train);
+      before = training_cost(without, data.train, &memo);
     }
     const FitResult alone = fit_model(problem);
     if (expired()) {
@@ -709,7 +717,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
         std::any_of(c.flags.begin(), c.flags.end(), [&](const FitFlag& f) {
           return f.kind == FitFlag::Kind::at_bound && f.names == std::vector<std::string>{key};
         });
-    std::string note = profile_breakaway(c, key, fit, data.train, settings.deadline);
+    std::string note = profile_breakaway(c, key, fit, data.train, settings.deadline, memo);
     if (note.empty()) continue;
     profiled.push_back(std::move(note));
     const double value = c.values[k];
@@ -761,7 +769,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
 /// lands at its job's index.
 std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& data,
                                    const std::vector<OutputFloor>& floors, const GapSettings& settings,
-                                   const std::vector<double>& orders, std::size_t& done, std::size_t total) {
+                                   const std::vector<double>& orders, std::size_t& done, std::size_t total,
+                                   SimulationMemo& memo) {
   std::vector<GapCandidate> out(jobs.size());
   std::mutex mutex;
   parallel::for_each(jobs.size(), 0, [&](std::size_t k) {
@@ -778,7 +787,7 @@ std::vector<GapCandidate> run_jobs(const std::vector<Job>& jobs, const GapData& 
       return;
     }
     try {
-      out[k] = run_job(jobs[k], data, floors, settings, orders);
+      out[k] = run_job(jobs[k], data, floors, settings, orders, memo);
     } catch (const Error& e) {
       // A candidate the data cannot fit is reported as such; the others go on.
       GapCandidate& c = out[k];
@@ -968,12 +977,91 @@ void check_excluded(const std::vector<std::string>& excluded) {
   }
 }
 
-Evaluation evaluate(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors) {
+namespace {
+
+void append_bytes(std::string& key, const void* bytes, std::size_t size) {
+  key.append(static_cast<const char*>(bytes), size);
+}
+
+/// Everything a simulation of one run depends on besides the run: the bits of every parameter
+/// (the nominal ones are a struct of doubles), the effects with their values, the shaft terms
+/// and the options.
+std::string memo_key(const model::Model& model, const model::SimOptions& options) {
+  static_assert(std::is_trivially_copyable_v<model::Params> && sizeof(model::Params) % sizeof(double) == 0,
+                "the key reads the nominal parameters as bytes: they must be doubles without padding");
+  static_assert(sizeof(model::SimOptions) == 2 * sizeof(double),
+                "a new simulation option belongs in the key");
+  std::string key;
+  append_bytes(key, &model.params, sizeof model.params);
+  for (const model::Effect& e : model.effects) {
+    key += e.name;
+    key += '\0';
+    for (const auto& [name, value] : e.params) {
+      key += name;
+      key += '\0';
+      append_bytes(key, &value, sizeof value);
+    }
+    key += '\n';
+  }
+  for (const model::ShaftTerm& t : model.shaft_terms) {
+    key += t.equation;
+    key += '\0';
+    append_bytes(key, t.k.data(), sizeof t.k);
+    append_bytes(key, &t.basis, sizeof t.basis);
+    append_bytes(key, &t.basis_it, sizeof t.basis_it);
+  }
+  append_bytes(key, &options.max_step_s, sizeof options.max_step_s);
+  key += options.circuit_bound ? '1' : '0';
+  key += options.smooth_stick ? '1' : '0';
+  return key;
+}
+
+}  // namespace
+
+SimulationMemo::Series SimulationMemo::simulate(const model::Model& model, const Run& run,
+                                                const model::SimOptions& options) {
+  std::string key = memo_key(model, options);
+  {
+    const std::lock_guard lock(m_mutex);
+    const auto held = std::find_if(m_entries.begin(), m_entries.end(),
+                                   [&](const Entry& e) { return e.run == &run && e.key == key; });
+    if (held != m_entries.end()) {
+      m_entries.splice(m_entries.begin(), m_entries, held);
+      ++m_hits;
+      return held->series;
+    }
+  }
+  Series series = simulate_as_measured(model, run, options);
+  std::size_t bytes = 0;
+  for (const auto& s : series) bytes += s.size() * sizeof(double);
+  const std::lock_guard lock(m_mutex);
+  ++m_simulations;
+  m_entries.push_front({&run, std::move(key), series, bytes});
+  m_bytes += bytes;
+  while (m_entries.size() > k_entries || (m_entries.size() > 1 && m_bytes > k_bytes)) {
+    m_bytes -= m_entries.back().bytes;
+    m_entries.pop_back();
+  }
+  return series;
+}
+
+std::size_t SimulationMemo::simulations() const {
+  const std::lock_guard lock(m_mutex);
+  return m_simulations;
+}
+
+std::size_t SimulationMemo::hits() const {
+  const std::lock_guard lock(m_mutex);
+  return m_hits;
+}
+
+Evaluation evaluate(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors,
+                    SimulationMemo* memo) {
   Evaluation ev;
   ev.sum_sq.assign(floors.size(), 0.0);
   ev.count.assign(floors.size(), 0);
   for (const ScoredRun& sr : data.validate) {
-    auto sim = simulate_as_measured(model, sr.run);
+    auto sim = memo != nullptr ? memo->simulate(model, sr.run) : simulate_as_measured(model, sr.run);
     for (std::size_t o = 0; o < sr.run.outputs.size(); ++o) {
       const std::size_t f = floor_index(floors, sr.run.outputs[o]);
       if (f == std::string::npos) continue;
@@ -997,10 +1085,10 @@ Evaluation evaluate(const model::Model& model, const GapData& data, const std::v
 
 /// The fit objective on the training runs (sum over runs and outputs of the squared NRMSE),
 /// used to pick a starting point on a grid.
-double training_cost(const model::Model& model, const std::vector<Run>& runs) {
+double training_cost(const model::Model& model, const std::vector<Run>& runs, SimulationMemo* memo) {
   double cost = 0.0;
   for (const Run& run : runs) {
-    const auto sim = simulate_as_measured(model, run);
+    const auto sim = memo != nullptr ? memo->simulate(model, run) : simulate_as_measured(model, run);
     for (std::size_t o = 0; o < run.outputs.size(); ++o) {
       const auto& y = run.measured[o];
       double mean = 0.0;
@@ -1027,7 +1115,7 @@ double training_cost(const model::Model& model, const std::vector<Run>& runs) {
 }
 
 double training_speed_rms(const model::Model& model, const std::vector<Run>& runs,
-                          const model::SimOptions& options) {
+                          const model::SimOptions& options, SimulationMemo* memo) {
   double sq = 0.0;
   std::size_t count = 0;
   for (const Run& run : runs) {
@@ -1035,7 +1123,8 @@ double training_speed_rms(const model::Model& model, const std::vector<Run>& run
                                  [](const std::string& o) { return o == "rpm" || o == "omega"; });
     if (it == run.outputs.end()) continue;
     const auto o = static_cast<std::size_t>(it - run.outputs.begin());
-    const auto sim = simulate_as_measured(model, run, options);
+    const auto sim =
+        memo != nullptr ? memo->simulate(model, run, options) : simulate_as_measured(model, run, options);
     for (std::size_t n = 0; n < run.measured[o].size(); ++n) {
       const double r = run.measured[o][n] - sim[o][n];
       if (std::isfinite(r)) {
@@ -1062,7 +1151,9 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   none.score = before.score;
   none.fpe = before.score;
   none.rms = before.rms;
-  none.train_rms_rpm = training_speed_rms(model, data.train);
+  // The search's simulations, looked up when a model is simulated again (runs of `data` by address).
+  SimulationMemo memo;
+  none.train_rms_rpm = training_speed_rms(model, data.train, {}, &memo);
   none.evaluated = true;
 
   std::size_t done = 0;
@@ -1081,7 +1172,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
              {},
              {}};
   if (settings.progress) settings.progress("fitting param_mismatch (nominal parameters)");
-  std::vector<GapCandidate> pm_result = run_jobs({pm_job}, data, floors, settings, {}, done, total);
+  std::vector<GapCandidate> pm_result = run_jobs({pm_job}, data, floors, settings, {}, done, total, memo);
   GapCandidate pm = std::move(pm_result.front());
   pm.fpe = fpe(pm.score, pm.free.size());
 
@@ -1126,13 +1217,13 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   // Friction is what every real motor has and what a model made from a datasheet lacks: its
   // candidates are fitted first, so that a time budget never leaves them unfitted.
   std::stable_partition(jobs.begin(), jobs.end(), [](const Job& j) { return is_friction(j.name); });
-  std::vector<GapCandidate> singles = run_jobs(jobs, data, floors, settings, orders, done, total);
+  std::vector<GapCandidate> singles = run_jobs(jobs, data, floors, settings, orders, done, total, memo);
 
   // The refit must not lose to an effect fit that merely found better nominal values: when
   // some candidate's nominal scales alone fit the training runs better, refit from there.
   {
     model::Model start = pm.model;
-    const double pm_cost = training_cost(pm.model, data.train);
+    const double pm_cost = training_cost(pm.model, data.train, &memo);
     double best = pm_cost;
     std::vector<model::Model> trials(singles.size(), pm.model);
     std::vector<double> costs(singles.size(), std::numeric_limits<double>::infinity());
@@ -1141,7 +1232,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       *std::find_if(trials[k].effects.begin(), trials[k].effects.end(), [](const auto& e) {
         return e.name == "param_mismatch";
       }) = *singles[k].model.effect("param_mismatch");
-      costs[k] = training_cost(trials[k], data.train);
+      costs[k] = training_cost(trials[k], data.train, &memo);
     });
     for (std::size_t k = 0; k < singles.size(); ++k) {
       if (costs[k] < best) {
@@ -1161,9 +1252,10 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
                 {},
                 {},
                 {}};
-      GapCandidate refit = std::move(run_jobs({again}, data, floors, settings, {}, done, total).front());
+      GapCandidate refit =
+          std::move(run_jobs({again}, data, floors, settings, {}, done, total, memo).front());
       refit.fpe = fpe(refit.score, refit.free.size());
-      if (refit.evaluated && training_cost(refit.model, data.train) < pm_cost) pm = std::move(refit);
+      if (refit.evaluated && training_cost(refit.model, data.train, &memo) < pm_cost) pm = std::move(refit);
     }
   }
   const double ref_score = std::min(before.score, pm.score);
@@ -1171,7 +1263,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
     GapCandidate& c = singles[k];
     c.fpe = fpe(c.score, c.free.size());
     c.significant = gap && c.determined() && improves(c.score, ref_score, outputs) &&
-                    carries_weight(c, c.name, data, floors, outputs);
+                    carries_weight(c, c.name, data, floors, outputs, memo);
   });
   std::sort(singles.begin(), singles.end(), [](const auto& a, const auto& b) { return a.fpe < b.fpe; });
 
@@ -1273,7 +1365,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       // holds an offset it does not have.
       std::stable_partition(round.begin(), round.end(), [](const Job& j) { return !j.extension; });
       total = done + round.size();
-      std::vector<GapCandidate> fitted = run_jobs(round, data, floors, settings, orders, done, total);
+      std::vector<GapCandidate> fitted = run_jobs(round, data, floors, settings, orders, done, total, memo);
       for (auto& c : fitted) c.fpe = fpe(c.score, c.free.size());
       std::sort(fitted.begin(), fitted.end(), [](const auto& x, const auto& y) { return x.fpe < y.fpe; });
       // An extension whose added member is an offset alike one the model holds.
@@ -1298,7 +1390,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         // drive and the reversals, a few rows of the held-out runs whose score it barely moves:
         // those rows decide, where the two disagree by more than the noise.
         const Disagreement d = offset_added(c) && c.score < current.score
-                                   ? where_they_differ(c.model, current.model, data, floors)
+                                   ? where_they_differ(c.model, current.model, data, floors, memo)
                                    : Disagreement{};
         c.significant = d.rows >= k_min_disagreeing_rows && improves(d.score_a, d.score_b, outputs);
         if (c.significant) decided_where_they_differ(c, current.name, d);
@@ -1315,7 +1407,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       if (!fitted.empty() && fitted.front().significant && offset_added(fitted.front())) {
         for (std::size_t k = 1; k < fitted.size(); ++k) {
           if (!fitted[k].significant || !offset_added(fitted[k])) continue;
-          const Disagreement d = where_they_differ(fitted[k].model, fitted.front().model, data, floors);
+          const Disagreement d = where_they_differ(fitted[k].model, fitted.front().model, data, floors, memo);
           if (d.rows >= k_min_disagreeing_rows && improves(d.score_a, d.score_b, outputs)) {
             decided_where_they_differ(fitted[k], fitted.front().name, d);
             std::swap(fitted.front(), fitted[k]);
@@ -1328,7 +1420,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         GapCandidate& best = fitted.front();
         for (const auto& e : best.effects) {
           if (std::find(current.effects.begin(), current.effects.end(), e) == current.effects.end()) {
-            best.significant = carries_weight(best, e, data, floors, outputs);
+            best.significant = carries_weight(best, e, data, floors, outputs, memo);
           }
         }
       }

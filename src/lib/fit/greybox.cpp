@@ -658,7 +658,8 @@ FitResult fit_model(const FitProblem& problem) {
     // The runs are simulated side by side (each fills its own block of the residuals).
     parallel::for_each(problem.runs.size(), problem.nls.threads, [&](std::size_t r) {
       const Run& run = problem.runs[r];
-      const auto sim = simulate_as_measured(m, run, problem.sim);
+      const auto sim =
+          problem.simulate ? problem.simulate(m, r, problem.sim) : simulate_as_measured(m, run, problem.sim);
       auto k = static_cast<Eigen::Index>(offset[r]);
       for (std::size_t o = 0; o < run.outputs.size(); ++o) {
         const auto& y = run.measured[o];

@@ -177,6 +177,12 @@ struct FitProblem {
   /// Simulate the runs once more at the optimum for FitResult::runs (a caller that only needs
   /// the model and its statistics saves that simulation).
   bool evaluate_runs = true;
+  /// How the residuals simulate run `run` (an index into runs) of a model: when set, instead
+  /// of simulate_as_measured(model, runs[run], options), whose numbers it must return (the gap
+  /// search looks up a model it simulated before). Called concurrently.
+  std::function<std::vector<std::vector<double>>(const model::Model& model, std::size_t run,
+                                                 const model::SimOptions& options)>
+      simulate;
 };
 
 /// The constant bias of a drive, N m at the motor shaft (N on a linear axis): the part of the
