@@ -82,7 +82,7 @@ segments() {
 # gap_closes_most FILE: gap's text report FILE closes >= 60 % of the validation speed error.
 gap_closes_most() {
   local shrink
-  shrink=$(sed -n 's/^validation omega RMS: .*(\([0-9]*\) % less).*/\1/p' "$1")
+  shrink=$(sed -n 's/^validation \(omega\|rpm\) RMS: .*(\([0-9]*\) % less).*/\2/p' "$1")
   if [[ -n $shrink ]] && ((shrink >= 60)); then
     pass
     echo "ok   gap closes $shrink % of the validation speed error"

@@ -149,6 +149,38 @@ TEST(FitFrictionNoStatic, RunThatNeverRests) {
   }
 }
 
+// Behind a driver that coasts in the PWM off-time the back-emf opposes the drive only in the
+// on-time: the voltage balance Kt (v - (1 - coast (1 - |v| / supply_V)) Ke w) / R gives the
+// friction back from a staircase at low duty (speeds far above the braking v / Ke); taken as
+// braking, the same runs read the missing back-emf as a large negative viscous term.
+TEST(FitFrictionCoast, TheBalanceOfACoastingDriver) {
+  model::Model rig;
+  rig.effects.push_back(model::parse_effect("pwm_coast:coast=1"));
+  Program p;
+  for (const double d : {1.0, -1.0}) {
+    p.hold(0.0, 0.3, 0);
+    for (double v = 1.0; v <= 4.0 + 1e-9; v += 0.5) p.hold(d * v, 0.6, 0);
+  }
+  const std::vector<table::Table> runs{measure(rig, p.inputs, 21, false)};
+  FrictionOptions options;
+  options.static_friction = false;
+  options.order = 1;
+  options.coast = 1.0;
+  const auto coasting = fit_friction(runs, rig.params, options);
+  ASSERT_TRUE(coasting.motor.has_value());
+  const StateFriction& st = coasting.states[0];
+  const model::Friction& truth = rig.params.motor.friction;
+  // A line over the staircase's speeds stands in for the rig's cubic: within 2 % there.
+  for (const double w :
+       {st.omega_min_rad_s, 0.5 * (st.omega_min_rad_s + st.omega_max_rad_s), st.omega_max_rad_s}) {
+    EXPECT_NEAR(coasting.motor->value.kinetic_Nm(w), truth.kinetic_Nm(w), 0.02 * truth.kinetic_Nm(w)) << w;
+  }
+  options.coast = 0.0;
+  const auto braking = fit_friction(runs, rig.params, options);
+  ASSERT_TRUE(braking.motor.has_value());
+  EXPECT_LT(braking.motor->value.viscous[0], -10.0 * truth.viscous[0]);
+}
+
 // Coarse starts from rest (steps of 4, 6 and -5 V, each bracketing the breakaway between 0
 // and its level) beside the slow ramps' narrow brackets: the static level follows the ramps,
 // as a plain mean of the brackets' midpoints (about 2.6 V of drive) would not.

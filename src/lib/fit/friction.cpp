@@ -127,7 +127,10 @@ void collect(const table::Table& logged, const model::Params& p, const FrictionO
       continue;
     }
     measured[k] = current != nullptr && std::isfinite((*current)[k]);
-    drive[k] = measured[k] ? m.Kt_Nm_A * (*current)[k] : m.Kt_Nm_A * (v - m.Ke_V_s_rad * omega[k]) / m.R_ohm;
+    // Behind a coasting driver the back-emf opposes the drive only in the on-time (pwm_coast).
+    const double emf_share = 1.0 - options.coast * (1.0 - std::abs(v) / p.supply_V);
+    drive[k] = measured[k] ? m.Kt_Nm_A * (*current)[k]
+                           : m.Kt_Nm_A * (v - emf_share * m.Ke_V_s_rad * omega[k]) / m.R_ohm;
   }
 
   // Quasi-steady windows.

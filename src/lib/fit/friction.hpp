@@ -63,6 +63,10 @@ struct FrictionOptions {
   /// that of the motor shaft: its speed is the measured one times the ratio.
   std::optional<double> gear_ratio_ini;
   std::optional<double> gear_ratio_override;
+  /// Share of the PWM off-time in which the driver lets the motor coast (the model's
+  /// pwm_coast.coast; 0: a braking driver): the voltage balance's back-emf acts only while the
+  /// current flows, Kt (v - (1 - coast (1 - |v| / supply_V)) Ke w) / R.
+  double coast = 0.0;
 };
 
 /// A friction element and the standard errors of its values (same layout).
@@ -78,7 +82,8 @@ struct FrictionTerm {
 ///                   not subtracted; offset: a constant regressor too); dw/dt = (w_end - w_start) / window,
 ///                   so the window mean of J dw/dt is exact without differentiating twice;
 ///   T_drive       = Kt i (measured current) or Kt (v - Ke w) / R (voltage balance, the
-///                   armature at steady state: L di/dt averages out over a window);
+///                   armature at steady state: L di/dt averages out over a window; behind a
+///                   coasting driver Kt (v - (1 - coast (1 - |v| / supply_V)) Ke w) / R);
 ///   T_gen_load    = Kt_g i_gen, or Kt_g Ke_g w / (R_g + r_load) (state 2 only);
 ///   breakaway     = each start from rest: Ts lies between the largest drive torque held
 ///                   at rest and the drive torque when the shaft moved; Ts is the mean of the

@@ -97,6 +97,8 @@ int FitFriction::run(Io& io) {
   const config::Ini config = config::Ini::load_all(options.config);
   const model::Params base = model::from_ini(config);
   options.fit.gear_ratio_ini = measurement::speed_path_from_ini(config).gear_ratio;
+  const model::Model given = model::model_from_ini(config);
+  if (const model::Effect* coast = given.effect("pwm_coast")) options.fit.coast = coast->get("coast");
   if (options.linear && (options.fit.drive.torque_column.empty() || options.fit.position_column.empty())) {
     fail("--linear: needs --torque (a force column, N) and --position (m)");
   }
