@@ -763,6 +763,52 @@ TEST(GapPins, AZeroBoundIsPinnedAfterTheVerdictAndAProfiledBreakawayKeepsItsOwn)
   EXPECT_TRUE(std::isfinite(c.score));
 }
 
+// A dead band and a Coulomb level trade along a long valley: a fit the search's budget stopped
+// on it reports both far from the optimum as if they were measured. The diagnosis is fitted on
+// to convergence after the verdict and says so.
+TEST(GapConverge, TheDiagnosisIsFittedOnToConvergence) {
+  const std::vector<std::string> effects{"hbridge:R_on_ohm=0,deadband=0.04", "friction_levels:Tc_Nm=0.002"};
+  const table::Table train = speed_only(measure(steps(3.0, -9.0, 9.0, 3, 0, false), effects, 1, "train.csv"));
+  const table::Table validate =
+      speed_only(measure(steps(3.0, -9.0, 9.0, 4, 0, false), effects, 2, "validate.csv"));
+  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+  const std::vector<OutputFloor> floors = gap_detail::noise_floors(data);
+  // The diagnosis as a search with a small budget leaves it: up the valley, not converged.
+  FitProblem problem;
+  problem.model.effects = {model::parse_effect("hbridge:R_on_ohm=0,deadband=0.015"),
+                           model::parse_effect("friction_levels:Tc_Nm=0.004,Ts_excess_Nm=0,c1_Nm_s_rad=0")};
+  problem.runs = data.train;
+  problem.free = {"hbridge.deadband", "friction_levels.Tc_Nm"};
+  problem.sim.smooth_stick = true;
+  problem.nls.max_evaluations = 6;
+  const FitResult fit = fit_model(problem);
+  ASSERT_FALSE(fit.nls.converged);
+  GapCandidate c;
+  c.name = "hbridge+friction_levels";
+  c.effects = {"hbridge", "friction_levels"};
+  c.model = fit.model;
+  c.free = fit.nls.names;
+  for (std::size_t k = 0; k < c.free.size(); ++k) {
+    c.values.push_back(fit.nls.values[static_cast<Eigen::Index>(k)]);
+    c.std_errors.push_back(fit.reported_se(k));
+  }
+  c.evaluated = true;
+  c.converged = false;
+  c.status = std::string(gap_detail::k_fitted_budget_spent) + "; a note";
+  const double score_before = gap_detail::evaluate(c.model, data, floors).score;
+  ASSERT_GT(std::abs(c.values[0] - 0.04), 0.1 * 0.04) << "the short fit already reached the optimum";
+
+  GapSettings settings;
+  settings.threads = 2;
+  gap_detail::converge_diagnosis(c, data, floors, settings);
+  EXPECT_TRUE(c.converged);
+  EXPECT_EQ(c.status, "fitted (on to convergence after the verdict); a note");
+  ASSERT_EQ(c.free, (std::vector<std::string>{"hbridge.deadband", "friction_levels.Tc_Nm"}));
+  EXPECT_NEAR(c.values[0], 0.04, 0.1 * 0.04);
+  EXPECT_NEAR(c.values[1], 0.002, 0.1 * 0.002);
+  EXPECT_LT(c.score, score_before);
+}
+
 // A static level below the Coulomb level acts as the Coulomb level does: the runs of a rig whose
 // static friction is that low leave the nominal static scale where the fit left it (an infinite
 // error), and holding it at the given 1 would put a stiction in the model that the runs do not

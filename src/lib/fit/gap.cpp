@@ -298,8 +298,10 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   const bool gap = improves(static_cast<double>(outputs), before.score, outputs);
   decide(search_candidates(model, data, report.floors, before, gap, settings), gap, outputs, report);
   // Pinned only now: held during the search, a pin changed which candidates were significant.
-  if (report.diagnosis != "none" && report.diagnosis != "unexplained")
+  if (report.diagnosis != "none" && report.diagnosis != "unexplained") {
+    converge_diagnosis(report.candidates.front(), data, report.floors, settings);
     pin_diagnosis(report.candidates.front(), model, data, report.floors, settings);
+  }
 
   const bool diagnosed = report.diagnosis != "unexplained";
   // The discrepancy terms are a fit of their own: one the time budget leaves no room for is not begun.

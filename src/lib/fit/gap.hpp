@@ -175,6 +175,7 @@ struct GapCandidate {
   double train_rms_rpm = 0.0;
   bool significant = false;
   bool evaluated = false;             ///< false when skipped (not excited)
+  bool converged = true;              ///< its fit converged (false: the budget was spent first)
   /// The fit's honest-numbers findings (FitResult::warnings and ::flags): a parameter at a
   /// bound, not determined, with a standard error too small to be true, correlated beyond
   /// k_max_correlation with another, or physically impossible.

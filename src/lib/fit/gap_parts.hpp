@@ -23,6 +23,11 @@ namespace mcg::fit::gap_detail {
 inline constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 /// Status of a candidate the time budget cut short (the start of its status text).
 inline constexpr std::string_view k_out_of_time = "time budget spent";
+/// Status of a candidate whose fit spent its simulation budget before it converged (the start of
+/// its status text; converge_diagnosis() goes on with the diagnosis').
+inline constexpr std::string_view k_fitted_budget_spent = "fitted; budget spent";
+/// Fits, each of the search's budget, that converge_diagnosis() spends at most.
+inline constexpr int k_converge_rounds = 4;
 /// Status of a mixture rejected early (the start of its status text): the effect (not a
 /// friction effect) it adds to the current best model, fitted alone, lowered that model's
 /// training cost by less than k_gap_reject_gain of it, so the joint refit was not run and the
@@ -187,6 +192,14 @@ struct Candidates {
 Candidates search_candidates(const model::Model& model, const GapData& data, const std::vector<OutputFloor>& floors,
                              const Evaluation& before, bool gap, const GapSettings& settings);
 
+/// The diagnosis `c` on to convergence, when its fit in the search spent the budget first (a
+/// dead band and a Coulomb level trade along a long valley the search's budget may stop in,
+/// ten standard errors from the optimum): refitted from its own values, up to
+/// k_converge_rounds fits of the search's budget, its profiled breakaways held as
+/// pin_diagnosis() holds them. `c` takes the refit, is scored again and says so in its status;
+/// the verdict stays. Nothing is done after the time budget, nor kept when it cuts the refit.
+void converge_diagnosis(GapCandidate& c, const GapData& data, const std::vector<OutputFloor>& floors,
+                        const GapSettings& settings);
 /// After the verdict, the parameters of diagnosis `c`'s fit that the runs do not set are held as
 /// mcg-fit model holds them (pin_undetermined()): one with an infinite error at its value in the
 /// model as given (`as_given`, the nominal scales at 1), else where the fit left it; one at a

@@ -754,7 +754,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     cut_short(fit);
     return c;
   }
-  c.status = fit.nls.converged ? "fitted" : "fitted; budget spent";
+  c.converged = fit.nls.converged;
+  c.status = fit.nls.converged ? "fitted" : k_fitted_budget_spent;
   if (!pinned.empty())
     c.status += fmt::format("; {} pinned at the given value (a gauge)", fmt::join(pinned, " "));
   if (!unexcited.empty())
@@ -1448,20 +1449,118 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
   return out;
 }
 
-void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData& data,
-                   const std::vector<OutputFloor>& floors, const GapSettings& settings) {
-  const auto expired = [&] { return std::chrono::steady_clock::now() >= settings.deadline; };
-  if (!c.evaluated || c.free.empty() || c.values.size() != c.free.size() ||
-      c.std_errors.size() != c.free.size() || expired())
-    return;
-  // A friction effect's breakaway is its profile's (profile_breakaway()): held where the profile
-  // put it, never pinned.
+namespace {
+
+/// The friction effects' breakaway keys of candidate `c`: each is its profile's
+/// (profile_breakaway()), held where the profile put it, never pinned or refitted.
+std::vector<std::string> profiled_keys(const GapCandidate& c) {
   std::vector<std::string> profiled;
   for (const auto& e : c.effects) {
     const model::EffectSpec* spec = find_plan(e);
     if (spec != nullptr && !spec->plan.breakaway_key.empty())
       profiled.push_back(e + "." + spec->plan.breakaway_key);
   }
+  return profiled;
+}
+
+/// A refit of the diagnosis' free parameters but its profiled breakaways, from its own values:
+/// with a breakaway held where its profile on the exact stick put it, the other levels are
+/// refitted on the exact stick too (as the search refits a collapsed breakaway's).
+FitProblem diagnosis_problem(const GapCandidate& c, const std::vector<std::string>& profiled,
+                             const GapData& data, const GapSettings& settings) {
+  FitProblem problem = candidate_problem(c.effects, data, settings);
+  problem.model = c.model;
+  std::copy_if(c.free.begin(), c.free.end(), std::back_inserter(problem.free), [&](const std::string& name) {
+    return std::find(profiled.begin(), profiled.end(), name) == profiled.end();
+  });
+  if (problem.free.size() < c.free.size()) problem.sim.smooth_stick = false;
+  problem.nls.max_evaluations = fit_budget(settings, 10, problem.free.size());
+  return problem;
+}
+
+/// `c` takes refit `r`'s model, values, errors and findings; its profiled breakaways keep the
+/// profile's; it is scored again.
+void adopt(GapCandidate& c, const FitResult& r, const std::vector<std::string>& profiled, const GapData& data,
+           const std::vector<OutputFloor>& floors, const model::SimOptions& sim) {
+  const auto is_profiled = [&](const std::string& name) {
+    return std::find(profiled.begin(), profiled.end(), name) != profiled.end();
+  };
+  std::vector<std::string> free;
+  std::vector<double> values;
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < c.free.size(); ++k) {
+    const std::string& name = c.free[k];
+    if (is_profiled(name)) {
+      free.push_back(name);
+      values.push_back(c.values[k]);
+      errors.push_back(c.std_errors[k]);
+      continue;
+    }
+    const auto it = std::find(r.nls.names.begin(), r.nls.names.end(), name);
+    if (it == r.nls.names.end()) continue;  // pinned
+    const auto i = static_cast<std::size_t>(it - r.nls.names.begin());
+    free.push_back(name);
+    values.push_back(r.nls.values[static_cast<Eigen::Index>(i)]);
+    errors.push_back(r.reported_se(i));
+  }
+  std::vector<FitFlag> flags = r.flags;
+  std::copy_if(c.flags.begin(), c.flags.end(), std::back_inserter(flags),
+               [&](const FitFlag& f) { return std::all_of(f.names.begin(), f.names.end(), is_profiled); });
+  std::vector<std::string> warnings = r.warnings;
+  std::copy_if(c.warnings.begin(), c.warnings.end(), std::back_inserter(warnings), [&](const std::string& w) {
+    return std::any_of(profiled.begin(), profiled.end(), [&](const std::string& key) {
+      return w.starts_with(key + " = ") || w.starts_with(key + ": ");
+    });
+  });
+  c.model = r.model;
+  c.free = std::move(free);
+  c.values = std::move(values);
+  c.std_errors = std::move(errors);
+  c.flags = std::move(flags);
+  c.warnings = std::move(warnings);
+  const Evaluation ev = evaluate(c.model, data, floors);
+  c.score = ev.score;
+  c.rms = ev.rms;
+  c.fpe = fpe(ev.score, c.free.size(), static_cast<double>(validation_count(data) * floors.size()));
+  c.train_rms_rpm = training_speed_rms(c.model, data.train, sim);
+}
+
+}  // namespace
+
+void converge_diagnosis(GapCandidate& c, const GapData& data, const std::vector<OutputFloor>& floors,
+                        const GapSettings& settings) {
+  const auto expired = [&] { return std::chrono::steady_clock::now() >= settings.deadline; };
+  if (c.converged || !c.evaluated || c.free.empty() || c.values.size() != c.free.size() ||
+      c.std_errors.size() != c.free.size() || expired())
+    return;
+  if (settings.progress) settings.progress(fmt::format("fitting {} on to convergence", c.name));
+  const std::vector<std::string> profiled = profiled_keys(c);
+  FitProblem problem = diagnosis_problem(c, profiled, data, settings);
+  if (problem.free.empty()) return;
+  FitResult r = fit_model(problem);
+  for (int round = 1; round < k_converge_rounds && !r.nls.converged && !r.nls.stopped && !expired();
+       ++round) {
+    problem.model = r.model;
+    r = fit_model(problem);
+  }
+  if (r.nls.stopped || expired()) return;
+  adopt(c, r, profiled, data, floors, problem.sim);
+  c.converged = r.nls.converged;
+  if (c.status.starts_with(k_fitted_budget_spent)) {
+    c.status.replace(0, k_fitted_budget_spent.size(),
+                     c.converged ? "fitted (on to convergence after the verdict)"
+                                 : "fitted; budget spent, also after the verdict");
+  }
+}
+
+void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData& data,
+                   const std::vector<OutputFloor>& floors, const GapSettings& settings) {
+  const auto expired = [&] { return std::chrono::steady_clock::now() >= settings.deadline; };
+  if (!c.evaluated || c.free.empty() || c.values.size() != c.free.size() ||
+      c.std_errors.size() != c.free.size() || expired())
+    return;
+  // A friction effect's breakaway is its profile's: never pinned.
+  const std::vector<std::string> profiled = profiled_keys(c);
   const auto is_profiled = [&](const std::string& name) {
     return std::find(profiled.begin(), profiled.end(), name) != profiled.end();
   };
@@ -1477,15 +1576,8 @@ void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData&
   if (settings.progress)
     settings.progress(fmt::format("refitting {} with what its runs do not set pinned", c.name));
 
-  FitProblem problem = candidate_problem(c.effects, data, settings);
-  problem.model = c.model;
-  std::copy_if(c.free.begin(), c.free.end(), std::back_inserter(problem.free),
-               [&](const std::string& name) { return !is_profiled(name); });
-  // With a breakaway held where its profile on the exact stick put it, the other levels are
-  // refitted on the exact stick too (as the search refits a collapsed breakaway's).
-  if (problem.free.size() < c.free.size()) problem.sim.smooth_stick = false;
+  FitProblem problem = diagnosis_problem(c, profiled, data, settings);
   // The fit once more from the diagnosis' values: what the pins must not cost against.
-  problem.nls.max_evaluations = fit_budget(settings, 10, problem.free.size());
   const FitResult first = fit_model(problem);
   model::Model nominal = as_given;
   add_effect(nominal, "param_mismatch");
@@ -1506,47 +1598,9 @@ void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData&
   }
   if (held.pinned.empty() || expired()) return;
 
-  // The refit's values and findings; the profiled breakaway's as the profile left them.
-  std::vector<std::string> free;
-  std::vector<double> values;
-  std::vector<double> errors;
-  for (std::size_t k = 0; k < c.free.size(); ++k) {
-    const std::string& name = c.free[k];
-    if (is_profiled(name)) {
-      free.push_back(name);
-      values.push_back(c.values[k]);
-      errors.push_back(c.std_errors[k]);
-      continue;
-    }
-    const auto it = std::find(held.nls.names.begin(), held.nls.names.end(), name);
-    if (it == held.nls.names.end()) continue;  // pinned
-    const auto i = static_cast<std::size_t>(it - held.nls.names.begin());
-    free.push_back(name);
-    values.push_back(held.nls.values[static_cast<Eigen::Index>(i)]);
-    errors.push_back(held.reported_se(i));
-  }
-  std::vector<FitFlag> flags = held.flags;
-  std::copy_if(c.flags.begin(), c.flags.end(), std::back_inserter(flags),
-               [&](const FitFlag& f) { return std::all_of(f.names.begin(), f.names.end(), is_profiled); });
-  std::vector<std::string> warnings = held.warnings;
-  std::copy_if(c.warnings.begin(), c.warnings.end(), std::back_inserter(warnings), [&](const std::string& w) {
-    return std::any_of(profiled.begin(), profiled.end(), [&](const std::string& key) {
-      return w.starts_with(key + " = ") || w.starts_with(key + ": ");
-    });
-  });
-  c.model = held.model;
-  c.free = std::move(free);
-  c.values = std::move(values);
-  c.std_errors = std::move(errors);
-  c.flags = std::move(flags);
-  c.warnings = std::move(warnings);
+  adopt(c, held, profiled, data, floors, problem.sim);
   c.pinned = held.pinned;
   for (const PinnedParameter& pin : c.pinned) c.status += "; " + pinned_text(pin);
-  const Evaluation ev = evaluate(c.model, data, floors);
-  c.score = ev.score;
-  c.rms = ev.rms;
-  c.fpe = fpe(ev.score, c.free.size(), static_cast<double>(validation_count(data) * floors.size()));
-  c.train_rms_rpm = training_speed_rms(c.model, data.train, problem.sim);
 }
 
 }  // namespace gap_detail
