@@ -9,7 +9,12 @@
 #  - mcg-fit gap on the output shaft given without friction, with the set's gap.args (trained on
 #    the step run, scored on the PRBS run; the benchmark's row), names friction, closes >= 60 % of
 #    the validation run's speed error, and its Coulomb and viscous levels lie within two of its
-#    standard errors of what mcg-fit friction finds in the same training run.
+#    standard errors of what mcg-fit friction finds in the same training run;
+#  - the same, with the driver described as braking (frictionless.ini without its pwm_coast):
+#    gap names the coasting driver and the friction together (pwm_coast+friction_levels), with
+#    the driver coasting throughout and friction's Coulomb level as above. A coasting share fitted
+#    first without friction holds the speeds down in its place, and a joint fit begun there ends
+#    with friction 0 (a verdict of unexplained).
 # Args: TOOL_DIR SOURCE_DIR.
 set -euo pipefail
 tools=$(cd "$1" && pwd)
@@ -64,5 +69,26 @@ within "gap's friction_levels.Tc_Nm (friction's on the training run)" "$(gap_fie
   "$(gap_field friction_levels.Tc_Nm 2)" "$tc"
 within "gap's friction_levels.c1_Nm_s_rad (friction's visc1)" "$(gap_field friction_levels.c1_Nm_s_rad 1)" \
   "$(gap_field friction_levels.c1_Nm_s_rad 2)" "$c1"
+warnings_hold_values "$work/gap.txt"
+
+awk '/^\[/ { skip = ($0 == "[effect.pwm_coast]") } !skip' "$dir/frictionless.ini" >"$work/braking.ini"
+braking_args=()
+for a in "${gap_args[@]}"; do
+  [[ $a == frictionless.ini ]] && a=$work/braking.ini
+  braking_args+=("$a")
+done
+(cd "$dir" && mcg-fit gap "${braking_args[@]}" --format text) >"$work/gap.txt" 2>"$work/gap.err" || true
+diagnosis=$(sed -n 's/^diagnosis: //p' "$work/gap.txt")
+if [[ $diagnosis == pwm_coast+friction_levels ]]; then
+  pass
+  echo "ok   given a braking driver, gap names $diagnosis"
+else
+  fail "gap given a braking driver: diagnosis '${diagnosis:-none}', not pwm_coast+friction_levels:" \
+    "$(tail -1 "$work/gap.err")"
+fi
+expect "given a braking driver, gap's pwm_coast.coast = $(gap_field pwm_coast.coast 1) is 1 (coasting throughout)" \
+  "awk -v c='$(gap_field pwm_coast.coast 1)' 'BEGIN { exit !(c > 0.95) }'"
+within "given a braking driver, gap's friction_levels.Tc_Nm (friction's on the training run)" \
+  "$(gap_field friction_levels.Tc_Nm 1)" "$(gap_field friction_levels.Tc_Nm 2)" "$tc"
 warnings_hold_values "$work/gap.txt"
 finish undcmotor_runs

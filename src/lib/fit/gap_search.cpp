@@ -1315,6 +1315,17 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       // there too, where its single fit, made without that change, may lie in another valley.
       const std::map<std::string, std::vector<double>> current_starts =
           data_friction_starts(current.model, data.train);
+      // The same friction is also tried with the members at their catalog defaults: a member
+      // fitted without friction may hold the friction in its own level (a coasting driver's share
+      // lowered until the frictionless speeds fell to the data's), and the joint fit from there
+      // trades the two along a valley and stops at friction 0. The friction is the one seen
+      // beside the current model, whose speeds pass through the data's where the estimate's
+      // biases cancel (a frictionless model at the defaults may run at several times them).
+      model::Model defaults = current.model;
+      for (model::Effect& e : defaults.effects) {
+        if (std::find(current.effects.begin(), current.effects.end(), e.name) != current.effects.end())
+          e = model::default_effect(e.name);
+      }
       for (const GapCandidate* single : pool) {
         const std::string& added = single->name;
         if (std::find(current.effects.begin(), current.effects.end(), added) != current.effects.end())
@@ -1349,12 +1360,16 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
             if (c.name == m) job.other_starts.front().effects.push_back(*c.model.effect(m));
           }
         }
-        if (const auto point = current_starts.find(added); point != current_starts.end()) {
-          model::Model& from_data = job.other_starts.emplace_back(current.model);
+        const auto start_from_data = [&](const model::Model& on) {
+          const auto point = current_starts.find(added);
+          if (point == current_starts.end()) return;
+          model::Model& from_data = job.other_starts.emplace_back(on);
           from_data.effects.push_back(*single->model.effect(added));
           for (std::size_t k = 0; k < point->second.size(); ++k)
             model::set_parameter(from_data, added + "." + find_plan(added)->plan.free[k], point->second[k]);
-        }
+        };
+        start_from_data(current.model);
+        start_from_data(defaults);
         for (const auto& key : find_plan(added)->plan.free) {
           job.stage1_free.push_back(added + "." + key);
           job.free.push_back(added + "." + key);
