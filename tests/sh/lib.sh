@@ -79,6 +79,29 @@ segments() {
   }'
 }
 
+# gap_on_real DIR WANT WHAT [FROM=TO...]: mcg-fit gap with a real set's own options, DIR/gap.args
+# (run in DIR; an argument FROM replaced by TO), into $work/gap.txt and $work/gap.err; passes when
+# the diagnosis matches the pattern WANT. WHAT names the model given, for the messages.
+gap_on_real() {
+  local dir=$1 want=$2 what=$3 diagnosis a sub
+  shift 3
+  local -a given args=()
+  read -ra given <<<"$(grep -v '^[[:space:]]*#' "$dir/gap.args" | tr '\n' ' ')"
+  for a in "${given[@]}"; do
+    for sub in "$@"; do [[ $a == "${sub%%=*}" ]] && a=${sub#*=}; done
+    args+=("$a")
+  done
+  (cd "$dir" && mcg-fit gap "${args[@]}" --format text) >"$work/gap.txt" 2>"$work/gap.err" || true
+  diagnosis=$(sed -n 's/^diagnosis: //p' "$work/gap.txt")
+  # shellcheck disable=SC2053 # WANT is a pattern
+  if [[ $diagnosis == $want ]]; then
+    pass
+    echo "ok   gap on $what names $diagnosis"
+  else
+    fail "gap on $what: diagnosis '${diagnosis:-none}' is not $want: $(tail -1 "$work/gap.err")"
+  fi
+}
+
 # gap_closes_most FILE: gap's text report FILE closes >= 60 % of the validation speed error.
 gap_closes_most() {
   local shrink

@@ -93,15 +93,7 @@ fitted Tc_Nm 20.3935 "$work/model_no_offset.ini"
 fitted visc1_Nm_s_rad 203.5034 "$work/model_no_offset.ini"
 
 # gap on the frictionless axis, as the benchmark row runs it.
-read -ra gap_args <<<"$(grep -v '^[[:space:]]*#' "$dir/gap.args" | tr '\n' ' ')"
-(cd "$dir" && mcg-fit gap "${gap_args[@]}" --format text) >"$work/gap.txt" 2>"$work/gap.err" || true
-diagnosis=$(sed -n 's/^diagnosis: //p' "$work/gap.txt")
-if [[ $diagnosis == friction_levels+friction_asymmetry ]]; then
-  pass
-  echo "ok   gap names $diagnosis"
-else
-  fail "gap on the frictionless axis: diagnosis '${diagnosis:-none}' is not friction_levels+friction_asymmetry: $(tail -1 "$work/gap.err")"
-fi
+gap_on_real "$dir" friction_levels+friction_asymmetry "the frictionless axis"
 # gap_param KEY REFERENCE [TOLERANCE]: "KEY=value+-se" of the fitted parameters line within two
 # standard errors of REFERENCE, or within TOLERANCE of it when given.
 gap_param() {

@@ -47,16 +47,7 @@ for m in 1 2 3; do
   within visc1_Nm_s_rad "${published_b[m - 1]}" "$work/m$m.ini"
 done
 
-read -ra gap_args <<<"$(grep -v '^[[:space:]]*#' "$dir/gap.args" | tr '\n' ' ')"
-(cd "$dir" && mcg-fit gap "${gap_args[@]}" --format text) >"$work/gap.txt" 2>"$work/gap.err" || true
-diagnosis=$(sed -n 's/^diagnosis: //p' "$work/gap.txt")
-if [[ $diagnosis == *friction* ]]; then
-  pass
-  echo "ok   gap names $diagnosis"
-else
-  fail "gap on the frictionless motor: diagnosis '${diagnosis:-none}' does not name friction:" \
-    "$(tail -1 "$work/gap.err")"
-fi
+gap_on_real "$dir" '*friction*' "the frictionless motor"
 gap_closes_most "$work/gap.txt"
 warnings_hold_values "$work/gap.txt"
 finish robotino

@@ -54,16 +54,7 @@ within "friction on the step run: Tc_Nm (the static curve's in model.ini)" "$tc"
 expect "friction on the step run: visc1 = $c1 +- $c1_se N m s/rad is positive beyond two errors" \
   "awk -v c='$c1' -v s='$c1_se' 'BEGIN { exit !(s > 0 && c > 2 * s) }'"
 
-read -ra gap_args <<<"$(grep -v '^[[:space:]]*#' "$dir/gap.args" | tr '\n' ' ')"
-(cd "$dir" && mcg-fit gap "${gap_args[@]}" --format text) >"$work/gap.txt" 2>"$work/gap.err" || true
-diagnosis=$(sed -n 's/^diagnosis: //p' "$work/gap.txt")
-if [[ $diagnosis == *friction* ]]; then
-  pass
-  echo "ok   gap names $diagnosis"
-else
-  fail "gap on the frictionless output shaft: diagnosis '${diagnosis:-none}' does not name friction:" \
-    "$(tail -1 "$work/gap.err")"
-fi
+gap_on_real "$dir" '*friction*' "the frictionless output shaft"
 gap_closes_most "$work/gap.txt"
 within "gap's friction_levels.Tc_Nm (friction's on the training run)" "$(gap_field friction_levels.Tc_Nm 1)" \
   "$(gap_field friction_levels.Tc_Nm 2)" "$tc"
@@ -72,20 +63,8 @@ within "gap's friction_levels.c1_Nm_s_rad (friction's visc1)" "$(gap_field frict
 warnings_hold_values "$work/gap.txt"
 
 awk '/^\[/ { skip = ($0 == "[effect.pwm_coast]") } !skip' "$dir/frictionless.ini" >"$work/braking.ini"
-braking_args=()
-for a in "${gap_args[@]}"; do
-  [[ $a == frictionless.ini ]] && a=$work/braking.ini
-  braking_args+=("$a")
-done
-(cd "$dir" && mcg-fit gap "${braking_args[@]}" --format text) >"$work/gap.txt" 2>"$work/gap.err" || true
-diagnosis=$(sed -n 's/^diagnosis: //p' "$work/gap.txt")
-if [[ $diagnosis == pwm_coast+friction_levels ]]; then
-  pass
-  echo "ok   given a braking driver, gap names $diagnosis"
-else
-  fail "gap given a braking driver: diagnosis '${diagnosis:-none}', not pwm_coast+friction_levels:" \
-    "$(tail -1 "$work/gap.err")"
-fi
+gap_on_real "$dir" pwm_coast+friction_levels "the output shaft behind a braking driver" \
+  "frictionless.ini=$work/braking.ini"
 expect "given a braking driver, gap's pwm_coast.coast = $(gap_field pwm_coast.coast 1) is 1 (coasting throughout)" \
   "awk -v c='$(gap_field pwm_coast.coast 1)' 'BEGIN { exit !(c > 0.95) }'"
 within "given a braking driver, gap's friction_levels.Tc_Nm (friction's on the training run)" \

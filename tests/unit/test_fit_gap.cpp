@@ -689,6 +689,15 @@ table::Table speed_only(table::Table t) {
   return t;
 }
 
+/// Speed-only runs of the built-in rig with `effects` through -9..9 V steps (train and validate
+/// drawn apart), split as gap splits them.
+GapData reversing_speed_runs(const std::vector<std::string>& effects) {
+  const table::Table train = speed_only(measure(steps(3.0, -9.0, 9.0, 3, 0, false), effects, 1, "train.csv"));
+  const table::Table validate =
+      speed_only(measure(steps(3.0, -9.0, 9.0, 4, 0, false), effects, 2, "validate.csv"));
+  return prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+}
+
 // What the runs do not set is pinned once the verdict is drawn (pin_diagnosis), as mcg-fit model
 // pins it: on speed-only runs of a drive's dead band whose switches have no resistance, the
 // diagnosis' fit left hbridge's R_on trapped at its bound 0 (1e-12 +- inf, flagged: a number the
@@ -696,11 +705,7 @@ table::Table speed_only(table::Table t) {
 // breakaway its profile put at 0 with a profiled error is determined: it keeps its value, error,
 // flag, warning and note, and is held, not refitted.
 TEST(GapPins, AZeroBoundIsPinnedAfterTheVerdictAndAProfiledBreakawayKeepsItsOwn) {
-  const std::vector<std::string> effect{"hbridge:R_on_ohm=0,deadband=0.04"};
-  const table::Table train = speed_only(measure(steps(3.0, -9.0, 9.0, 3, 0, false), effect, 1, "train.csv"));
-  const table::Table validate =
-      speed_only(measure(steps(3.0, -9.0, 9.0, 4, 0, false), effect, 2, "validate.csv"));
-  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+  const GapData data = reversing_speed_runs({"hbridge:R_on_ohm=0,deadband=0.04"});
   const std::vector<OutputFloor> floors = gap_detail::noise_floors(data);
   // The diagnosis as the search leaves it: hbridge with R_on trapped near 0, beside a friction
   // effect whose levels are 0 and whose breakaway was profiled.
@@ -767,11 +772,8 @@ TEST(GapPins, AZeroBoundIsPinnedAfterTheVerdictAndAProfiledBreakawayKeepsItsOwn)
 // on it reports both far from the optimum as if they were measured. The diagnosis is fitted on
 // to convergence after the verdict and says so.
 TEST(GapConverge, TheDiagnosisIsFittedOnToConvergence) {
-  const std::vector<std::string> effects{"hbridge:R_on_ohm=0,deadband=0.04", "friction_levels:Tc_Nm=0.002"};
-  const table::Table train = speed_only(measure(steps(3.0, -9.0, 9.0, 3, 0, false), effects, 1, "train.csv"));
-  const table::Table validate =
-      speed_only(measure(steps(3.0, -9.0, 9.0, 4, 0, false), effects, 2, "validate.csv"));
-  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+  const GapData data =
+      reversing_speed_runs({"hbridge:R_on_ohm=0,deadband=0.04", "friction_levels:Tc_Nm=0.002"});
   const std::vector<OutputFloor> floors = gap_detail::noise_floors(data);
   // The diagnosis as a search with a small budget leaves it: up the valley, not converged.
   FitProblem problem;
