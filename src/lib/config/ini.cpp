@@ -212,7 +212,7 @@ std::string Ini::str() const {
 std::string format_number(double value) {
   if (std::isnan(value)) return "nan";
   if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
-  return fmt::format("{}", value == 0.0 ? 0.0 : value);  // -0 reads as a negative number
+  return fmt::format("{}", without_negative_zero(value));
 }
 
 }  // namespace mcg::config

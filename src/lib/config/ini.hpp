@@ -73,4 +73,8 @@ class Ini {
 /// Formats a double for INI/CSV text: shortest form that reads back exactly.
 std::string format_number(double value);
 
+/// `value`, a zero reached from below made 0: every number the tools write goes through it
+/// (-0 reads as a negative number).
+inline double without_negative_zero(double value) { return value == 0.0 ? 0.0 : value; }
+
 }  // namespace mcg::config

@@ -14,6 +14,7 @@
 #include "common/units.hpp"
 #include "fit/nls.hpp"
 #include "measurement/measurement.hpp"
+#include "model/effects/compiled.hpp"
 
 namespace mcg::fit {
 
@@ -118,6 +119,10 @@ void collect(const table::Table& logged, const model::Params& p, const FrictionO
   const auto& m = p.motor;
   std::vector<double> drive(n);
   std::vector<bool> measured(n);
+  // Behind a coasting driver the back-emf opposes the drive only in the on-time (the plant's own
+  // share, CircuitTerms::emf_share).
+  model::CircuitTerms driver;
+  driver.coast = options.coast;
   for (std::size_t k = 0; k < n; ++k) {
     const double v = std::clamp(in.v_V[k], -p.supply_V, p.supply_V);
     if (torque != nullptr) {
@@ -127,10 +132,9 @@ void collect(const table::Table& logged, const model::Params& p, const FrictionO
       continue;
     }
     measured[k] = current != nullptr && std::isfinite((*current)[k]);
-    // Behind a coasting driver the back-emf opposes the drive only in the on-time (pwm_coast).
-    const double emf_share = 1.0 - options.coast * (1.0 - std::abs(v) / p.supply_V);
-    drive[k] = measured[k] ? m.Kt_Nm_A * (*current)[k]
-                           : m.Kt_Nm_A * (v - emf_share * m.Ke_V_s_rad * omega[k]) / m.R_ohm;
+    drive[k] = measured[k]
+                   ? m.Kt_Nm_A * (*current)[k]
+                   : m.Kt_Nm_A * (v - driver.emf_share(v / p.supply_V) * m.Ke_V_s_rad * omega[k]) / m.R_ohm;
   }
 
   // Quasi-steady windows.

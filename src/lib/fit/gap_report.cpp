@@ -9,6 +9,7 @@
 
 #include "common/checked.hpp"
 #include "common/demand.hpp"
+#include "config/ini.hpp"
 #include "fit/discrepancy.hpp"
 #include "fit/gap_parts.hpp"
 #include "table/table.hpp"
@@ -142,7 +143,7 @@ double above_noise(double rms, double floor) {
 std::string number(double v, int digits = 4) {
   if (std::isnan(v)) return "nan";
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  return fmt::format("{:.{}g}", v, digits);
+  return fmt::format("{:.{}g}", config::without_negative_zero(v), digits);
 }
 
 /// "stribeck.v_s_rad_s=7.9+-0.4 ..." for the added effects first, then the nominal scales.

@@ -706,7 +706,7 @@ FitResult fit_model(const FitProblem& problem) {
 }
 
 std::string pinned_text(const PinnedParameter& pin) {
-  return fmt::format("{} = {:.6g} {}", pin.name, pin.value == 0.0 ? 0.0 : pin.value, pin.why);
+  return fmt::format("{} = {:.6g} {}", pin.name, config::without_negative_zero(pin.value), pin.why);
 }
 
 std::vector<PinnedParameter> undetermined_pins(

@@ -11,6 +11,7 @@
 #include "config/ini.hpp"
 #include "mcg/version.hpp"
 #include "measurement/measurement.hpp"
+#include "model/effects/compiled.hpp"
 #include "model/model.hpp"
 #include "table/table.hpp"
 
@@ -97,8 +98,7 @@ int FitFriction::run(Io& io) {
   const config::Ini config = config::Ini::load_all(options.config);
   const model::Params base = model::from_ini(config);
   options.fit.gear_ratio_ini = measurement::speed_path_from_ini(config).gear_ratio;
-  const model::Model given = model::model_from_ini(config);
-  if (const model::Effect* coast = given.effect("pwm_coast")) options.fit.coast = coast->get("coast");
+  options.fit.coast = model::Compiled(model::model_from_ini(config)).circuit.coast;
   if (options.linear && (options.fit.drive.torque_column.empty() || options.fit.position_column.empty())) {
     fail("--linear: needs --torque (a force column, N) and --position (m)");
   }

@@ -7,11 +7,12 @@
 #include <string>
 #include <string_view>
 
+#include "config/ini.hpp"
+
 namespace mcg::cmd {
 
-/// Six significant digits: what the data supports, and readable in an INI file. A zero reached
-/// from below is written 0, not -0.
-inline std::string num6(double x) { return fmt::format("{:.6g}", x == 0.0 ? 0.0 : x); }
+/// Six significant digits: what the data supports, and readable in an INI file (never -0).
+inline std::string num6(double x) { return fmt::format("{:.6g}", config::without_negative_zero(x)); }
 
 /// "+- SE UNIT", or why there is none.
 inline std::string se_comment(double se, std::string_view unit) {
