@@ -27,7 +27,7 @@ export PATH="$tools:$PATH"
 # ini_value KEY INI and ini_se KEY INI: "KEY = value  ; +- se UNIT" (the first, [motor]).
 ini_value() { awk -v k="$1" '$1 == k && $2 == "=" { print $3; exit }' "$2"; }
 ini_se() { awk -v k="$1" '$1 == k && $2 == "=" { print $6; exit }' "$2"; }
-# gap_value NAME and gap_se NAME: from the fitted-parameters line of gap's text report.
+# gap_field NAME 1 and gap_field NAME 2: NAME's value and standard error in gap's fitted parameters.
 gap_field() {
   awk -v k="$1" -v f="$2" '/^fitted parameters/ { sub(/^[^:]*: /, ""); n = split($0, p, " ")
     for (j = 1; j <= n; j++) { split(p[j], kv, "="); split(kv[2], vs, "[+]-"); if (kv[1] == k) print vs[f] } }' \

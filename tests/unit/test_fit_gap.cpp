@@ -689,6 +689,25 @@ table::Table speed_only(table::Table t) {
   return t;
 }
 
+/// The candidate a search's fit `fit` of effects `effects` leaves: its model, values, errors and
+/// findings, evaluated.
+GapCandidate candidate_of(const std::string& name, const std::vector<std::string>& effects,
+                          const FitResult& fit) {
+  GapCandidate c;
+  c.name = name;
+  c.effects = effects;
+  c.model = fit.model;
+  c.free = fit.nls.names;
+  for (std::size_t k = 0; k < c.free.size(); ++k) {
+    c.values.push_back(fit.nls.values[static_cast<Eigen::Index>(k)]);
+    c.std_errors.push_back(fit.reported_se(k));
+  }
+  c.flags = fit.flags;
+  c.warnings = fit.warnings;
+  c.evaluated = true;
+  return c;
+}
+
 /// Speed-only runs of the built-in rig with `effects` through -9..9 V steps (train and validate
 /// drawn apart), split as gap splits them.
 GapData reversing_speed_runs(const std::vector<std::string>& effects) {
@@ -716,17 +735,7 @@ TEST(GapPins, AZeroBoundIsPinnedAfterTheVerdictAndAProfiledBreakawayKeepsItsOwn)
   problem.runs = data.train;
   problem.free = {"param_mismatch.J_scale", "hbridge.R_on_ohm", "hbridge.deadband"};
   const FitResult fit = fit_model(problem);
-  GapCandidate c;
-  c.name = "hbridge+friction_levels";
-  c.effects = {"hbridge", "friction_levels"};
-  c.model = fit.model;
-  c.free = fit.nls.names;
-  for (std::size_t k = 0; k < c.free.size(); ++k) {
-    c.values.push_back(fit.nls.values[static_cast<Eigen::Index>(k)]);
-    c.std_errors.push_back(fit.reported_se(k));
-  }
-  c.flags = fit.flags;
-  c.warnings = fit.warnings;
+  GapCandidate c = candidate_of("hbridge+friction_levels", {"hbridge", "friction_levels"}, fit);
   const std::string breakaway = "friction_levels.Ts_excess_Nm";
   const std::string profile =
       breakaway + " profiled on the exact stick: 0 +- 0.0001 (regularised fit 0 +- inf)";
@@ -737,7 +746,6 @@ TEST(GapPins, AZeroBoundIsPinnedAfterTheVerdictAndAProfiledBreakawayKeepsItsOwn)
   c.flags.push_back({FitFlag::Kind::at_bound, {breakaway}, 0.0});
   c.warnings.push_back(at_zero);
   c.status = "fitted; " + profile;
-  c.evaluated = true;
   ASSERT_TRUE(std::any_of(c.flags.begin(), c.flags.end(), [](const FitFlag& f) {
     return f.kind == FitFlag::Kind::at_bound && f.names.front() == "hbridge.R_on_ohm" && f.bound == 0.0;
   })) << "the fit left R_on off its bound: nothing to pin";
@@ -785,16 +793,7 @@ TEST(GapConverge, TheDiagnosisIsFittedOnToConvergence) {
   problem.nls.max_evaluations = 6;
   const FitResult fit = fit_model(problem);
   ASSERT_FALSE(fit.nls.converged);
-  GapCandidate c;
-  c.name = "hbridge+friction_levels";
-  c.effects = {"hbridge", "friction_levels"};
-  c.model = fit.model;
-  c.free = fit.nls.names;
-  for (std::size_t k = 0; k < c.free.size(); ++k) {
-    c.values.push_back(fit.nls.values[static_cast<Eigen::Index>(k)]);
-    c.std_errors.push_back(fit.reported_se(k));
-  }
-  c.evaluated = true;
+  GapCandidate c = candidate_of("hbridge+friction_levels", {"hbridge", "friction_levels"}, fit);
   c.converged = false;
   c.status = std::string(gap_detail::k_fitted_budget_spent) + "; a note";
   const double score_before = gap_detail::evaluate(c.model, data, floors).score;
@@ -825,18 +824,8 @@ TEST(GapPins, AnInfiniteErrorWhoseGivenValueCostsIsPinnedWhereTheFitLeftIt) {
   problem.runs = data.train;
   problem.free = {"param_mismatch.J_scale", "param_mismatch.static_scale"};
   const FitResult fit = fit_model(problem);
-  GapCandidate c;
-  c.name = "param_mismatch";
-  c.model = fit.model;
-  c.free = fit.nls.names;
-  for (std::size_t k = 0; k < c.free.size(); ++k) {
-    c.values.push_back(fit.nls.values[static_cast<Eigen::Index>(k)]);
-    c.std_errors.push_back(fit.reported_se(k));
-  }
-  c.flags = fit.flags;
-  c.warnings = fit.warnings;
+  GapCandidate c = candidate_of("param_mismatch", {}, fit);
   c.status = "fitted";
-  c.evaluated = true;
   ASSERT_FALSE(std::isfinite(c.std_errors[1])) << c.values[1] << " +- " << c.std_errors[1];
   GapSettings settings;
   settings.threads = 2;
