@@ -252,6 +252,24 @@ TEST(FitGreybox, AParameterAtItsBoundIsFlagged) {
   EXPECT_FALSE(r.flags[0].undetermined());
 }
 
+// Closed-form cases of the at-bound rule: within 1e-3 of the (log) range; pressed against it
+// (within 1 % and a tenth of a standard error); a level bounded by 0 only when it is 0 in all
+// but name and its error covers it.
+TEST(FitGreybox, AtABoundWhenTheDataCannotTellItFromTheBound) {
+  EXPECT_EQ(bound_reached(0.5004, 0.01, 0.5, 2.0), BoundSide::lower);
+  EXPECT_EQ(bound_reached(0.5009, 0.14, 0.5, 2.0), BoundSide::lower);
+  EXPECT_EQ(bound_reached(0.5009, 0.001, 0.5, 2.0), BoundSide::none);
+  EXPECT_EQ(bound_reached(0.52, 10.0, 0.5, 2.0), BoundSide::none);
+  EXPECT_EQ(bound_reached(1.999, 0.01, 0.5, 2.0), BoundSide::upper);
+  EXPECT_EQ(bound_reached(1.99, 0.5, 0.5, 2.0), BoundSide::upper);
+  EXPECT_EQ(bound_reached(-0.99, 0.5, -1.0, 1.0), BoundSide::lower);
+  EXPECT_EQ(bound_reached(-0.99, 0.05, -1.0, 1.0), BoundSide::none);
+  EXPECT_EQ(bound_reached(1e-12, 1e-9, 0.0, 10.0), BoundSide::lower);
+  EXPECT_EQ(bound_reached(1e-12, 1e-13, 0.0, 10.0), BoundSide::none);
+  EXPECT_EQ(bound_reached(1e-3, 1.0, 0.0, 10.0), BoundSide::none);
+  EXPECT_EQ(bound_reached(5.0, 1.0, 0.0, std::numeric_limits<double>::infinity()), BoundSide::none);
+}
+
 // A small viscous level the data fix to well within its size is not "at its lower bound" of 0,
 // although it is below 1e-6 of the catalog's range (sized for large motors): flagging it would
 // have the pinning hold it at 0.

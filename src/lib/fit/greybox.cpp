@@ -449,6 +449,37 @@ std::string impossible(std::string_view name, double v) {
   return {};
 }
 
+}  // namespace
+
+BoundSide bound_reached(double v, double se, double lo, double hi) {
+  const bool logs = lo > 0.0 && std::isfinite(hi);
+  const double span = logs ? std::log(hi / lo) : hi - lo;
+  if (!std::isfinite(span)) return BoundSide::none;
+  const double from_lo = logs ? std::log(v / lo) : v - lo;
+  const double from_hi = logs ? std::log(hi / v) : hi - v;
+  // At a bound the Jacobian steps out of the range: its standard error says nothing more.
+  // A positive parameter bounded by 0 is fitted in log coordinates: it nears the bound only
+  // by orders of magnitude, so only a value that is 0 in all but name is at it, and only
+  // when the data cannot tell it from 0 (a standard error at least its size). A small
+  // motor's viscous level, 1e-6 of a range sized for a large one, is not at the bound when
+  // the data fix it to a few per cent.
+  const bool positive_near_0 = lo == 0.0 && v > 0.0;
+  const double lo_margin = positive_near_0 ? 1e-6 * span : k_at_bound * span;
+  const bool told_from_0 = positive_near_0 && se < v;
+  // A value pressed against a bound the data cannot tell it from (a small fraction of a
+  // standard error away) is at it too, whatever the few steps the solver kept off it.
+  const double se_coords = logs ? se / v : se;
+  const auto pressed = [&](double from) {
+    return lo != 0.0 && std::isfinite(se_coords) && from <= k_near_bound * span &&
+           from <= k_bound_within_se * se_coords;
+  };
+  if ((from_lo <= lo_margin && !told_from_0) || pressed(from_lo)) return BoundSide::lower;
+  if (from_hi <= k_at_bound * span || pressed(from_hi)) return BoundSide::upper;
+  return BoundSide::none;
+}
+
+namespace {
+
 /// The honest-numbers checks of FitResult::warnings and ::flags.
 void fit_warnings(const NlsResult& n, const std::vector<std::pair<double, double>>& bounds,
                   const std::vector<std::string>& units, FitResult& result) {
@@ -469,27 +500,12 @@ void fit_warnings(const NlsResult& n, const std::vector<std::pair<double, double
       add(Kind::impossible, {n.names[k]}, fmt::format("{} = {:.6g}{} {}", n.names[k], v, unit, why));
       continue;
     }
-    const bool logs = lo > 0.0 && std::isfinite(hi);
-    const double span = logs ? std::log(hi / lo) : hi - lo;
-    const double from_lo = logs ? std::log(v / lo) : v - lo;
-    const double from_hi = logs ? std::log(hi / v) : hi - v;
-    // At a bound the Jacobian steps out of the range: its standard error says nothing more.
-    // A positive parameter bounded by 0 is fitted in log coordinates: it nears the bound only
-    // by orders of magnitude, so only a value that is 0 in all but name is at it, and only
-    // when the data cannot tell it from 0 (a standard error at least its size). A small
-    // motor's viscous level, 1e-6 of a range sized for a large one, is not at the bound when
-    // the data fix it to a few per cent.
-    const bool positive_near_0 = lo == 0.0 && v > 0.0;
-    const double lo_margin = positive_near_0 ? 1e-6 * span : k_at_bound * span;
-    const bool told_from_0 = positive_near_0 && n.std_errors[i] < v;
-    if (std::isfinite(span) && from_lo <= lo_margin && !told_from_0) {
+    const BoundSide side = bound_reached(v, n.std_errors[i], lo, hi);
+    if (side != BoundSide::none) {
+      const bool lower = side == BoundSide::lower;
       add(Kind::at_bound, {n.names[k]},
-          fmt::format("{} = {:.6g}{} is at its lower bound", n.names[k], v, unit), lo);
-      continue;
-    }
-    if (std::isfinite(span) && from_hi <= k_at_bound * span) {
-      add(Kind::at_bound, {n.names[k]},
-          fmt::format("{} = {:.6g}{} is at its upper bound", n.names[k], v, unit), hi);
+          fmt::format("{} = {:.6g}{} is at its {} bound", n.names[k], v, unit, lower ? "lower" : "upper"),
+          lower ? lo : hi);
       continue;
     }
     const double se = n.std_errors[i];

@@ -320,6 +320,17 @@ struct FitResult {
 inline constexpr double k_max_correlation = 0.99;
 /// A parameter within this fraction of its range (log range for positive ones) of a bound is at it.
 inline constexpr double k_at_bound = 1e-3;
+/// ... or within this fraction of it when the bound lies less than k_bound_within_se of a
+/// standard error away (in the same coordinates): a J_scale of 0.5009 +- 0.14 is at its 0.5.
+inline constexpr double k_near_bound = 1e-2;
+inline constexpr double k_bound_within_se = 0.1;
+
+enum class BoundSide { none, lower, upper };
+/// Which bound of [lo, hi] a fitted value v of standard error se is at (FitFlag::Kind::at_bound):
+/// within k_at_bound of the range (in log coordinates for a positive range), or pressed
+/// against it as above; a positive value bounded by 0 only when it is 0 in all but name
+/// (1e-6 of its log range) and its standard error is at least its size.
+BoundSide bound_reached(double v, double se, double lo, double hi);
 
 /// The runs' fit % and RMS under `model` without fitting (an evaluate-only score).
 std::vector<RunFit> evaluate_model(const model::Model& model, const std::vector<Run>& runs,
