@@ -677,6 +677,33 @@ TEST(GapSearch, EarlyRejectionKeepsTheDiagnosisAndItsParameters) {
   EXPECT_EQ(a.score, b.score);
 }
 
+// Without a gap (a run of the model as given) no candidate can be significant: each single is
+// fitted alone on the refitted nominal model and not jointly (its status says why), and the
+// verdict is none as before.
+TEST(GapSearch, WithoutAGapSinglesAreFittedAloneOnly) {
+  const table::Table train = measure(prbs(1.5, 6.0, 3.0, 5, 0, k_inf), {}, 1, "train.csv");
+  const table::Table validate = measure(prbs(1.5, 7.0, 3.0, 7, 0, k_inf), {}, 2, "validate.csv");
+  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+  GapSettings settings;
+  settings.threads = 2;
+  for (const model::EffectSpec& spec : model::effect_catalog()) {
+    if (spec.plan.candidate && spec.name != "dead_time" && spec.name != "friction_levels")
+      settings.excluded.push_back(spec.name);
+  }
+  const GapReport report = diagnose_gap(model::Model{}, data, settings);
+  EXPECT_EQ(report.diagnosis, "none");
+  std::size_t alone = 0;
+  for (const GapCandidate& c : report.candidates) {
+    if (c.effects.size() != 1) continue;
+    ++alone;
+    EXPECT_TRUE(c.status.starts_with("fitted alone: no gap to close")) << c.name << ": " << c.status;
+    EXPECT_TRUE(std::none_of(c.free.begin(), c.free.end(), [](const std::string& f) {
+      return f.starts_with("param_mismatch.");
+    })) << c.name;
+  }
+  EXPECT_EQ(alone, 2U);
+}
+
 /// `t` without its current, generator and relay readings: the speed alone, as a small motor's
 /// encoder logs it.
 table::Table speed_only(table::Table t) {

@@ -10,6 +10,7 @@
 //   EFFECT          the refitted model plus one catalog effect, its parameters started from
 //                   the best point of a coarse grid (on the refit and on the model as
 //                   given), fitted alone, then refitted jointly with the nominal scales
+//                   (only alone when the model as given misses by no more than the noise)
 //   A+B, A+B+C      mixtures by forward selection: the best significant effect extended by
 //                   one effect at a time from the best singles, refitted jointly; an
 //                   extension joins when it is significant against the model it extends

@@ -33,6 +33,10 @@ inline constexpr int k_converge_rounds = 4;
 /// training cost by less than k_gap_reject_gain of it, so the joint refit was not run and the
 /// mixture is never significant.
 inline constexpr std::string_view k_rejected_early = "rejected early";
+/// Status of a single effect fitted alone on the refitted nominal model and not jointly with it
+/// (the start of its status text): the model as given matches the validation runs within the
+/// noise, so no candidate can be significant and the joint fit could not change the verdict.
+inline constexpr std::string_view k_no_gap_alone = "fitted alone: no gap to close";
 /// Share of the training cost an added effect, fitted alone, must remove to be refitted jointly
 /// (a tenth of the smallest share a significant candidate removes from a score near the noise).
 inline constexpr double k_gap_reject_gain = 0.01;

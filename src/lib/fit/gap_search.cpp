@@ -171,6 +171,8 @@ struct Job {
   /// A mixture extending the current best model by one effect: rejected early when that
   /// effect, fitted alone on it, removes almost nothing (k_gap_reject_gain).
   bool extension = false;
+  /// Fitted in stage 1 only (k_no_gap_alone): the search has no gap to close.
+  bool stage1_only = false;
 };
 
 void add_effect(model::Model& m, std::string_view name) {
@@ -641,6 +643,13 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     if (expired()) {
       take(alone, job.stage1_free);
       cut_short(alone);
+      return c;
+    }
+    if (job.stage1_only) {
+      take(alone, job.stage1_free);
+      c.converged = alone.nls.converged;
+      c.status = std::string(k_no_gap_alone);
+      score();
       return c;
     }
     start = alone.model;
@@ -1213,6 +1222,9 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       job.stage1_free.push_back(plan.name + "." + key);
     }
     job.data_starts = friction_starts;
+    // Without a gap no single is significant (nor, then, any mixture): the joint refit, the
+    // profile of a breakaway and the pins of its fit are spent on a verdict already drawn.
+    job.stage1_only = !gap;
     jobs.push_back(std::move(job));
   }
   // Friction is what every real motor has and what a model made from a datasheet lacks: its
