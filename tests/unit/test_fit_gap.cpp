@@ -519,6 +519,32 @@ TEST(GapDecision, AnUndeterminedCandidateIsNeverTheDiagnosis) {
 // alone given without friction has none to scale, whatever the (built-in) generator's and clutch's
 // friction, which only an attached or engaged clutch puts on the shaft; a current-driven motor's
 // Kt only scales J and the friction with it, unless the generator's load shows it.
+TEST(GapSearch, AnOffsetAddedBesideACoulombLevelStartsWithItsShare) {
+  // 2 ohm, 0.05 N m/A, 12 V: a Coulomb level of 0.05 N m holds 2 V of the drive.
+  model::Model m;
+  m.params.motor.R_ohm = 2.0;
+  m.params.motor.Kt_Nm_A = 0.05;
+  m.params.motor.Ke_V_s_rad = 0.05;
+  m.params.supply_V = 12.0;
+  m.effects = {model::default_effect("friction_levels"), model::default_effect("hbridge")};
+  model::set_parameter(m, "friction_levels.Tc_Nm", 0.05);
+  model::set_parameter(m, "friction_levels.Ts_excess_Nm", 0.01);
+  const auto split = gap_detail::split_offset(m, {"friction_levels", "hbridge"}, "hbridge", 0.25);
+  ASSERT_TRUE(split.has_value());
+  EXPECT_NEAR(model::get_parameter(*split, "hbridge.deadband"), 0.25 * 2.0 / 12.0, 1e-12);
+  EXPECT_NEAR(model::get_parameter(*split, "friction_levels.Tc_Nm"), 0.75 * 0.05, 1e-12);
+  // Only the level the offset sets moves: the breakaway excess and the on-resistance stay.
+  EXPECT_EQ(model::get_parameter(*split, "friction_levels.Ts_excess_Nm"), 0.01);
+  EXPECT_EQ(model::get_parameter(*split, "hbridge.R_on_ohm"), model::get_parameter(m, "hbridge.R_on_ohm"));
+  m.effects[1] = model::default_effect("brush_drop");
+  const auto drop = gap_detail::split_offset(m, {"friction_levels", "brush_drop"}, "brush_drop", 0.5);
+  ASSERT_TRUE(drop.has_value());
+  EXPECT_NEAR(model::get_parameter(*drop, "brush_drop.V_b_V"), 1.0, 1e-12);
+  // Nothing holds an offset of another shape: no split.
+  m.effects = {model::default_effect("brush_drop")};
+  EXPECT_FALSE(gap_detail::split_offset(m, {"brush_drop"}, "brush_drop", 0.5).has_value());
+}
+
 TEST(GapSearch, TheRefitFreesOnlyScalesThatActInTheRuns) {
   model::Params motor_alone = model::builtin_rig();
   motor_alone.motor.friction = {};

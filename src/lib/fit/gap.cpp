@@ -141,6 +141,45 @@ std::string alike_one_way(const GapReport& report, const GapData& data) {
       current ? "" : " save where the current reverses", current ? "" : ", or the current measured,");
 }
 
+/// "; with a dead band of the drive (hbridge) in place of a brush drop (brush_drop), ... explains
+/// these runs as well": a dead band and a brush drop beside a Coulomb level differ only where the
+/// current and the drive oppose (a drive braking from a speed), a few rows that measurement noise
+/// can hide. When the mixture that swaps one of the diagnosis' offsets for one of another shape
+/// scores no significantly worse, the verdict says so: the runs named the class, not the member.
+/// `shape_of` gives an effect's offset shape. Empty when no such mixture was fitted.
+template <class ShapeOf>
+std::string alike_in_place(const GapReport& report, const ShapeOf& shape_of) {
+  const GapCandidate& diagnosis = report.candidates.front();
+  const auto holds = [](const GapCandidate& c, const std::string& e) {
+    return std::find(c.effects.begin(), c.effects.end(), e) != c.effects.end();
+  };
+  for (const GapCandidate& c : report.candidates) {
+    if (&c == &diagnosis || c.effects.size() != diagnosis.effects.size() || !c.evaluated ||
+        !std::isfinite(c.score) || improves(diagnosis.score, c.score, report.floors.size()))
+      continue;
+    std::vector<std::string> out;
+    std::vector<std::string> in;
+    for (const std::string& e : diagnosis.effects) {
+      if (!holds(c, e)) out.push_back(e);
+    }
+    for (const std::string& e : c.effects) {
+      if (!holds(diagnosis, e)) in.push_back(e);
+    }
+    if (out.size() != 1 || in.size() != 1) continue;
+    const model::TermShape shape_out = shape_of(out.front());
+    const model::TermShape shape_in = shape_of(in.front());
+    if (shape_out == model::TermShape::none || shape_in == model::TermShape::none || shape_in == shape_out)
+      continue;
+    return fmt::format(
+        "; with {} ({}) in place of {} ({}), {} explains these runs as well (score {:.3g} against {:.3g}): "
+        "they hardly tell the two apart (a drive braking from a speed, where the current opposes the drive, "
+        "with less noise tells them apart)",
+        model::term_shape_text(shape_in), in.front(), model::term_shape_text(shape_out), out.front(), c.name,
+        c.score, diagnosis.score);
+  }
+  return {};
+}
+
 /// "; hbridge (a dead band of the drive) explains these runs too ...": in both directions a
 /// Coulomb level and a dead band of the drive still act alike wherever the shaft turns, and a
 /// drive that brakes at zero leaves only the coasts and reversals to tell them apart, which
@@ -163,8 +202,10 @@ std::string alike_both_ways(const GapReport& report) {
   };
   std::string mine;
   for (const std::string& name : diagnosis.effects) {
-    // A diagnosis holding two of the class (a dead band beside a Coulomb level): the runs told them apart.
-    if (shape_of(name) != Shape::none && !mine.empty() && shape_of(name) != shape_of(mine)) return {};
+    // A diagnosis holding two of the class (a dead band beside a Coulomb level): the runs told the
+    // two apart, but perhaps not one of them from a third shape in its place.
+    if (shape_of(name) != Shape::none && !mine.empty() && shape_of(name) != shape_of(mine))
+      return alike_in_place(report, shape_of);
     if (shape_of(name) != Shape::none) mine = name;
   }
   if (mine.empty()) return {};

@@ -12,6 +12,7 @@
 #include <list>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -166,6 +167,15 @@ std::string not_applicable(const model::EffectPlan& plan, const std::vector<Run>
 /// torque while the shaft turns: only the coasts at zero drive, the reversals and a measured
 /// current (which a Coulomb level does not move) tell them apart.
 model::TermShape offset_shape(std::string_view name, bool with_sign = true);
+
+/// Model `m` (which holds `added` and the members `effects`) with the steady offset its members
+/// of another offset shape hold, in volts on its motor, shared: a fraction `share` moved to
+/// `added`, the rest left with them. A dead band added beside a Coulomb level that holds the whole
+/// offset starts at 0 there and trades along a long valley; a start on that valley at each share
+/// lets the joint fit begin near the split the data hold. Returns nothing when no member holds an
+/// offset of another shape.
+std::optional<model::Model> split_offset(const model::Model& m, const std::vector<std::string>& effects,
+                                         const std::string& added, double share);
 
 /// Throws unless every name is a candidate effect of the catalog (--exclude).
 void check_excluded(const std::vector<std::string>& excluded);

@@ -107,6 +107,38 @@ bool alike_offset(const std::vector<std::string>& effects, const std::string& ad
          });
 }
 
+/// The parameters of `spec` that its offset term of `shape` sets, each with its value per volt
+/// of the offset on a motor of resistance `R_ohm` and torque constant `Kt_Nm_A` (a Coulomb
+/// level's N m, a dead band's duty, a brush drop's volt): the keys whose seeded value grows with
+/// the term's coefficient.
+std::vector<std::pair<std::string, double>> offset_keys_per_volt(const model::EffectSpec& spec,
+                                                                 model::TermShape shape,
+                                                                 const model::Params& p, double R_ohm,
+                                                                 double Kt_Nm_A) {
+  std::vector<std::pair<std::string, double>> out;
+  for (const model::TermSeed& rule : spec.plan.seeded_by) {
+    if (rule.shape != shape || rule.start == nullptr) continue;
+    // A Coulomb level is a torque against the motion (a negative coefficient), held by R / Kt volts
+    // per N m; the others are volts.
+    const double sign = shape == model::TermShape::sign ? -1.0 : 1.0;
+    const double volts_per_unit = shape == model::TermShape::sign ? R_ohm / Kt_Nm_A : 1.0;
+    model::TermValues one;
+    model::TermValues two;
+    one.coefficient = sign;
+    two.coefficient = 2.0 * sign;
+    const auto a = rule.start(one, p);
+    const auto b = rule.start(two, p);
+    for (std::size_t k = 0; k < a.size() && k < b.size(); ++k) {
+      const double per_unit = b[k].second - a[k].second;
+      if (a[k].first == b[k].first && per_unit > 0.0) out.emplace_back(a[k].first, per_unit / volts_per_unit);
+    }
+  }
+  return out;
+}
+
+/// The shares of a steady offset split_offset() starts a mixture at.
+constexpr std::array<double, 3> k_offset_shares{0.25, 0.5, 0.75};
+
 /// Validation rows at least where two models must disagree for those rows to decide between
 /// them (where_they_differ).
 constexpr std::size_t k_min_disagreeing_rows = 10;
@@ -840,6 +872,36 @@ model::TermShape offset_shape(std::string_view name, bool with_sign) {
   return Shape::none;
 }
 
+std::optional<model::Model> split_offset(const model::Model& m, const std::vector<std::string>& effects,
+                                         const std::string& added, double share) {
+  const model::EffectSpec* added_spec = find_plan(added);
+  const model::TermShape added_shape = offset_shape(added);
+  if (added_spec == nullptr || added_shape == model::TermShape::none) return std::nullopt;
+  const model::Compiled compiled(m);
+  const double R_ohm = compiled.p.motor.R_ohm;
+  const double Kt_Nm_A = compiled.p.motor.Kt_Nm_A;
+  if (!(R_ohm > 0.0) || !(Kt_Nm_A > 0.0)) return std::nullopt;
+  model::Model out = m;
+  double held_V = 0.0;
+  for (const std::string& e : effects) {
+    const model::TermShape shape = offset_shape(e);
+    const model::EffectSpec* spec = find_plan(e);
+    if (e == added || spec == nullptr || shape == model::TermShape::none || shape == added_shape) continue;
+    const auto keys = offset_keys_per_volt(*spec, shape, m.params, R_ohm, Kt_Nm_A);
+    if (keys.empty()) continue;
+    held_V += model::get_parameter(m, e + "." + keys.front().first) / keys.front().second;
+    for (const auto& [key, per_volt] : keys) {
+      const std::string name = e + "." + key;
+      model::set_parameter(out, name, (1.0 - share) * model::get_parameter(m, name));
+    }
+  }
+  const auto keys = offset_keys_per_volt(*added_spec, added_shape, m.params, R_ohm, Kt_Nm_A);
+  if (!(held_V > 0.0) || keys.empty()) return std::nullopt;
+  for (const auto& [key, per_volt] : keys)
+    model::set_parameter(out, added + "." + key, share * held_V * per_volt);
+  return out;
+}
+
 std::map<std::string, std::vector<double>> data_friction_starts(const model::Model& model,
                                                                 const std::vector<Run>& runs) {
   std::map<std::string, std::vector<double>> out;
@@ -1382,6 +1444,16 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         };
         start_from_data(current.model);
         start_from_data(defaults);
+        // Only beside one member's offset: a third offset split off two that already share it
+        // takes a sliver of each and fits the noise.
+        if (!job.extension && current.effects.size() == 1) {
+          model::Model with_added = current.model;
+          with_added.effects.push_back(*single->model.effect(added));
+          for (const double share : k_offset_shares) {
+            if (auto split = split_offset(with_added, members, added, share))
+              job.other_starts.push_back(std::move(*split));
+          }
+        }
         for (const auto& key : find_plan(added)->plan.free) {
           job.stage1_free.push_back(added + "." + key);
           job.free.push_back(added + "." + key);
