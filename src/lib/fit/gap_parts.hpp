@@ -181,8 +181,10 @@ std::optional<model::Model> split_offset(const model::Model& m, const std::vecto
 void check_excluded(const std::vector<std::string>& excluded);
 
 /// The fit objective on the training runs (sum over runs and outputs of the squared NRMSE),
-/// used to pick a starting point on a grid. `memo`: the search's, or none.
-double training_cost(const model::Model& model, const std::vector<Run>& runs, SimulationMemo* memo = nullptr);
+/// used to pick a starting point on a grid; simulated with `options` (a fit's, to compare with
+/// its cost). `memo`: the search's, or none.
+double training_cost(const model::Model& model, const std::vector<Run>& runs, SimulationMemo* memo = nullptr,
+                     const model::SimOptions& options = {});
 /// RMS of the speed residual over the training runs, in their measured unit (rpm or omega; the
 /// diagnosis holds every speed in rpm, its report converts), simulated with `options`: those of
 /// the fit the model came from (the regularised stick for friction), so that it is the error that

@@ -205,7 +205,15 @@ struct Job {
   bool extension = false;
   /// Fitted in stage 1 only (k_no_gap_alone): the search has no gap to close.
   bool stage1_only = false;
+  /// A mixture's: the model it extends (`start` without the added effect, whose keys are
+  /// stage1_free). The fit ends no worse on the training runs than this model
+  /// (k_no_worse_than_extended).
+  std::optional<model::Model> extends = std::nullopt;
 };
+
+/// How much more than the model it extends a mixture's fit may cost on the training runs, relative:
+/// the solver's tolerance, with room.
+constexpr double k_no_worse_than_extended = 1e-3;
 
 void add_effect(model::Model& m, std::string_view name) {
   if (m.effect(name) == nullptr) m.effects.push_back(model::default_effect(name));
@@ -638,6 +646,9 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     c.rms = ev.rms;
     c.train_rms_rpm = training_speed_rms(c.model, data.train, problem.sim, &memo);
   };
+  // The training cost of the model a mixture extends, on the fit's own simulation.
+  const double extended_cost = job.extends ? training_cost(*job.extends, data.train, &memo, problem.sim)
+                                           : std::numeric_limits<double>::infinity();
   // Stage 1: the added effect alone on the refitted nominal model (cheap, and it brings the
   // effect into its basin before the nominal parameters may move to absorb it).
   if (!job.stage1_free.empty()) {
@@ -694,26 +705,58 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
       return c;
     }
   }
-  // A single's own level at 0 after stage 1 is its fit's word (a gauge may hold it there).
-  if (job.effects.size() > 1) lift_trapped_levels(start, job.free, data.train);
-  problem.model = start;
-  problem.free = job.free;
-  problem.nls.max_evaluations = budget(job.free.size());
-  FitResult fit = fit_model(problem);
   // A mixture's members may trade along a long valley (a drive dead band against Coulomb
   // friction: the steady states see only their sum, the coasts and reversals tell them apart):
   // a joint fit that spent its budget still moving goes on from where it stopped, while each
   // round still takes a tenth off the cost (a coasting driver's share and the friction it hides
   // climb a valley together), at most k_joint_rounds times.
-  constexpr int k_joint_rounds = 3;
-  double cost_before = std::numeric_limits<double>::infinity();
-  for (int round = 0; round < k_joint_rounds && job.effects.size() > 1 && !fit.nls.converged &&
-                      fit.nls.cost < 0.9 * cost_before && !expired();
-       ++round) {
-    cost_before = fit.nls.cost;
-    problem.model = fit.model;
-    lift_trapped_levels(problem.model, job.free, data.train);
-    fit = fit_model(problem);
+  const auto joint_fit = [&](model::Model from, bool lift) {
+    // A single's own level at 0 after stage 1 is its fit's word (a gauge may hold it there).
+    if (lift && job.effects.size() > 1) lift_trapped_levels(from, job.free, data.train);
+    problem.model = std::move(from);
+    problem.free = job.free;
+    problem.nls.max_evaluations = budget(job.free.size());
+    FitResult joint = fit_model(problem);
+    constexpr int k_joint_rounds = 3;
+    double cost_before = std::numeric_limits<double>::infinity();
+    for (int round = 0; round < k_joint_rounds && job.effects.size() > 1 && !joint.nls.converged &&
+                        joint.nls.cost < 0.9 * cost_before && !expired();
+         ++round) {
+      cost_before = joint.nls.cost;
+      problem.model = joint.model;
+      lift_trapped_levels(problem.model, job.free, data.train);
+      joint = fit_model(problem);
+    }
+    return joint;
+  };
+  FitResult fit = joint_fit(start, true);
+  // A joint fit that ends worse than the model it extends is made again, and the better one kept.
+  // A start whose added effect doubles an offset a member holds already (a brush drop at the 3 V
+  // its single fit gave it, beside a Coulomb level) may hold the shaft still: no parameter then
+  // moves the runs, and stage 1 and the joint fit stop where they began. Stage 1 is then made
+  // again from the model extended with the effect nearly off (its levels at their trap floor).
+  // The levels lifted off 0 may also leave the joint fit short of where stage 1 was, on a valley
+  // of members that trade (an added brush drop against the Coulomb level): it is made again from
+  // stage 1's end as it was.
+  const auto worse = [&](double cost) { return cost > (1.0 + k_no_worse_than_extended) * extended_cost; };
+  if (worse(fit.nls.cost) && !expired()) {
+    model::Model from = start;
+    if (worse(training_cost(from, data.train, &memo, problem.sim))) {
+      problem.model = job.start;
+      for (const std::string& key : job.stage1_free) {
+        if (const double floor = trap_floor(problem.model, key, data.train); floor > 0.0)
+          model::set_parameter(problem.model, key, floor);
+      }
+      problem.free = job.stage1_free;
+      problem.nls.max_evaluations = budget(job.stage1_free.size());
+      FitResult alone = fit_model(problem);
+      if (alone.nls.cost < training_cost(from, data.train, &memo, problem.sim)) from = std::move(alone.model);
+    }
+    FitResult again = joint_fit(from, false);
+    if (again.nls.cost < fit.nls.cost) {
+      fit = std::move(again);
+      start = std::move(from);
+    }
   }
   take(fit, job.free);
   if (expired()) {
@@ -734,6 +777,17 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     problem.free = free;
     problem.nls.max_evaluations = budget(free.size());
     fit = fit_model(problem);
+    // A mixture's scales, moved along a valley to trade with the added effect, may start the
+    // pinned fit worse than the model it extends: it is made again from stage 1's end, where they
+    // had not moved, and the better one kept.
+    if (job.extends && !expired() &&
+        fit.nls.cost >
+            (1.0 + k_no_worse_than_extended) * training_cost(*job.extends, data.train, &memo, problem.sim)) {
+      problem.model = start;
+      model::set_parameter(problem.model, key, value);
+      FitResult again = fit_model(problem);
+      if (again.nls.cost < fit.nls.cost) fit = std::move(again);
+    }
     take(fit, free);
   };
   std::vector<std::string> pinned;
@@ -1157,10 +1211,12 @@ Evaluation evaluate(const model::Model& model, const GapData& data, const std::v
 
 /// The fit objective on the training runs (sum over runs and outputs of the squared NRMSE),
 /// used to pick a starting point on a grid.
-double training_cost(const model::Model& model, const std::vector<Run>& runs, SimulationMemo* memo) {
+double training_cost(const model::Model& model, const std::vector<Run>& runs, SimulationMemo* memo,
+                     const model::SimOptions& options) {
   double cost = 0.0;
   for (const Run& run : runs) {
-    const auto sim = memo != nullptr ? memo->simulate(model, run) : simulate_as_measured(model, run);
+    const auto sim =
+        memo != nullptr ? memo->simulate(model, run, options) : simulate_as_measured(model, run, options);
     for (std::size_t o = 0; o < run.outputs.size(); ++o) {
       const auto& y = run.measured[o];
       double mean = 0.0;
@@ -1425,6 +1481,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         // An offset alike one the model holds (a dead band beside a Coulomb level) removes nothing
         // fitted alone: the member holds its share, which only the joint refit moves.
         job.extension = !alike_offset(current.effects, added);
+        job.extends = current.model;
         for (const auto& f : current.free) {
           if (!f.starts_with("param_mismatch.")) job.free.push_back(f);
         }
