@@ -646,9 +646,12 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     c.rms = ev.rms;
     c.train_rms_rpm = training_speed_rms(c.model, data.train, problem.sim, &memo);
   };
-  // The training cost of the model a mixture extends, on the fit's own simulation.
-  const double extended_cost = job.extends ? training_cost(*job.extends, data.train, &memo, problem.sim)
-                                           : std::numeric_limits<double>::infinity();
+  // A training cost above that of the model a mixture extends (on the fit's own simulation, as
+  // it stands when asked), beyond the solver's tolerance; never for a single.
+  const auto worse = [&](double cost) {
+    return job.extends && cost > (1.0 + k_no_worse_than_extended) *
+                                     training_cost(*job.extends, data.train, &memo, problem.sim);
+  };
   // Stage 1: the added effect alone on the refitted nominal model (cheap, and it brings the
   // effect into its basin before the nominal parameters may move to absorb it).
   if (!job.stage1_free.empty()) {
@@ -738,8 +741,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   // The levels lifted off 0 may also leave the joint fit short of where stage 1 was, on a valley
   // of members that trade (an added brush drop against the Coulomb level): it is made again from
   // stage 1's end as it was.
-  const auto worse = [&](double cost) { return cost > (1.0 + k_no_worse_than_extended) * extended_cost; };
-  if (worse(fit.nls.cost) && !expired()) {
+  if (!expired() && worse(fit.nls.cost)) {
     model::Model from = start;
     if (worse(training_cost(from, data.train, &memo, problem.sim))) {
       problem.model = job.start;
@@ -780,9 +782,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     // A mixture's scales, moved along a valley to trade with the added effect, may start the
     // pinned fit worse than the model it extends: it is made again from stage 1's end, where they
     // had not moved, and the better one kept.
-    if (job.extends && !expired() &&
-        fit.nls.cost >
-            (1.0 + k_no_worse_than_extended) * training_cost(*job.extends, data.train, &memo, problem.sim)) {
+    if (!expired() && worse(fit.nls.cost)) {
       problem.model = start;
       model::set_parameter(problem.model, key, value);
       FitResult again = fit_model(problem);
