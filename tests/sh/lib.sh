@@ -64,6 +64,26 @@ expect() { check "$1" eval "$2"; }
 # pass: counts a check that passed without check (its failures go through fail).
 pass() { checks=$((checks + 1)); }
 
+# near WHAT VALUE TRUTH TOL: VALUE within TOL (relative) of TRUTH.
+near() {
+  if awk -v v="$2" -v w="$3" -v t="$4" 'BEGIN { d = v - w; if (d < 0) d = -d; a = w < 0 ? -w : w; exit !(d <= t * a) }'; then
+    pass
+    echo "ok   $1 = $2 (truth $3)"
+  else
+    fail "$1 = $2, truth $3 (tolerance $4)"
+  fi
+}
+
+# within_se WHAT VALUE SE REFERENCE: |VALUE - REFERENCE| <= 2 SE, SE finite and > 0.
+within_se() {
+  if awk -v v="$2" -v s="$3" -v r="$4" 'BEGIN { d = v - r; if (d < 0) d = -d; exit !(s > 0 && s < 1e300 && d <= 2 * s) }'; then
+    pass
+    echo "ok   $1 = $2 +- $3 (against $4)"
+  else
+    fail "$1 = $2 +- $3: $4 is not within two standard errors"
+  fi
+}
+
 # segments DT SEGMENTS: open-loop inputs at a sample period of DT s, clutch 0, relay open, from
 # ";"-separated "hold V SECONDS" and "ramp V0 V1 SECONDS" (sample_period in the metadata).
 segments() {

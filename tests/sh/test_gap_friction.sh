@@ -31,16 +31,6 @@ program "hold 0 0.2;hold 4 0.5;hold 8 0.5;hold 0 0.5;hold -4 0.5;hold -8 0.5;hol
 ramp 0 1.2 2;hold 0 0.5;ramp 0 -1.2 2;hold 0 0.5" |
   measure 2 >"$work/validate.csv"
 
-# near NAME VALUE TRUTH TOL: VALUE within TOL (relative) of TRUTH
-near() {
-  if awk -v v="$2" -v w="$3" -v t="$4" 'BEGIN { d = v - w; if (d < 0) d = -d; exit !(d <= t * w) }'; then
-    pass
-    echo "ok   $1 = $2 (truth $3)"
-  else
-    fail "$1 = $2, truth $3 (tolerance $4)"
-  fi
-}
-
 mcg-fit friction --config "$work/given.ini" --order 1 "$work/train.csv" "$work/validate.csv" \
   >"$work/friction.ini"
 ts=$(awk '/^Ts_Nm = / { print $3; exit }' "$work/friction.ini")

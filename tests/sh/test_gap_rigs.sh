@@ -26,9 +26,9 @@ source "$(dirname "$0")/lib.sh"
 source "$(dirname "$0")/rigs_lib.sh"
 require_tools mcg-fit
 
-# near NAME VALUE_SE TRUTH TOL [K]: VALUE (VALUE_SE is "VALUE+-SE") within TOL (relative) of TRUTH,
+# near_truth NAME VALUE_SE TRUTH TOL [K]: VALUE (VALUE_SE is "VALUE+-SE") within TOL (relative) of TRUTH,
 # with a finite standard error (and, given K, within K of it).
-near() {
+near_truth() {
   local v=${2%%+-*} s=${2##*+-} k=${5:-0}
   if awk -v v="$v" -v s="$s" -v w="$3" -v t="$4" -v k="$k" \
     'BEGIN { d = v - w; if (d < 0) d = -d; a = w < 0 ? -w : w
@@ -76,7 +76,7 @@ for spec in current:7 current:9 deadband:1 deadband:4 deadband:7; do
       echo "ok   $kind $seed: $key pinned at 0 and said so (truth $truth)"
       continue
     fi
-    near "$kind $seed: $key" "$value" "$truth" "$tol" $ses
+    near_truth "$kind $seed: $key" "$value" "$truth" "$tol" $ses
   done <"$dir/truth"
 done
 # Dead-band seed 10 (24 V, a 9.6 % dead band, R 5.5 ohm): a brush drop beside the Coulomb level

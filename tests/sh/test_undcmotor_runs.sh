@@ -33,15 +33,6 @@ gap_field() {
     for (j = 1; j <= n; j++) { split(p[j], kv, "="); split(kv[2], vs, "[+]-"); if (kv[1] == k) print vs[f] } }' \
     "$work/gap.txt"
 }
-# within WHAT VALUE SE REFERENCE: |VALUE - REFERENCE| <= 2 SE, SE finite and > 0.
-within() {
-  if awk -v v="$2" -v s="$3" -v r="$4" 'BEGIN { d = v - r; if (d < 0) d = -d; exit !(s > 0 && s < 1e300 && d <= 2 * s) }'; then
-    pass
-    echo "ok   $1 = $2 +- $3 (against $4)"
-  else
-    fail "$1 = $2 +- $3: $4 is not within two standard errors"
-  fi
-}
 
 mcg-fit friction --config "$dir/frictionless.ini" --order 1 --no-static "$dir/undcmotor_step_open.csv" \
   >"$work/friction.ini"
@@ -49,16 +40,16 @@ tc=$(ini_value Tc_Nm "$work/friction.ini")
 tc_se=$(ini_se Tc_Nm "$work/friction.ini")
 c1=$(ini_value visc1_Nm_s_rad "$work/friction.ini")
 c1_se=$(ini_se visc1_Nm_s_rad "$work/friction.ini")
-within "friction on the step run: Tc_Nm (the static curve's in model.ini)" "$tc" "$tc_se" \
+within_se "friction on the step run: Tc_Nm (the static curve's in model.ini)" "$tc" "$tc_se" \
   "$(ini_value Tc_Nm "$dir/model.ini")"
 expect "friction on the step run: visc1 = $c1 +- $c1_se N m s/rad is positive beyond two errors" \
   "awk -v c='$c1' -v s='$c1_se' 'BEGIN { exit !(s > 0 && c > 2 * s) }'"
 
 gap_on_real "$dir" '*friction*' "the frictionless output shaft"
 gap_closes_most "$work/gap.txt"
-within "gap's friction_levels.Tc_Nm (friction's on the training run)" "$(gap_field friction_levels.Tc_Nm 1)" \
+within_se "gap's friction_levels.Tc_Nm (friction's on the training run)" "$(gap_field friction_levels.Tc_Nm 1)" \
   "$(gap_field friction_levels.Tc_Nm 2)" "$tc"
-within "gap's friction_levels.c1_Nm_s_rad (friction's visc1)" "$(gap_field friction_levels.c1_Nm_s_rad 1)" \
+within_se "gap's friction_levels.c1_Nm_s_rad (friction's visc1)" "$(gap_field friction_levels.c1_Nm_s_rad 1)" \
   "$(gap_field friction_levels.c1_Nm_s_rad 2)" "$c1"
 warnings_hold_values "$work/gap.txt"
 
@@ -67,7 +58,7 @@ gap_on_real "$dir" pwm_coast+friction_levels "the output shaft behind a braking 
   "frictionless.ini=$work/braking.ini"
 expect "given a braking driver, gap's pwm_coast.coast = $(gap_field pwm_coast.coast 1) is 1 (coasting throughout)" \
   "awk -v c='$(gap_field pwm_coast.coast 1)' 'BEGIN { exit !(c > 0.95) }'"
-within "given a braking driver, gap's friction_levels.Tc_Nm (friction's on the training run)" \
+within_se "given a braking driver, gap's friction_levels.Tc_Nm (friction's on the training run)" \
   "$(gap_field friction_levels.Tc_Nm 1)" "$(gap_field friction_levels.Tc_Nm 2)" "$tc"
 warnings_hold_values "$work/gap.txt"
 finish undcmotor_runs
