@@ -443,12 +443,12 @@ class Worker {
         values[n] = line;
       }
     } catch (const Error& e) {
-      // Said once, not at every poll: a repeated poll error would overwrite the answer to what
-      // the user does meanwhile (a recording ended while the port is gone).
-      std::string text = fmt::format("polling the registers: {}", e.what());
-      if (text != m_poll_error) {
-        m_poll_error = text;
-        report(std::move(text));
+      // Said once per outage, not at every poll: a later poll error (a timeout, then "no such
+      // port" once the port is gone) would overwrite the answer to what the user does meanwhile
+      // (a recording ended while the port is gone).
+      if (m_poll_error.empty()) {
+        m_poll_error = fmt::format("polling the registers: {}", e.what());
+        report(m_poll_error);
       }
       return;
     }
@@ -527,7 +527,7 @@ class Worker {
   std::condition_variable m_wake;
   std::deque<ConsoleAction> m_queue;
   std::string m_status;
-  std::string m_poll_error;  ///< the last poll error said; the worker thread's alone
+  std::string m_poll_error;  ///< the poll error said in this outage; the worker thread's alone
   std::map<std::string, std::string> m_registers;
   std::optional<std::vector<std::pair<std::string, std::string>>> m_config;
   bool m_config_failed = false;
