@@ -369,11 +369,18 @@ class Worker {
     }
     m_wake.notify_all();
   }
-  /// Moves the news (status, register values) into `state`; returns the status, if new.
+  /// Moves the news (status, register values) into `state`; returns the status, if new. A poll
+  /// error while the title already shows the link down (state.link_note) adds nothing and would
+  /// overwrite the answer to what the user does meanwhile (a recording ended while the port is
+  /// gone): it is dropped.
   std::string collect(ConsoleState& state) {
     const std::lock_guard lock(m_mutex);
     for (auto& [k, v] : m_registers) state.registers[k] = v;
     if (m_status.empty()) return {};
+    if (std::exchange(m_status_is_poll, false) && !state.link_note.empty()) {
+      m_status.clear();
+      return {};
+    }
     state.status = std::exchange(m_status, {});
     return state.status;
   }
@@ -410,9 +417,10 @@ class Worker {
     }
   }
 
-  void report(std::string text) {
+  void report(std::string text, bool poll_error = false) {
     const std::lock_guard lock(m_mutex);
     m_status = std::move(text);
+    m_status_is_poll = poll_error;
   }
 
   std::string get(const std::string& name) {
@@ -448,7 +456,7 @@ class Worker {
       // (a recording ended while the port is gone).
       if (m_poll_error.empty()) {
         m_poll_error = fmt::format("polling the registers: {}", e.what());
-        report(m_poll_error);
+        report(m_poll_error, true);
       }
       return;
     }
@@ -527,6 +535,7 @@ class Worker {
   std::condition_variable m_wake;
   std::deque<ConsoleAction> m_queue;
   std::string m_status;
+  bool m_status_is_poll = false;  ///< m_status is a poll error
   std::string m_poll_error;  ///< the poll error said in this outage; the worker thread's alone
   std::map<std::string, std::string> m_registers;
   std::optional<std::vector<std::pair<std::string, std::string>>> m_config;
