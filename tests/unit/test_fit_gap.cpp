@@ -730,6 +730,33 @@ TEST(GapSearch, WithoutAGapSinglesAreFittedAloneOnly) {
   EXPECT_EQ(alone, 2U);
 }
 
+// Without a gap every single starts on the refitted nominal model: its grid is not searched on
+// the model as given too (a start there, a hair better on the training runs, made stribeck's
+// and cogging's rows on the 120 s null fits of another nominal model).
+TEST(GapSearch, WithoutAGapEverySingleStartsOnTheRefit) {
+  const table::Table train = measure(prbs(1.5, 6.0, 3.0, 5, 0, k_inf), {}, 1, "train.csv");
+  const table::Table validate = measure(prbs(1.5, 7.0, 3.0, 7, 0, k_inf), {}, 2, "validate.csv");
+  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+  GapSettings settings;
+  settings.threads = 2;
+  const GapReport report = diagnose_gap(model::Model{}, data, settings);
+  EXPECT_EQ(report.diagnosis, "none");
+  const auto pm = std::find_if(report.candidates.begin(), report.candidates.end(),
+                               [](const GapCandidate& c) { return c.name == "param_mismatch"; });
+  ASSERT_NE(pm, report.candidates.end());
+  const model::Effect* refit = pm->model.effect("param_mismatch");
+  ASSERT_NE(refit, nullptr);
+  std::size_t alone = 0;
+  for (const GapCandidate& c : report.candidates) {
+    if (c.effects.size() != 1 || !c.evaluated) continue;
+    ++alone;
+    const model::Effect* own = c.model.effect("param_mismatch");
+    ASSERT_NE(own, nullptr) << c.name;
+    EXPECT_EQ(own->params, refit->params) << c.name;
+  }
+  EXPECT_GE(alone, 10U);
+}
+
 /// `t` without its current, generator and relay readings: the speed alone, as a small motor's
 /// encoder logs it.
 table::Table speed_only(table::Table t) {

@@ -1341,8 +1341,11 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
     }
     job.data_starts = friction_starts;
     // Without a gap no single is significant (nor, then, any mixture): the joint refit, the
-    // profile of a breakaway and the pins of its fit are spent on a verdict already drawn.
+    // profile of a breakaway and the pins of its fit are spent on a verdict already drawn. The
+    // grid is then searched on the refit alone: the model as given beside it serves an effect
+    // whose gain the refit took, and there is no gain to take.
     job.stage1_only = !gap;
+    if (job.stage1_only) job.other_starts.clear();
     jobs.push_back(std::move(job));
   }
   // Friction is what every real motor has and what a model made from a datasheet lacks: its
