@@ -702,8 +702,13 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     const double gain = before > 0.0 ? (before - alone.nls.cost) / before : 1.0;
     if (may_reject && !(gain >= k_gap_reject_gain) && std::isfinite(before)) {
       take(alone, job.stage1_free);
-      c.status = fmt::format("{}: fitted alone it removes {:.2g} % of the training cost", k_rejected_early,
-                             100.0 * std::max(gain, 0.0));
+      // A fit alone that ended above the model without the effect stalled where its start put
+      // it (a level lifted off 0): its numbers are that stalled fit's, and the status says so.
+      c.status = -gain > k_no_worse_than_extended
+                     ? fmt::format("{}: fitted alone it stalls {:.2g} % above the training cost without it",
+                                   k_rejected_early, -100.0 * gain)
+                     : fmt::format("{}: fitted alone it removes {:.2g} % of the training cost",
+                                   k_rejected_early, 100.0 * std::max(gain, 0.0));
       score();
       return c;
     }
