@@ -18,6 +18,12 @@
 # where the dead band trades against the Coulomb level; reported from there, the two were 12
 # standard errors off (0.0319 against 0.0453, Tc +12 SE). The diagnosis is now fitted on to
 # convergence after the verdict.
+# And two of those motors driven as a lab validates one (deadband_aprbs: braking steps from speed
+# to half the dead band in training, a random-level step run held out; seeds 2 and 6), with the
+# same tolerances. Before, seed 6 was named brush_drop+friction_levels (c1 +16 standard errors)
+# and seed 2's c1 was pinned at 0 (truth 6.3e-6): the bridge's on-resistance, fitted on speed
+# alone, traded with the viscous level through Kt, so the dead band's mixture was set aside as
+# undetermined or stopped at the bound. Without a measured current it is now held at 0.
 # Args: TOOL_DIR SOURCE_DIR.
 set -euo pipefail
 tools=$1
@@ -40,12 +46,12 @@ near_truth() {
   fi
 }
 
-for spec in current:7 current:9 deadband:1 deadband:4 deadband:7; do
+for spec in current:7 current:9 deadband:1 deadband:4 deadband:7 deadband_aprbs:2 deadband_aprbs:6; do
   kind=${spec%%:*} seed=${spec##*:} dir="$work/$kind-$seed"
   rig "$kind" "$seed" "$dir"
   mapfile -t drive <"$dir/args"
   # The dead band's mixture comes after every single fit: a budget the verdict does not hang on.
-  [[ $kind == deadband ]] && drive+=(--budget 900)
+  [[ $kind == deadband* ]] && drive+=(--budget 900)
   mcg-fit gap "${drive[@]}" --config "$dir/given.ini" --train "$dir/train.csv" \
     --validate "$dir/validate.csv" \
     >"$dir/gap.csv" 2>"$dir/gap.err" || fail "$kind $seed: gap: exit $?: $(tail -1 "$dir/gap.err")"
@@ -66,8 +72,8 @@ for spec in current:7 current:9 deadband:1 deadband:4 deadband:7; do
       current:*Ts_excess*) tol=0.1 ;;
       current:*dT_Nm) tol=0.05 ;;
       current:*) tol=0.02 ;;
-      deadband:*Ts_excess*) tol=0.3 ses=3 ;;
-      deadband:*) tol=0.1 ses=3 ;;
+      deadband*:*Ts_excess*) tol=0.3 ses=3 ;;
+      deadband*:*) tol=0.1 ses=3 ;;
     esac
     value=$(grep -o "$key=[^ ,]*" <<<"$row" | cut -d= -f2 || true)
     # A breakaway whose exact-stick profile stays open is pinned, and the status must say so.

@@ -309,6 +309,14 @@ model::Model grid_start(const std::vector<model::Model>& bases, const model::Eff
       }
     }
   }
+  // A key the runs do not fit is held where the bases hold it, not gridded.
+  const std::vector<std::string> fitted = fitted_keys(effect, runs);
+  for (std::size_t k = keys.size(); k-- > 0;) {
+    if (std::find(fitted.begin(), fitted.end(), keys[k]) == fitted.end()) {
+      keys.erase(keys.begin() + static_cast<std::ptrdiff_t>(k));
+      axes.erase(axes.begin() + static_cast<std::ptrdiff_t>(k));
+    }
+  }
   if (!plan.angle_order_key.empty() && !orders.empty()) {
     keys.push_back(plan.angle_order_key);
     axes.push_back(orders);
@@ -578,13 +586,15 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   c.name = job.name;
   c.effects = job.effects;
   model::Model start = job.start;
+  hold_unfitted(start, data.train);
   if (job.grid_effects.empty() && !job.other_starts.empty()) {
     double best = training_cost(start, data.train, &memo);
-    for (const model::Model& other : job.other_starts) {
+    for (model::Model other : job.other_starts) {
+      hold_unfitted(other, data.train);
       const double cost = training_cost(other, data.train, &memo);
       if (cost < best) {
         best = cost;
-        start = other;
+        start = std::move(other);
       }
     }
   }
@@ -593,6 +603,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
       std::vector<model::Model> bases{start};
       for (model::Model other : job.other_starts) {
         add_effect(other, e);
+        hold_unfitted(other, data.train);
         bases.push_back(std::move(other));
       }
       const auto point = job.data_starts.find(e);
@@ -626,7 +637,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   // and the status says so.
   const auto cut_short = [&](const FitResult& r) {
     for (const auto& e : job.effects) {
-      if (const model::EffectSpec* plan = find_plan(e)) c.added_parameters += plan->plan.free.size();
+      if (const model::EffectSpec* plan = find_plan(e))
+        c.added_parameters += fitted_keys(*plan, data.train).size();
     }
     c.status = fmt::format("{}; fit cut short after {} iterations, scored as it stands", k_out_of_time,
                            r.nls.iterations);
@@ -638,7 +650,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   };
   const auto score = [&] {
     for (const auto& e : job.effects) {
-      if (const model::EffectSpec* plan = find_plan(e)) c.added_parameters += plan->plan.free.size();
+      if (const model::EffectSpec* plan = find_plan(e))
+        c.added_parameters += fitted_keys(*plan, data.train).size();
     }
     c.evaluated = true;
     const Evaluation ev = evaluate(c.model, data, floors, &memo);
@@ -1036,6 +1049,27 @@ bool measures_current(const std::vector<Run>& runs) {
   });
 }
 
+std::vector<std::string> fitted_keys(const model::EffectSpec& spec, const std::vector<Run>& runs) {
+  std::vector<std::string> keys = spec.plan.free;
+  if (!measures_current(runs)) {
+    std::erase_if(keys, [&](const std::string& k) {
+      return std::find(spec.plan.series_resistance.begin(), spec.plan.series_resistance.end(), k) !=
+             spec.plan.series_resistance.end();
+    });
+  }
+  return keys;
+}
+
+void hold_unfitted(model::Model& m, const std::vector<Run>& runs) {
+  if (measures_current(runs)) return;
+  for (model::Effect& e : m.effects) {
+    if (const model::EffectSpec* spec = model::find_effect(e.name)) {
+      for (const std::string& key : spec->plan.series_resistance)
+        model::set_parameter(m, e.name + "." + key, 0.0);
+    }
+  }
+}
+
 std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, const model::Params& p,
                                        const std::vector<Run>& runs,
                                        const std::vector<std::string>& effects) {
@@ -1335,7 +1369,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
             {},          {base},
             {}};
     add_effect(job.start, plan.name);
-    for (const auto& key : plan.plan.free) {
+    for (const auto& key : fitted_keys(plan, data.train)) {
       job.free.push_back(plan.name + "." + key);
       job.stage1_free.push_back(plan.name + "." + key);
     }
@@ -1511,7 +1545,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
               job.other_starts.push_back(std::move(*split));
           }
         }
-        for (const auto& key : find_plan(added)->plan.free) {
+        for (const auto& key : fitted_keys(*find_plan(added), data.train)) {
           job.stage1_free.push_back(added + "." + key);
           job.free.push_back(added + "." + key);
         }
