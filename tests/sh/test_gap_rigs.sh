@@ -89,7 +89,10 @@ done
 # fits these runs as well as the rig's own model does (held-out 7.33 rpm both): the runs name a
 # voltage offset, not which. Either mixture may be named, and when it is not the dead band's, the
 # verdict must say that the dead band in its place explains the runs as well. Before, gap named
-# brush_drop+friction_levels and said nothing of the other.
+# brush_drop+friction_levels and said nothing of the other. Said so, the dead band's mixture must
+# score within 2 % of the diagnosis: with the bridge's on-resistance held, its joint fit once
+# spent its budget half way along the valley where the dead band trades with the Coulomb level
+# (0.693 against 0.633, dead band 0.064 against the rig's 0.096) and still said "as well".
 dir="$work/deadband-10"
 rig deadband 10 "$dir"
 mcg-fit gap --budget 900 --config "$dir/given.ini" --train "$dir/train.csv" --validate "$dir/validate.csv" \
@@ -101,7 +104,12 @@ case $named in
   hbridge+friction_levels) pass ;;
   brush_drop+friction_levels)
     check "deadband 10: the dead band in the brush drop's place is named" \
-      grep -q 'hbridge) in place of a brush drop (brush_drop), hbridge+friction_levels explains' <<<"$reason" ;;
+      grep -q 'hbridge) in place of a brush drop (brush_drop), hbridge+friction_levels explains' <<<"$reason"
+    # ... fitted as far as the brush drop's mixture: "as well" within 2 % of its score.
+    scores=$(sed -n 's/.*explains these runs as well (score \([0-9.e+-]*\) against \([0-9.e+-]*\)).*/\1 \2/p' \
+      <<<"$reason")
+    check "deadband 10: the dead band's mixture scores within 2 % of the diagnosis' ($scores)" \
+      awk -v s="$scores" 'BEGIN { split(s, f, " "); exit !(f[2] > 0 && f[1] <= 1.02 * f[2]) }' ;;
   *) fail "deadband 10: diagnosis $named, expected a dead band or a brush drop beside friction_levels" ;;
 esac
 finish gap_rigs

@@ -1515,6 +1515,8 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         // An offset alike one the model holds (a dead band beside a Coulomb level) removes nothing
         // fitted alone: the member holds its share, which only the joint refit moves.
         job.extension = !alike_offset(current.effects, added);
+        // Its joint fit walks the valley where the two offsets trade: twice the budget.
+        if (!job.extension) job.evaluations_per_parameter = 20;
         job.extends = current.model;
         for (const auto& f : current.free) {
           if (!f.starts_with("param_mismatch.")) job.free.push_back(f);
