@@ -23,7 +23,8 @@
 # same tolerances. Before, seed 6 was named brush_drop+friction_levels (c1 +16 standard errors)
 # and seed 2's c1 was pinned at 0 (truth 6.3e-6): the bridge's on-resistance, fitted on speed
 # alone, traded with the viscous level through Kt, so the dead band's mixture was set aside as
-# undetermined or stopped at the bound. Without a measured current it is now held at 0.
+# undetermined or stopped at the bound. Without a measured current it is now held at 0, and the
+# status says so.
 # Args: TOOL_DIR SOURCE_DIR.
 set -euo pipefail
 tools=$1
@@ -63,6 +64,9 @@ for spec in current:7 current:9 deadband:1 deadband:4 deadband:7 deadband_aprbs:
     continue
   fi
   pass
+  if [[ $kind == deadband* ]]; then
+    check "$kind $seed: the bridge's on-resistance is said held at 0" grep -q 'hbridge.R_on_ohm held at 0' <<<"$row"
+  fi
   shrink=$(cut -d, -f4 <<<"$row")
   awk -v s="$shrink" 'BEGIN { exit !(s >= 60) }' && pass || fail "$kind $seed: shrink $shrink % < 60 %"
   while read -r key truth; do

@@ -869,6 +869,18 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   if (!unexcited.empty())
     c.status +=
         fmt::format("; {} pinned at 0: no start from rest in these runs sets it", fmt::join(unexcited, " "));
+  std::vector<std::string> held;
+  for (const std::string& e : job.effects) {
+    const model::EffectSpec* spec = find_plan(e);
+    if (spec == nullptr) continue;
+    const std::vector<std::string> fitted = fitted_keys(*spec, data.train);
+    for (const std::string& key : spec->plan.free) {
+      if (std::find(fitted.begin(), fitted.end(), key) == fitted.end()) held.push_back(e + "." + key);
+    }
+  }
+  if (!held.empty())
+    c.status += fmt::format("; {} held at 0: without a measured current speed does not tell it from R",
+                            fmt::join(held, " "));
   for (const std::string& note : profiled) c.status += "; " + note;
   score();
   return c;
