@@ -17,6 +17,13 @@
 #    load inertia, Coulomb + viscous friction (+ an asymmetry on odd seeds), speed noise above
 #    what the encoder states, and on seeds divisible by 3 a drive that low-passes the speed it
 #    logs (speed_filter metadata). Integrated here, by an event-exact stick-slip of its own.
+# deadband_aprbs, gearmotor_aprbs, current_aprbs: the same rig (same seed, same physics) driven as
+# a lab validates one: the training run adds braking steps from speed to a small drive of either
+# sign (half the dead band, 0.5 V on a gearmotor, 3 % of the current range), and the held-out run
+# is a random-level step run (an amplitude-modulated PRBS) in which a third of the levels are
+# small, most of them after speed, so the two runs hold many brakes to a drive the rig cannot
+# start from. These rows tell a driver's dead band (the bridge shorts the motor: v_m = 0) from a
+# brush drop (v_m = v + V_b while the motor generates) and from Coulomb friction (v_m = v).
 
 # draw SEED: shell assignments of uniform draws u1..u12 in [0, 1) for SEED (awk's generator).
 draw() {
@@ -27,6 +34,28 @@ draw() {
 lin() { awk -v u="$1" -v a="$2" -v b="$3" 'BEGIN { printf "%.6g", a + u * (b - a) }'; }
 logu() { awk -v u="$1" -v a="$2" -v b="$3" 'BEGIN { printf "%.6g", exp(log(a) + u * (log(b) - log(a))) }'; }
 calc() { awk "BEGIN { printf \"%.6g\", $1 }"; }
+
+# aprbs SEED N AMP SMALL TMIN TMAX: segments() text of N random-level steps from rest back to rest:
+# each level uniform in [-AMP, AMP], or with probability 1/3 in [-SMALL, SMALL], held for a time
+# uniform in [TMIN, TMAX] s (awk's generator, its own stream for SEED).
+aprbs() {
+  awk -v s="$1" -v n="$2" -v a="$3" -v sm="$4" -v t0="$5" -v t1="$6" 'BEGIN {
+    srand(s * 104729 + 71); printf "hold 0 0.2"
+    for (k = 0; k < n; ++k) {
+      l = rand() < 1 / 3 ? sm * (2 * rand() - 1) : a * (2 * rand() - 1)
+      printf ";hold %.4g %.4g", l, t0 + rand() * (t1 - t0)
+    }
+    printf ";hold 0 %.4g", t1
+  }'
+}
+
+# brakes FAST SMALL HOLD: segments() text braking from +-FAST to a drive of +-SMALL, both signs of
+# each (with the motion and against it), each level held HOLD s, ending at rest.
+brakes() {
+  local f=$1 s=$2 h=$3
+  printf 'hold %s %s;hold %s %s;hold -%s %s;hold -%s %s;hold %s %s;hold -%s %s;hold -%s %s;hold %s %s;hold 0 %s' \
+    "$f" "$h" "$s" "$h" "$f" "$h" "$s" "$h" "$f" "$h" "$s" "$h" "$f" "$h" "$s" "$h" "$h"
+}
 
 # noisy SEED SIGMA: adds Gaussian noise of SIGMA to the rpm column of a CSV on stdin.
 noisy() {
@@ -53,7 +82,7 @@ measure_v() {
 }
 
 rig_deadband() {
-  local dir=$1 seed=$2
+  local dir=$1 seed=$2 aprbs=${3:-}
   eval "$(draw "$seed")"
   local vs=$(awk -v u="$u1" 'BEGIN { print u < 0.33 ? 6 : u < 0.67 ? 12 : 24 }')
   local r=$(logu "$u2" 1 8) w0=$(logu "$u3" 300 1000) j=$(logu "$u4" 1e-6 2e-5) te=$(logu "$u5" 2e-4 1e-3)
@@ -68,13 +97,15 @@ rig_deadband() {
   printf '[effect.hbridge]\nR_on_ohm = 0\ndeadband = %s\n' "$db" >>"$dir/truth.ini"
   voltage_ini "$r" "$l" "$kt" "$j" 0 0 0 "$vs" >"$dir/given.ini"
   local a=$(calc "0.25 * $vs") b=$(calc "0.5 * $vs") c=$(calc "0.75 * $vs") m=$(calc "0.2 * $vs")
-  segments "$dt" "hold 0 0.2;hold $a 0.5;hold $b 0.5;hold $c 0.5;hold $b 0.5;hold 0 0.5;hold -$a 0.5;\
-hold -$b 0.5;hold -$c 0.5;hold 0 0.5;ramp 0 $m 3;hold 0 0.5;ramp 0 -$m 3;hold 0 0.5" |
-    measure_v "$dir" "$dt" "$cpr" "$seed" "$sigma" >"$dir/train.csv"
+  local train="hold 0 0.2;hold $a 0.5;hold $b 0.5;hold $c 0.5;hold $b 0.5;hold 0 0.5;hold -$a 0.5;\
+hold -$b 0.5;hold -$c 0.5;hold 0 0.5;ramp 0 $m 3;hold 0 0.5;ramp 0 -$m 3;hold 0 0.5"
+  [[ -z $aprbs ]] || train+=";$(brakes "$b" "$(calc "0.5 * $db * $vs")" 0.4)"
+  segments "$dt" "$train" | measure_v "$dir" "$dt" "$cpr" "$seed" "$sigma" >"$dir/train.csv"
   a=$(calc "0.35 * $vs") b=$(calc "0.6 * $vs") m=$(calc "0.18 * $vs")
-  segments "$dt" "hold 0 0.2;hold $a 0.5;hold $b 0.5;hold 0 0.5;hold -$a 0.5;hold -$b 0.5;hold 0 0.5;\
-ramp 0 $m 2;hold 0 0.5;ramp 0 -$m 2;hold 0 0.5" |
-    measure_v "$dir" "$dt" "$cpr" "$((seed + 1000))" "$sigma" >"$dir/validate.csv"
+  local validate="hold 0 0.2;hold $a 0.5;hold $b 0.5;hold 0 0.5;hold -$a 0.5;hold -$b 0.5;hold 0 0.5;\
+ramp 0 $m 2;hold 0 0.5;ramp 0 -$m 2;hold 0 0.5"
+  [[ -z $aprbs ]] || validate=$(aprbs "$seed" 30 "$(calc "0.7 * $vs")" "$(calc "$db * $vs")" 0.1 0.4)
+  segments "$dt" "$validate" | measure_v "$dir" "$dt" "$cpr" "$((seed + 1000))" "$sigma" >"$dir/validate.csv"
   : >"$dir/args"
   printf 'effects hbridge+friction_levels\nhbridge.deadband %s\n' "$db" >"$dir/truth"
   printf 'friction_levels.Tc_Nm %s\n' "$tc" >>"$dir/truth"
@@ -84,7 +115,7 @@ ramp 0 $m 2;hold 0 0.5;ramp 0 -$m 2;hold 0 0.5" |
 }
 
 rig_gearmotor() {
-  local dir=$1 seed=$2
+  local dir=$1 seed=$2 aprbs=${3:-}
   eval "$(draw "$seed")"
   local n=$(awk -v u="$u1" 'BEGIN { printf "%d", 20 + int(u * 81) }')
   local r=$(logu "$u2" 1 5) kt=$(logu "$u3" 0.005 0.02) j=$(logu "$u4" 1e-6 1e-5)
@@ -98,12 +129,14 @@ rig_gearmotor() {
   local sigma=$(calc "$u10 * 60 / ($cpr * $dt)")
   voltage_ini "$r" "$l" "$kt" "$j" "$(calc "$tc + $tx")" "$tc" "$c1" 12 "$n" >"$dir/truth.ini"
   voltage_ini "$r" "$l" "$kt" "$j" 0 0 0 12 "$n" >"$dir/given.ini"
-  segments "$dt" "hold 0 0.5;hold 3 2;hold 6 2;hold 9 2;hold 12 2;hold 0 2;hold -3 2;hold -6 2;hold -9 2;\
-hold 0 2;ramp 0 3.5 10;hold 0 1;ramp 0 -3.5 10;hold 0 1" |
-    measure_v "$dir" "$dt" "$cpr" "$seed" "$sigma" >"$dir/train.csv"
-  segments "$dt" "hold 0 0.5;hold 4 2;hold 8 2;hold 11 2;hold 0 2;hold -4 2;hold -8 2;hold -11 2;hold 0 2;\
-ramp 0 3 8;hold 0 1;ramp 0 -3 8;hold 0 1" |
-    measure_v "$dir" "$dt" "$cpr" "$((seed + 1000))" "$sigma" >"$dir/validate.csv"
+  local train="hold 0 0.5;hold 3 2;hold 6 2;hold 9 2;hold 12 2;hold 0 2;hold -3 2;hold -6 2;hold -9 2;\
+hold 0 2;ramp 0 3.5 10;hold 0 1;ramp 0 -3.5 10;hold 0 1"
+  [[ -z $aprbs ]] || train+=";$(brakes 8 0.5 1.5)"
+  segments "$dt" "$train" | measure_v "$dir" "$dt" "$cpr" "$seed" "$sigma" >"$dir/train.csv"
+  local validate="hold 0 0.5;hold 4 2;hold 8 2;hold 11 2;hold 0 2;hold -4 2;hold -8 2;hold -11 2;hold 0 2;\
+ramp 0 3 8;hold 0 1;ramp 0 -3 8;hold 0 1"
+  [[ -z $aprbs ]] || validate=$(aprbs "$seed" 25 11 1.5 0.8 2.5)
+  segments "$dt" "$validate" | measure_v "$dir" "$dt" "$cpr" "$((seed + 1000))" "$sigma" >"$dir/validate.csv"
   : >"$dir/args"
   printf 'effects friction_levels\nfriction_levels.Tc_Nm %s\n' "$tc" >"$dir/truth"
   printf 'friction_levels.Ts_excess_Nm %s\n' "$tx" >>"$dir/truth"
@@ -151,7 +184,7 @@ current_run() {
 }
 
 rig_current() {
-  local dir=$1 seed=$2
+  local dir=$1 seed=$2 aprbs=${3:-}
   eval "$(draw "$seed")"
   local kt=$(logu "$u1" 0.02 0.1) j=$(logu "$u2" 1e-5 1e-4) imax=$(lin "$u3" 1 4)
   local tc=$(calc "$(lin "$u4" 0.05 0.15) * $kt * $imax")
@@ -171,13 +204,17 @@ rig_current() {
     "$tau" >>"$dir/given.ini"
   cp "$dir/given.ini" "$dir/truth.ini"
   local q=$(calc "0.3 * $imax") h=$(calc "0.6 * $imax") f=$(calc "$imax") m=$(calc "0.25 * $imax")
+  local train="hold 0 0.2;hold $q 0.6;hold $h 0.6;hold $f 0.6;hold 0 0.6;hold -$q 0.6;hold -$h 0.6;hold -$f 0.6;\
+hold 0 0.6;ramp 0 $m 3;hold 0 0.5;ramp 0 -$m 3;hold 0 0.5"
+  [[ -z $aprbs ]] || train+=";$(brakes "$h" "$(calc "0.03 * $imax")" 0.5)"
   current_run "$dt" "$kt" "$j" "$(calc "$tc + $tx")" "$tc" "$c1" "$da" "$cpr" "$tau" "$seed" "$sigma" \
-    "hold 0 0.2;hold $q 0.6;hold $h 0.6;hold $f 0.6;hold 0 0.6;hold -$q 0.6;hold -$h 0.6;hold -$f 0.6;\
-hold 0 0.6;ramp 0 $m 3;hold 0 0.5;ramp 0 -$m 3;hold 0 0.5" >"$dir/train.csv"
+    "$train" >"$dir/train.csv"
   q=$(calc "0.4 * $imax") h=$(calc "0.8 * $imax") m=$(calc "0.22 * $imax")
+  local validate="hold 0 0.2;hold $q 0.6;hold $h 0.6;hold 0 0.6;hold -$q 0.6;hold -$h 0.6;hold 0 0.6;\
+ramp 0 $m 2;hold 0 0.5;ramp 0 -$m 2;hold 0 0.5"
+  [[ -z $aprbs ]] || validate=$(aprbs "$seed" 20 "$(calc "0.9 * $imax")" "$(calc "0.1 * $imax")" 0.2 0.6)
   current_run "$dt" "$kt" "$j" "$(calc "$tc + $tx")" "$tc" "$c1" "$da" "$cpr" "$tau" "$((seed + 1000))" \
-    "$sigma" "hold 0 0.2;hold $q 0.6;hold $h 0.6;hold 0 0.6;hold -$q 0.6;hold -$h 0.6;hold 0 0.6;\
-ramp 0 $m 2;hold 0 0.5;ramp 0 -$m 2;hold 0 0.5" >"$dir/validate.csv"
+    "$sigma" "$validate" >"$dir/validate.csv"
   echo --current >"$dir/args"
   if [[ $da == 0 ]]; then
     echo 'effects friction_levels' >"$dir/truth"
@@ -189,5 +226,9 @@ ramp 0 $m 2;hold 0 0.5;ramp 0 -$m 2;hold 0 0.5" >"$dir/validate.csv"
   printf 'rig current Kt %s, J %s, imax %s A, %s s, filter %s s, noise %s rpm\n' \
     "$kt" "$j" "$imax" "$dt" "$tau" "$sigma" >"$dir/about"
 }
+
+rig_deadband_aprbs() { rig_deadband "$1" "$2" aprbs; }
+rig_gearmotor_aprbs() { rig_gearmotor "$1" "$2" aprbs; }
+rig_current_aprbs() { rig_current "$1" "$2" aprbs; }
 
 rig() { mkdir -p "$3" && "rig_$1" "$3" "$2"; }

@@ -18,6 +18,13 @@
 # where the dead band trades against the Coulomb level; reported from there, the two were 12
 # standard errors off (0.0319 against 0.0453, Tc +12 SE). The diagnosis is now fitted on to
 # convergence after the verdict.
+# And two of those motors driven as a lab validates one (deadband_aprbs: braking steps from speed
+# to half the dead band in training, a random-level step run held out; seeds 2 and 6), with the
+# same tolerances. Before, seed 6 was named brush_drop+friction_levels (c1 +16 standard errors)
+# and seed 2's c1 was pinned at 0 (truth 6.3e-6): the bridge's on-resistance, fitted on speed
+# alone, traded with the viscous level through Kt, so the dead band's mixture was set aside as
+# undetermined or stopped at the bound. Without a measured current it is now held at 0, and the
+# status says so.
 # Args: TOOL_DIR SOURCE_DIR.
 set -euo pipefail
 tools=$1
@@ -40,12 +47,12 @@ near_truth() {
   fi
 }
 
-for spec in current:7 current:9 deadband:1 deadband:4 deadband:7; do
+for spec in current:7 current:9 deadband:1 deadband:4 deadband:7 deadband_aprbs:2 deadband_aprbs:6; do
   kind=${spec%%:*} seed=${spec##*:} dir="$work/$kind-$seed"
   rig "$kind" "$seed" "$dir"
   mapfile -t drive <"$dir/args"
   # The dead band's mixture comes after every single fit: a budget the verdict does not hang on.
-  [[ $kind == deadband ]] && drive+=(--budget 900)
+  [[ $kind == deadband* ]] && drive+=(--budget 900)
   mcg-fit gap "${drive[@]}" --config "$dir/given.ini" --train "$dir/train.csv" \
     --validate "$dir/validate.csv" \
     >"$dir/gap.csv" 2>"$dir/gap.err" || fail "$kind $seed: gap: exit $?: $(tail -1 "$dir/gap.err")"
@@ -57,6 +64,9 @@ for spec in current:7 current:9 deadband:1 deadband:4 deadband:7; do
     continue
   fi
   pass
+  if [[ $kind == deadband* ]]; then
+    check "$kind $seed: the bridge's on-resistance is said held at 0" grep -q 'hbridge.R_on_ohm held at 0' <<<"$row"
+  fi
   shrink=$(cut -d, -f4 <<<"$row")
   awk -v s="$shrink" 'BEGIN { exit !(s >= 60) }' && pass || fail "$kind $seed: shrink $shrink % < 60 %"
   while read -r key truth; do
@@ -66,8 +76,8 @@ for spec in current:7 current:9 deadband:1 deadband:4 deadband:7; do
       current:*Ts_excess*) tol=0.1 ;;
       current:*dT_Nm) tol=0.05 ;;
       current:*) tol=0.02 ;;
-      deadband:*Ts_excess*) tol=0.3 ses=3 ;;
-      deadband:*) tol=0.1 ses=3 ;;
+      deadband*:*Ts_excess*) tol=0.3 ses=3 ;;
+      deadband*:*) tol=0.1 ses=3 ;;
     esac
     value=$(grep -o "$key=[^ ,]*" <<<"$row" | cut -d= -f2 || true)
     # A breakaway whose exact-stick profile stays open is pinned, and the status must say so.
@@ -83,7 +93,10 @@ done
 # fits these runs as well as the rig's own model does (held-out 7.33 rpm both): the runs name a
 # voltage offset, not which. Either mixture may be named, and when it is not the dead band's, the
 # verdict must say that the dead band in its place explains the runs as well. Before, gap named
-# brush_drop+friction_levels and said nothing of the other.
+# brush_drop+friction_levels and said nothing of the other. Said so, the dead band's mixture must
+# score within 2 % of the diagnosis: with the bridge's on-resistance held, its joint fit once
+# spent its budget half way along the valley where the dead band trades with the Coulomb level
+# (0.693 against 0.633, dead band 0.064 against the rig's 0.096) and still said "as well".
 dir="$work/deadband-10"
 rig deadband 10 "$dir"
 mcg-fit gap --budget 900 --config "$dir/given.ini" --train "$dir/train.csv" --validate "$dir/validate.csv" \
@@ -95,7 +108,12 @@ case $named in
   hbridge+friction_levels) pass ;;
   brush_drop+friction_levels)
     check "deadband 10: the dead band in the brush drop's place is named" \
-      grep -q 'hbridge) in place of a brush drop (brush_drop), hbridge+friction_levels explains' <<<"$reason" ;;
+      grep -q 'hbridge) in place of a brush drop (brush_drop), hbridge+friction_levels explains' <<<"$reason"
+    # ... fitted as far as the brush drop's mixture: "as well" within 2 % of its score.
+    scores=$(sed -n 's/.*explains these runs as well (score \([0-9.e+-]*\) against \([0-9.e+-]*\)).*/\1 \2/p' \
+      <<<"$reason")
+    check "deadband 10: the dead band's mixture scores within 2 % of the diagnosis' ($scores)" \
+      awk -v s="$scores" 'BEGIN { split(s, f, " "); exit !(f[2] > 0 && f[1] <= 1.02 * f[2]) }' ;;
   *) fail "deadband 10: diagnosis $named, expected a dead band or a brush drop beside friction_levels" ;;
 esac
 finish gap_rigs

@@ -513,6 +513,21 @@ TEST(GapDecision, AnUndeterminedCandidateIsNeverTheDiagnosis) {
   const auto with_current = gap_detail::mismatch_free({}, model::builtin_rig(), {run});
   EXPECT_EQ(std::count(with_current.begin(), with_current.end(), "param_mismatch.R_scale"), 1);
   EXPECT_EQ(with_current.size(), speed_only.size() + 1);
+  // Likewise a bridge's on-resistance, a resistance in series with R: held at 0 without a
+  // current (it traded with Kt and the viscous friction), fitted with one.
+  const model::EffectSpec& hbridge_spec = *model::find_effect("hbridge");
+  run.outputs = {"rpm"};
+  EXPECT_EQ(gap_detail::fitted_keys(hbridge_spec, {run}), std::vector<std::string>{"deadband"});
+  model::Model bridged;
+  bridged.params = model::builtin_rig();
+  bridged.effects.push_back(model::default_effect("hbridge"));
+  gap_detail::hold_unfitted(bridged, {run});
+  EXPECT_EQ(bridged.effect("hbridge")->get("R_on_ohm"), 0.0);
+  run.outputs = {"rpm", "i"};
+  EXPECT_EQ(gap_detail::fitted_keys(hbridge_spec, {run}), hbridge_spec.plan.free);
+  bridged.effects.back() = model::default_effect("hbridge");
+  gap_detail::hold_unfitted(bridged, {run});
+  EXPECT_GT(bridged.effect("hbridge")->get("R_on_ohm"), 0.0);
 }
 
 // The refit frees only the nominal scales whose parameters act in the training runs: a motor

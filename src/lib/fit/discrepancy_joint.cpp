@@ -29,13 +29,14 @@ JointFit joint_refit(const model::Model& model, std::size_t first_term, const st
              phased.size() == model.shaft_terms.size() - first_term);
   model::Model start = model;
   if (!start.effect("param_mismatch")) start.effects.push_back(model::default_effect("param_mismatch"));
+  gap_detail::hold_unfitted(start, data.train);
   std::vector<std::string> effects;
   for (const model::Effect& e : model.effects) effects.push_back(e.name);
   std::vector<std::string> nominal = gap_detail::mismatch_free({}, model.params, data.train, effects);
   for (const model::Effect& e : model.effects) {
     const model::EffectSpec* spec = model::find_effect(e.name);
     if (spec == nullptr || e.name == "param_mismatch") continue;
-    for (const std::string& key : spec->plan.free) {
+    for (const std::string& key : gap_detail::fitted_keys(*spec, data.train)) {
       if (key != spec->plan.angle_order_key) nominal.push_back(e.name + "." + key);
     }
   }

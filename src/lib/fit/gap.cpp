@@ -242,8 +242,9 @@ void seed_catalog(GapReport& report, const GapData& data, const GapSettings& set
     FitProblem problem;
     problem.model = reference.model;
     problem.model.effects.push_back(seed);
+    hold_unfitted(problem.model, data.train);
     problem.runs = data.train;
-    for (const std::string& key : spec->plan.free) {
+    for (const std::string& key : fitted_keys(*spec, data.train)) {
       if (key != spec->plan.angle_order_key) problem.free.push_back(seed.name + "." + key);
     }
     problem.bounds = settings.bounds;

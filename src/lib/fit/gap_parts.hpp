@@ -131,6 +131,13 @@ double residual_noise(const GapData& data, const Evaluation& ev, const std::stri
 /// True when some run measures the motor current (the only output that tells R from Kt).
 bool measures_current(const std::vector<Run>& runs);
 
+/// The free keys of `spec`'s plan a fit on `runs` moves: all but its series resistances
+/// (EffectPlan::series_resistance) when no run measures the current.
+std::vector<std::string> fitted_keys(const model::EffectSpec& spec, const std::vector<Run>& runs);
+
+/// `m` with every series resistance that `runs` do not fit (fitted_keys) held at 0.
+void hold_unfitted(model::Model& m, const std::vector<Run>& runs);
+
 /// The nominal scales of param_mismatch a refit moves ("param_mismatch.Kt_scale", ...): those
 /// --fix does not pin (`fixed`), that multiply something in `p` that acts in `runs` (a friction
 /// element the runs' clutch states put on a turning shaft: the generator's and the clutch's act

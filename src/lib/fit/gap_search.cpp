@@ -309,6 +309,14 @@ model::Model grid_start(const std::vector<model::Model>& bases, const model::Eff
       }
     }
   }
+  // A key the runs do not fit is held where the bases hold it, not gridded.
+  const std::vector<std::string> fitted = fitted_keys(effect, runs);
+  for (std::size_t k = keys.size(); k-- > 0;) {
+    if (std::find(fitted.begin(), fitted.end(), keys[k]) == fitted.end()) {
+      keys.erase(keys.begin() + static_cast<std::ptrdiff_t>(k));
+      axes.erase(axes.begin() + static_cast<std::ptrdiff_t>(k));
+    }
+  }
   if (!plan.angle_order_key.empty() && !orders.empty()) {
     keys.push_back(plan.angle_order_key);
     axes.push_back(orders);
@@ -578,13 +586,15 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   c.name = job.name;
   c.effects = job.effects;
   model::Model start = job.start;
+  hold_unfitted(start, data.train);
   if (job.grid_effects.empty() && !job.other_starts.empty()) {
     double best = training_cost(start, data.train, &memo);
-    for (const model::Model& other : job.other_starts) {
+    for (model::Model other : job.other_starts) {
+      hold_unfitted(other, data.train);
       const double cost = training_cost(other, data.train, &memo);
       if (cost < best) {
         best = cost;
-        start = other;
+        start = std::move(other);
       }
     }
   }
@@ -593,6 +603,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
       std::vector<model::Model> bases{start};
       for (model::Model other : job.other_starts) {
         add_effect(other, e);
+        hold_unfitted(other, data.train);
         bases.push_back(std::move(other));
       }
       const auto point = job.data_starts.find(e);
@@ -626,7 +637,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   // and the status says so.
   const auto cut_short = [&](const FitResult& r) {
     for (const auto& e : job.effects) {
-      if (const model::EffectSpec* plan = find_plan(e)) c.added_parameters += plan->plan.free.size();
+      if (const model::EffectSpec* plan = find_plan(e))
+        c.added_parameters += fitted_keys(*plan, data.train).size();
     }
     c.status = fmt::format("{}; fit cut short after {} iterations, scored as it stands", k_out_of_time,
                            r.nls.iterations);
@@ -638,7 +650,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   };
   const auto score = [&] {
     for (const auto& e : job.effects) {
-      if (const model::EffectSpec* plan = find_plan(e)) c.added_parameters += plan->plan.free.size();
+      if (const model::EffectSpec* plan = find_plan(e))
+        c.added_parameters += fitted_keys(*plan, data.train).size();
     }
     c.evaluated = true;
     const Evaluation ev = evaluate(c.model, data, floors, &memo);
@@ -861,6 +874,18 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   if (!unexcited.empty())
     c.status +=
         fmt::format("; {} pinned at 0: no start from rest in these runs sets it", fmt::join(unexcited, " "));
+  std::vector<std::string> held;
+  for (const std::string& e : job.effects) {
+    const model::EffectSpec* spec = find_plan(e);
+    if (spec == nullptr) continue;
+    const std::vector<std::string> fitted = fitted_keys(*spec, data.train);
+    for (const std::string& key : spec->plan.free) {
+      if (std::find(fitted.begin(), fitted.end(), key) == fitted.end()) held.push_back(e + "." + key);
+    }
+  }
+  if (!held.empty())
+    c.status += fmt::format("; {} held at 0: without a measured current speed does not tell it from R",
+                            fmt::join(held, " "));
   for (const std::string& note : profiled) c.status += "; " + note;
   score();
   return c;
@@ -1039,6 +1064,27 @@ bool measures_current(const std::vector<Run>& runs) {
   return std::any_of(runs.begin(), runs.end(), [](const Run& r) {
     return std::find(r.outputs.begin(), r.outputs.end(), "i") != r.outputs.end();
   });
+}
+
+std::vector<std::string> fitted_keys(const model::EffectSpec& spec, const std::vector<Run>& runs) {
+  std::vector<std::string> keys = spec.plan.free;
+  if (!measures_current(runs)) {
+    std::erase_if(keys, [&](const std::string& k) {
+      return std::find(spec.plan.series_resistance.begin(), spec.plan.series_resistance.end(), k) !=
+             spec.plan.series_resistance.end();
+    });
+  }
+  return keys;
+}
+
+void hold_unfitted(model::Model& m, const std::vector<Run>& runs) {
+  if (measures_current(runs)) return;
+  for (model::Effect& e : m.effects) {
+    if (const model::EffectSpec* spec = model::find_effect(e.name)) {
+      for (const std::string& key : spec->plan.series_resistance)
+        model::set_parameter(m, e.name + "." + key, 0.0);
+    }
+  }
 }
 
 std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, const model::Params& p,
@@ -1340,7 +1386,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
             {},          {base},
             {}};
     add_effect(job.start, plan.name);
-    for (const auto& key : plan.plan.free) {
+    for (const auto& key : fitted_keys(plan, data.train)) {
       job.free.push_back(plan.name + "." + key);
       job.stage1_free.push_back(plan.name + "." + key);
     }
@@ -1489,6 +1535,8 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         // An offset alike one the model holds (a dead band beside a Coulomb level) removes nothing
         // fitted alone: the member holds its share, which only the joint refit moves.
         job.extension = !alike_offset(current.effects, added);
+        // Its joint fit walks the valley where the two offsets trade: twice the budget.
+        if (!job.extension) job.evaluations_per_parameter = 20;
         job.extends = current.model;
         for (const auto& f : current.free) {
           if (!f.starts_with("param_mismatch.")) job.free.push_back(f);
@@ -1519,7 +1567,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
               job.other_starts.push_back(std::move(*split));
           }
         }
-        for (const auto& key : find_plan(added)->plan.free) {
+        for (const auto& key : fitted_keys(*find_plan(added), data.train)) {
           job.stage1_free.push_back(added + "." + key);
           job.free.push_back(added + "." + key);
         }

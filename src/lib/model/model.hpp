@@ -221,6 +221,11 @@ struct EffectPlan {
   /// Keys of param_mismatch the refit holds at 1 while this effect is in the model (they
   /// would move what the effect's own parameters move).
   std::vector<std::string> supersedes;
+  /// Free keys that are a resistance in series with the armature (a bridge's switches): speed
+  /// alone tells them from R no better than R_scale (see gap's mismatch_free), and beside a
+  /// refitted Kt they trade with the viscous friction. Without a measured current they are
+  /// held at 0: the given R then stands for the whole circuit.
+  std::vector<std::string> series_resistance;
   /// A friction effect: tried before the others, and fitted on the regularised stick
   /// (SimOptions::smooth_stick), scored on the exact one.
   bool friction = false;
@@ -258,6 +263,11 @@ struct EffectPlan {
   /// This plan with its grid scaled by `scale` (grid_scale).
   EffectPlan scaled_by(std::vector<double> (*scale)(const Params&, const DriveScale&)) && {
     grid_scale = scale;
+    return std::move(*this);
+  }
+  /// This plan with `keys` of its free keys a series resistance (series_resistance).
+  EffectPlan in_series(std::vector<std::string> keys) && {
+    series_resistance = std::move(keys);
     return std::move(*this);
   }
   /// This plan for an effect that acts where `where` says (Acts).

@@ -37,6 +37,7 @@ EffectSpec hbridge() {
           EffectPlan::fit({"R_on_ohm", "deadband"}, {{0.1, 0.5}, {0.005, 0.02, 0.06}})
               .scaled_by(grid_scale)
               .acting_in(EffectPlan::Acts::motor_circuit)
+              .in_series({"R_on_ohm"})
               .seeded_by_terms({{TermShape::drive_dead_band, from_dead_band}})};
 }
 
