@@ -718,13 +718,18 @@ TEST(GapSearch, EarlyRejectionKeepsTheDiagnosisAndItsParameters) {
   EXPECT_EQ(a.score, b.score);
 }
 
+/// Training and validation runs of the model as given (PRBS about 1.5 V, no effect): no gap.
+GapData null_gap_data() {
+  const table::Table train = measure(prbs(1.5, 6.0, 3.0, 5, 0, k_inf), {}, 1, "train.csv");
+  const table::Table validate = measure(prbs(1.5, 7.0, 3.0, 7, 0, k_inf), {}, 2, "validate.csv");
+  return prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+}
+
 // Without a gap (a run of the model as given) no candidate can be significant: each single is
 // fitted alone on the refitted nominal model and not jointly (its status says why), and the
 // verdict is none as before.
 TEST(GapSearch, WithoutAGapSinglesAreFittedAloneOnly) {
-  const table::Table train = measure(prbs(1.5, 6.0, 3.0, 5, 0, k_inf), {}, 1, "train.csv");
-  const table::Table validate = measure(prbs(1.5, 7.0, 3.0, 7, 0, k_inf), {}, 2, "validate.csv");
-  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+  const GapData data = null_gap_data();
   GapSettings settings;
   settings.threads = 2;
   for (const model::EffectSpec& spec : model::effect_catalog()) {
@@ -749,9 +754,7 @@ TEST(GapSearch, WithoutAGapSinglesAreFittedAloneOnly) {
 // the model as given too (a start there, a hair better on the training runs, made stribeck's
 // and cogging's rows on the 120 s null fits of another nominal model).
 TEST(GapSearch, WithoutAGapEverySingleStartsOnTheRefit) {
-  const table::Table train = measure(prbs(1.5, 6.0, 3.0, 5, 0, k_inf), {}, 1, "train.csv");
-  const table::Table validate = measure(prbs(1.5, 7.0, 3.0, 7, 0, k_inf), {}, 2, "validate.csv");
-  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+  const GapData data = null_gap_data();
   GapSettings settings;
   settings.threads = 2;
   const GapReport report = diagnose_gap(model::Model{}, data, settings);
