@@ -683,6 +683,18 @@ TEST(GapFrictionStart, LevelsAndAsymmetryComeFromTheData) {
   EXPECT_LT(none.at("friction_levels")[0], 3e-4);
 }
 
+/// Settings of a search on two threads among the catalog's candidates `names` only (kept few for
+/// the sanitizer build).
+GapSettings searching_only(const std::vector<std::string>& names) {
+  GapSettings settings;
+  settings.threads = 2;
+  for (const model::EffectSpec& spec : model::effect_catalog()) {
+    if (spec.plan.candidate && std::find(names.begin(), names.end(), spec.name) == names.end())
+      settings.excluded.push_back(spec.name);
+  }
+  return settings;
+}
+
 // The early rejection skips the joint refit of a mixture whose added effect, fitted alone on
 // the current best model, removes almost nothing of its training cost: the search gives the
 // diagnosis, parameters and score of the search that refits every extension (a withheld dead
@@ -692,14 +704,8 @@ TEST(GapSearch, EarlyRejectionKeepsTheDiagnosisAndItsParameters) {
   const table::Table train = measure(prbs(1.5, 6.0, 3.0, 5, 0, k_inf), effect, 1, "train.csv");
   const table::Table validate = measure(prbs(1.5, 7.0, 3.0, 7, 0, k_inf), effect, 2, "validate.csv");
   const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
-  GapSettings settings;
-  settings.threads = 2;
-  // Only the effects that matter here (kept few for the sanitizer build): the withheld one, and
-  // one whose extension of it is rejected.
-  for (const model::EffectSpec& spec : model::effect_catalog()) {
-    if (spec.plan.candidate && spec.name != "dead_time" && spec.name != "hbridge")
-      settings.excluded.push_back(spec.name);
-  }
+  // The withheld effect, and one whose extension of it is rejected.
+  GapSettings settings = searching_only({"dead_time", "hbridge"});
   const GapReport fast = diagnose_gap(model::Model{}, data, settings);
   settings.early_rejection = false;
   const GapReport slow = diagnose_gap(model::Model{}, data, settings);
@@ -730,12 +736,7 @@ GapData null_gap_data() {
 // verdict is none as before.
 TEST(GapSearch, WithoutAGapSinglesAreFittedAloneOnly) {
   const GapData data = null_gap_data();
-  GapSettings settings;
-  settings.threads = 2;
-  for (const model::EffectSpec& spec : model::effect_catalog()) {
-    if (spec.plan.candidate && spec.name != "dead_time" && spec.name != "friction_levels")
-      settings.excluded.push_back(spec.name);
-  }
+  GapSettings settings = searching_only({"dead_time", "friction_levels"});
   const GapReport report = diagnose_gap(model::Model{}, data, settings);
   EXPECT_EQ(report.diagnosis, "none");
   std::size_t alone = 0;
@@ -827,12 +828,7 @@ TEST(GapSearch, AMixtureEndsNoWorseOnItsTrainingRunsThanTheModelItExtends) {
                        {speed_only(measure(steps(3.0, 1.6, 2.4, 4, 0, false), effect, 2, "validate.csv"))},
                        model::builtin_rig(), 0.6);
   const std::vector<OutputFloor> floors = gap_detail::noise_floors(data);
-  GapSettings settings;
-  settings.threads = 2;
-  for (const model::EffectSpec& spec : model::effect_catalog()) {
-    if (spec.plan.candidate && spec.name != "friction_levels" && spec.name != "brush_drop")
-      settings.excluded.push_back(spec.name);
-  }
+  GapSettings settings = searching_only({"friction_levels", "brush_drop"});
   const gap_detail::Candidates found = gap_detail::search_candidates(
       model::Model{}, data, floors, gap_detail::evaluate(model::Model{}, data, floors), true, settings);
   ASSERT_EQ(found.best_single, "friction_levels");
