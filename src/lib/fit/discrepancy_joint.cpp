@@ -29,7 +29,6 @@ JointFit joint_refit(const model::Model& model, std::size_t first_term, const st
              phased.size() == model.shaft_terms.size() - first_term);
   model::Model start = model;
   if (!start.effect("param_mismatch")) start.effects.push_back(model::default_effect("param_mismatch"));
-  gap_detail::hold_unfitted(start, data.train);
   std::vector<std::string> effects;
   for (const model::Effect& e : model.effects) effects.push_back(e.name);
   std::vector<std::string> nominal = gap_detail::mismatch_free({}, model.params, data.train, effects);

@@ -242,7 +242,7 @@ void seed_catalog(GapReport& report, const GapData& data, const GapSettings& set
     FitProblem problem;
     problem.model = reference.model;
     problem.model.effects.push_back(seed);
-    hold_unfitted(problem.model, data.train);
+    hold_unfitted(problem.model.effects.back(), data.train);
     problem.runs = data.train;
     for (const std::string& key : fitted_keys(*spec, data.train)) {
       if (key != spec->plan.angle_order_key) problem.free.push_back(seed.name + "." + key);

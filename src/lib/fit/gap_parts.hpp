@@ -135,8 +135,13 @@ bool measures_current(const std::vector<Run>& runs);
 /// (EffectPlan::series_resistance) when no run measures the current.
 std::vector<std::string> fitted_keys(const model::EffectSpec& spec, const std::vector<Run>& runs);
 
-/// `m` with every series resistance that `runs` do not fit (fitted_keys) held at 0.
-void hold_unfitted(model::Model& m, const std::vector<Run>& runs);
+/// Effect `e` with every series resistance that `runs` do not fit (fitted_keys) at 0.
+void hold_unfitted(model::Effect& e, const std::vector<Run>& runs);
+
+/// Effect `name` as the search adds it to a model fitted on `runs`: at its catalog defaults, its
+/// unfitted series resistances at 0 (hold_unfitted). An effect of the model as given keeps its
+/// values: the search only adds what the model lacks.
+model::Effect searched_effect(std::string_view name, const std::vector<Run>& runs);
 
 /// The nominal scales of param_mismatch a refit moves ("param_mismatch.Kt_scale", ...): those
 /// --fix does not pin (`fixed`), that multiply something in `p` that acts in `runs` (a friction

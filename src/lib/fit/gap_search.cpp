@@ -215,8 +215,10 @@ struct Job {
 /// the solver's tolerance, with room.
 constexpr double k_no_worse_than_extended = 1e-3;
 
-void add_effect(model::Model& m, std::string_view name) {
-  if (m.effect(name) == nullptr) m.effects.push_back(model::default_effect(name));
+/// Adds effect `name` at its catalog defaults, as the search tries it on `runs` (searched_effect),
+/// unless `m` holds it already (the model as given may: its values stand).
+void add_effect(model::Model& m, std::string_view name, const std::vector<Run>& runs) {
+  if (m.effect(name) == nullptr) m.effects.push_back(searched_effect(name, runs));
 }
 
 /// The column a friction table holds a torque-driven run's motor torque in.
@@ -586,11 +588,9 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   c.name = job.name;
   c.effects = job.effects;
   model::Model start = job.start;
-  hold_unfitted(start, data.train);
   if (job.grid_effects.empty() && !job.other_starts.empty()) {
     double best = training_cost(start, data.train, &memo);
     for (model::Model other : job.other_starts) {
-      hold_unfitted(other, data.train);
       const double cost = training_cost(other, data.train, &memo);
       if (cost < best) {
         best = cost;
@@ -602,8 +602,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     if (const model::EffectSpec* plan = find_plan(e)) {
       std::vector<model::Model> bases{start};
       for (model::Model other : job.other_starts) {
-        add_effect(other, e);
-        hold_unfitted(other, data.train);
+        add_effect(other, e, data.train);
         bases.push_back(std::move(other));
       }
       const auto point = job.data_starts.find(e);
@@ -874,18 +873,27 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   if (!unexcited.empty())
     c.status +=
         fmt::format("; {} pinned at 0: no start from rest in these runs sets it", fmt::join(unexcited, " "));
+  // Where the search added the effect it holds the key at 0; an effect of the model as given at
+  // the given value.
   std::vector<std::string> held;
+  std::vector<std::string> held_given;
   for (const std::string& e : job.effects) {
     const model::EffectSpec* spec = find_plan(e);
     if (spec == nullptr) continue;
     const std::vector<std::string> fitted = fitted_keys(*spec, data.train);
     for (const std::string& key : spec->plan.free) {
-      if (std::find(fitted.begin(), fitted.end(), key) == fitted.end()) held.push_back(e + "." + key);
+      if (std::find(fitted.begin(), fitted.end(), key) != fitted.end()) continue;
+      const double value = model::get_parameter(c.model, e + "." + key);
+      if (value == 0.0) {
+        held.push_back(e + "." + key);
+      } else {
+        held_given.push_back(fmt::format("{} at the given {:.6g}", e + "." + key, value));
+      }
     }
   }
-  if (!held.empty())
-    c.status += fmt::format("; {} held at 0: without a measured current speed does not tell it from R",
-                            fmt::join(held, " "));
+  constexpr const char* k_held_why = "without a measured current speed does not tell it from R";
+  if (!held.empty()) c.status += fmt::format("; {} held at 0: {}", fmt::join(held, " "), k_held_why);
+  if (!held_given.empty()) c.status += fmt::format("; {} held: {}", fmt::join(held_given, ", "), k_held_why);
   for (const std::string& note : profiled) c.status += "; " + note;
   score();
   return c;
@@ -1077,14 +1085,17 @@ std::vector<std::string> fitted_keys(const model::EffectSpec& spec, const std::v
   return keys;
 }
 
-void hold_unfitted(model::Model& m, const std::vector<Run>& runs) {
+void hold_unfitted(model::Effect& e, const std::vector<Run>& runs) {
   if (measures_current(runs)) return;
-  for (model::Effect& e : m.effects) {
-    if (const model::EffectSpec* spec = model::find_effect(e.name)) {
-      for (const std::string& key : spec->plan.series_resistance)
-        model::set_parameter(m, e.name + "." + key, 0.0);
-    }
+  if (const model::EffectSpec* spec = model::find_effect(e.name)) {
+    for (const std::string& key : spec->plan.series_resistance) e.set(key, 0.0);
   }
+}
+
+model::Effect searched_effect(std::string_view name, const std::vector<Run>& runs) {
+  model::Effect e = model::default_effect(name);
+  hold_unfitted(e, runs);
+  return e;
 }
 
 std::vector<std::string> mismatch_free(const std::vector<std::string>& fixed, const model::Params& p,
@@ -1340,7 +1351,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
 
   // The refit of the nominal parameters, warm start of every effect candidate.
   model::Model base = model;
-  add_effect(base, "param_mismatch");
+  add_effect(base, "param_mismatch", data.train);
   Job pm_job{"param_mismatch",
              {},
              base,
@@ -1385,7 +1396,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
             {plan.name}, 15,
             {},          {base},
             {}};
-    add_effect(job.start, plan.name);
+    add_effect(job.start, plan.name, data.train);
     for (const auto& key : fitted_keys(plan, data.train)) {
       job.free.push_back(plan.name + "." + key);
       job.stage1_free.push_back(plan.name + "." + key);
@@ -1508,7 +1519,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       model::Model defaults = current.model;
       for (model::Effect& e : defaults.effects) {
         if (std::find(current.effects.begin(), current.effects.end(), e.name) != current.effects.end())
-          e = model::default_effect(e.name);
+          e = searched_effect(e.name, data.train);
       }
       for (const GapCandidate* single : pool) {
         const std::string& added = single->name;
@@ -1792,7 +1803,7 @@ void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData&
   // The fit once more from the diagnosis' values: what the pins must not cost against.
   const FitResult first = fit_model(problem);
   model::Model nominal = as_given;
-  add_effect(nominal, "param_mismatch");
+  add_effect(nominal, "param_mismatch", data.train);
   const auto given = [&](const std::string& name) -> std::optional<double> {
     const std::string effect = name.substr(0, name.find('.'));
     if (model::find_effect(effect) != nullptr && nominal.effect(effect) == nullptr) return std::nullopt;
