@@ -78,6 +78,48 @@ TEST(ModelAccuracy, HalvingTheStepChangesRpmByLessThanFiveHundredthsRms) {
   EXPECT_LT(rms, 0.05);
 }
 
+// A 100:1 gearmotor at 50 Hz (L/R = 0.1 ms, mechanical time constant 33 ms) on levels that
+// reverse and stop it: its circuit's decay is over within a quarter of the 1 ms step, so the
+// fits' step is not held to half its L/R (SimOptions::circuit_bound), and the speed is still
+// within 0.03 rpm RMS of 10 us steps.
+TEST(ModelAccuracy, ACircuitOverWithinAStepDoesNotBoundTheFitsStep) {
+  Model m;
+  Machine& mm = m.params.motor;
+  mm.R_ohm = 10.0;
+  mm.L_H = 1e-3;
+  mm.Kt_Nm_A = 0.3476;
+  mm.Ke_V_s_rad = 0.3476;
+  mm.J_kg_m2 = 4e-4;
+  mm.friction.Tc_Nm = mm.friction.Ts_Nm = 0.0109;
+  m.params.supply_V = 5.0;
+  const Inputs in = program(
+      10.0, 0.02,
+      [](double t) {
+        const double s =
+            std::sin(2.0 * std::numbers::pi * 0.7 * t) + 0.6 * std::sin(2.0 * std::numbers::pi * 2.3 * t);
+        return std::round(4.0 * s) * 1.2;
+      },
+      [](double) { return 0; }, [](double) { return k_open_circuit; });
+  const SimOptions fit;
+  SimOptions unbound;
+  unbound.circuit_bound = false;
+  SimOptions fine;
+  fine.max_step_s = 1e-5;
+  const Outputs a = simulate(m, in, fit);
+  const Outputs b = simulate(m, in, unbound);
+  const Outputs c = simulate(m, in, fine);
+  std::size_t at_rest = 0;
+  for (double w : c.omega_rad_s) at_rest += w == 0.0 ? 1 : 0;
+  EXPECT_GT(at_rest, 20u);
+  EXPECT_GT(*std::max_element(c.rpm.begin(), c.rpm.end()), 100.0);
+  EXPECT_LT(*std::min_element(c.rpm.begin(), c.rpm.end()), -100.0);
+  EXPECT_EQ(a.rpm, b.rpm);
+  EXPECT_LT(rms_difference(a.rpm, c.rpm), 0.03);
+  // The rig's motor (L/R = 1.05 ms) is resolved: half its L/R.
+  EXPECT_NE(simulate(Model{}, stick_slip_program(), fit).rpm,
+            simulate(Model{}, stick_slip_program(), unbound).rpm);
+}
+
 TEST(ModelPhysics, StuckShaftNeitherCreepsNorChatters) {
   // Motor alone coasting down under 0.15 V: below Tc R / Kt = 0.171 V it cannot keep turning,
   // and at rest it holds Kt 0.15 / R = 2.2e-3 N m, well inside the static band (5.59e-3 N m).

@@ -494,6 +494,13 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
     if (points[best] > lower && w.starts_with(key + " = ") && w.ends_with(" bound")) return true;
     return !open && w.starts_with(key + ": ");
   });
+  // Left at its bound, the level's sentence names the profile's value, which the report holds.
+  for (std::string& w : c.warnings) {
+    if (points[best] <= lower && w.starts_with(key + " = ") && w.ends_with(" bound")) {
+      const std::size_t rest = w.find(' ', key.size() + 3);
+      if (rest != std::string::npos) w = fmt::format("{} = {:.6g}{}", key, points[best], w.substr(rest));
+    }
+  }
   if (open && std::none_of(c.warnings.begin(), c.warnings.end(),
                            [&](const std::string& w) { return w.starts_with(key + ": "); }))
     c.warnings.push_back(

@@ -406,12 +406,16 @@ struct State {
 /// Integrator settings.
 struct SimOptions {
   /// Largest step, s. The circuits' decay is taken exactly (plant.cpp), so L/R does not
-  /// bound it; the clutch spring's period does, and under the brush drop half the fastest
+  /// bound it; the clutch spring's period does, a torque ripple's period at the no-load
+  /// speed, and under the brush drop or a shaft torque of unknown shape half the fastest
   /// electrical time constant (L/R = 1.05 ms for the rig's motor: 524 us).
   double max_step_s = 1e-3;
-  /// Also bound the step by half the fastest circuit's L/R (524 us for the rig's motor), as
-  /// before the exponential step made it unnecessary: the fits keep it (the gap search's
-  /// diagnoses were settled with it); mcg-sim's runs drop it (within 0.005 rpm RMS).
+  /// Also resolve each circuit whose decay spans steps: half its L/R (524 us for the rig's
+  /// motor, L/R = 1.05 ms). A step's first stage takes the current before an input's change,
+  /// so a decay of a few steps would be integrated into the speed coarsely; one over within a
+  /// quarter of the largest step (a 100:1 gearmotor's 0.1 ms) is taken exactly and bounds
+  /// the step only to a sixteenth of the motor's mechanical time constant J R / (Kt Ke). The
+  /// fits keep it; mcg-sim's runs drop it (within 0.005 rpm RMS).
   bool circuit_bound = true;
   /// Regularised stick, for fitting friction: a stuck motor shaft breaks away at a rate that
   /// grows exponentially with its drive torque, e-fold per 1 % of Ts (plant.cpp,

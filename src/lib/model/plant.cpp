@@ -41,6 +41,13 @@ using Vec = std::array<double, k_states>;
 constexpr double k_quasi_static_rate = 2e4;
 /// Events handled inside one integration step before the step is accepted as is.
 constexpr int k_max_events_per_step = 16;
+/// A torque ripple's largest phase advance in one step, rad (step_limit).
+constexpr double k_phase_per_step = 2.0;
+/// SimOptions::circuit_bound: a circuit whose L/R is under this share of the largest step is
+/// over within the step, and the step is bound by the motor's mechanical time constant over
+/// k_steps_per_tau_m instead of by half the L/R.
+constexpr double k_fast_circuit_share = 0.25;
+constexpr double k_steps_per_tau_m = 16.0;
 /// The regularised stick's breakaway (SimOptions::smooth_stick): a stuck motor breaks away at
 /// the rate exp((|T| - Ts) / (k_stick_width Ts)) / k_stick_time_s once its drive torque T
 /// exceeds the Coulomb level, so at Ts after 10 ms, 5 % below it after 1.5 s, 5 % above it
@@ -499,21 +506,41 @@ class PlantImpl {
     return y1;
   }
 
-  /// Largest step for accuracy: a fraction of the spring's time scale, and of the electrical
-  /// ones where asked (SimOptions::circuit_bound), under a saturating drop (whose slope the
-  /// step takes at its start only) and under a torque of the shaft angle. The bound holds R/L
+  /// Largest step for accuracy: a fraction of the spring's time scale, of a ripple's period,
+  /// and of the electrical time constants where asked (SimOptions::circuit_bound) or under a
+  /// saturating drop (whose slope the step takes at its start only). The bound holds R/L
   /// without the drop: it depends on the parameters alone, not on the state.
   double step_limit() const {
     double h = m_opt.max_step_s;
     const Machine& mm = m_c.p.motor;
-    // A torque of the shaft angle (a ripple, a discrepancy term) varies within a millisecond at
-    // speed: its model keeps the electrical bound, which resolves the angle as it always did.
-    const bool electrical_bound =
-        m_opt.circuit_bound || m_c.circuit.V_sat_V > 0.0 || !m_c.motor_torque.empty();
-    if (electrical_bound && !m_motor_quasi && !current_driven())
-      h = std::min(h, 0.5 * mm.L_H / (mm.R_ohm + m_c.circuit.R_series_ohm + m_c.circuit.R_duty_ohm));
-    if (electrical_bound && gen_circuit() && !gen_quasi_static()) {
-      h = std::min(h, 0.5 * m_c.p.generator.L_H / (m_c.p.generator.R_ohm + m_r_load));
+    // A torque of the shaft angle varies within a millisecond at speed. A ripple's phase moves
+    // at most k_phase_per_step in a step at the no-load speed supply_V / Ke (RK4's stages sample
+    // it 1 rad apart: 0.6 % of its impulse lost); a term of unknown shape (a discrepancy term)
+    // keeps the electrical bound, which resolves the angle as it always did.
+    bool electrical_bound = m_c.circuit.V_sat_V > 0.0;
+    const double w_free_rad_s = m_c.p.supply_V / mm.Ke_V_s_rad;
+    for (const TorqueTerm& term : m_c.motor_torque) {
+      if (term.angle_rate < 0.0) {
+        electrical_bound = true;
+      } else if (term.angle_rate > 0.0) {
+        h = std::min(h, k_phase_per_step / (term.angle_rate * w_free_rad_s));
+      }
+    }
+    // A circuit's bound (SimOptions::circuit_bound): half its L/R where its decay spans steps;
+    // where it is over within a quarter of the largest step, a share of the motor's
+    // mechanical time constant instead.
+    const auto circuit = [&](double tau_s, double tau_m_s) {
+      if (electrical_bound || (m_opt.circuit_bound && tau_s > k_fast_circuit_share * m_opt.max_step_s)) {
+        h = std::min(h, 0.5 * tau_s);
+      } else if (m_opt.circuit_bound) {
+        h = std::min(h, tau_m_s / k_steps_per_tau_m);
+      }
+    };
+    const double R_motor_ohm = mm.R_ohm + m_c.circuit.R_series_ohm + m_c.circuit.R_duty_ohm;
+    const double tau_m_s = mm.J_kg_m2 * R_motor_ohm / (mm.Kt_Nm_A * mm.Ke_V_s_rad);
+    if (!m_motor_quasi && !current_driven()) circuit(mm.L_H / R_motor_ohm, tau_m_s);
+    if (gen_circuit() && !gen_quasi_static()) {
+      circuit(m_c.p.generator.L_H / (m_c.p.generator.R_ohm + m_r_load), tau_m_s);
     }
     if (spring() && m_coupling == Coupling::spring) {
       const double inv_J = 1.0 / m_c.p.motor.J_kg_m2 + 1.0 / m_c.p.generator.J_kg_m2;

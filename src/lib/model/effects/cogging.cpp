@@ -15,7 +15,8 @@ double ripple(const std::array<double, 4>& k, double theta_rad, double /*omega_r
 }
 
 void compile(const Effect& e, Compiled& c) {
-  c.motor_torque.push_back({ripple, {e.get("T_c_Nm"), e.get("N_per_rev"), e.get("phase_rad"), 0.0}});
+  const double N = e.get("N_per_rev");
+  c.motor_torque.push_back({ripple, {e.get("T_c_Nm"), N, e.get("phase_rad"), 0.0}, nullptr, N});
 }
 
 /// An angle harmonic of the shaft torque, at two or more cycles a revolution: cogging repeats

@@ -32,6 +32,10 @@ struct TorqueTerm {
   /// Used instead of fn when set: a term of the motor current and time too (ShaftTerm::basis_it).
   double (*fn_it)(const std::array<double, 4>& k, double theta_rad, double omega_rad_s, double i_A,
                   double t_s) = nullptr;
+  /// How fast it varies with the shaft angle, rad of its phase per rad of shaft: N for a ripple
+  /// sin(N theta + phase), 0 for a term without the angle, negative when unknown. The step
+  /// resolves it (plant.cpp, step_limit).
+  double angle_rate = -1.0;
 
   double operator()(double theta_rad, double omega_rad_s, double i_A, double t_s) const {
     return fn_it ? fn_it(k, theta_rad, omega_rad_s, i_A, t_s) : fn(k, theta_rad, omega_rad_s);

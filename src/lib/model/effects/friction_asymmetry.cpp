@@ -19,7 +19,7 @@ namespace {
 double bias(const std::array<double, 4>& k, double /*theta_rad*/, double /*omega_rad_s*/) { return -k[0]; }
 
 void compile(const Effect& e, Compiled& c) {
-  c.motor_torque.push_back({bias, {e.get("dT_Nm"), 0.0, 0.0, 0.0}});
+  c.motor_torque.push_back({bias, {e.get("dT_Nm"), 0.0, 0.0, 0.0}, nullptr, 0.0});
 }
 
 /// The asymmetry the data show, when the runs move both ways.
