@@ -120,6 +120,33 @@ TEST(ModelAccuracy, ACircuitOverWithinAStepDoesNotBoundTheFitsStep) {
             simulate(Model{}, stick_slip_program(), unbound).rpm);
 }
 
+// A cogging ripple of 40 cycles a revolution on the rig's motor alone, driven by a current
+// that breaks it away and runs it between about 100 and 330 rad/s: the step resolves the
+// ripple (its phase moves at most 2 rad a step at the no-load speed), also where no circuit
+// bounds the step, so the speed is within 0.1 rpm RMS of 10 us steps. Unresolved (1 ms steps,
+// the phase moving 13 rad) the speed is off by more than the ripple's own effect.
+TEST(ModelAccuracy, ACoggingRippleIsResolvedWithoutACircuitToBoundTheStep) {
+  Model m;
+  Effect cog = default_effect("cogging");
+  cog.set("T_c_Nm", 2e-3);
+  cog.set("N_per_rev", 40.0);
+  m.effects.push_back(cog);
+  Inputs in = constant(0.0, 4.0, 0.02, 0);
+  for (double t : in.t_s) in.i_cmd_A.push_back(0.11 + 0.05 * std::sin(2.0 * std::numbers::pi * 0.5 * t));
+  SimOptions fine;
+  fine.max_step_s = 1e-5;
+  SimOptions unresolved;
+  unresolved.ripple_speed_rad_s = 1.0;
+  const Outputs a = simulate(m, in, {});
+  const Outputs b = simulate(m, in, fine);
+  const Outputs plain = simulate(Model{}, in, fine);
+  const double ripple_rpm = rms_difference(b.rpm, plain.rpm);
+  EXPECT_GT(*std::max_element(b.omega_rad_s.begin(), b.omega_rad_s.end()), 300.0);
+  EXPECT_GT(ripple_rpm, 1.0);
+  EXPECT_LT(rms_difference(a.rpm, b.rpm), 0.1);
+  EXPECT_GT(rms_difference(simulate(m, in, unresolved).rpm, b.rpm), ripple_rpm);
+}
+
 TEST(ModelPhysics, StuckShaftNeitherCreepsNorChatters) {
   // Motor alone coasting down under 0.15 V: below Tc R / Kt = 0.171 V it cannot keep turning,
   // and at rest it holds Kt 0.15 / R = 2.2e-3 N m, well inside the static band (5.59e-3 N m).

@@ -1184,7 +1184,7 @@ void append_bytes(std::string& key, const void* bytes, std::size_t size) {
 std::string memo_key(const model::Model& model, const model::SimOptions& options) {
   static_assert(std::is_trivially_copyable_v<model::Params> && sizeof(model::Params) % sizeof(double) == 0,
                 "the key reads the nominal parameters as bytes: they must be doubles without padding");
-  static_assert(sizeof(model::SimOptions) == 2 * sizeof(double),
+  static_assert(sizeof(model::SimOptions) == 3 * sizeof(double),
                 "a new simulation option belongs in the key");
   std::string key;
   append_bytes(key, &model.params, sizeof model.params);
@@ -1207,6 +1207,7 @@ std::string memo_key(const model::Model& model, const model::SimOptions& options
   }
   append_bytes(key, &options.max_step_s, sizeof options.max_step_s);
   key += options.circuit_bound ? '1' : '0';
+  append_bytes(key, &options.ripple_speed_rad_s, sizeof options.ripple_speed_rad_s);
   key += options.smooth_stick ? '1' : '0';
   return key;
 }

@@ -298,9 +298,29 @@ std::vector<std::string> fix_parameters(model::Model& model, const std::vector<s
   return names;
 }
 
+namespace {
+
+/// A run's fastest measured motor speed with a margin of k_ripple_margin, rad/s (0: no speed
+/// measured), where a torque ripple is resolved (model::SimOptions::ripple_speed_rad_s).
+constexpr double k_ripple_margin = 1.2;
+double ripple_speed(const Run& run) {
+  double fastest = 0.0;
+  for (std::size_t k = 0; k < run.outputs.size(); ++k) {
+    const double to_rad_s = run.outputs[k] == "rpm" ? k_rad_s_per_rpm : run.outputs[k] == "omega" ? 1.0 : 0.0;
+    for (double x : run.measured[k]) {
+      if (std::isfinite(x)) fastest = std::max(fastest, std::abs(x) * to_rad_s);
+    }
+  }
+  return k_ripple_margin * fastest * run.gear_ratio;
+}
+
+}  // namespace
+
 std::vector<std::vector<double>> simulate_as_measured(const model::Model& model, const Run& run,
                                                       const model::SimOptions& options) {
-  const model::Outputs out = model::simulate(model, run.inputs, options);
+  model::SimOptions at_speed = options;
+  if (at_speed.ripple_speed_rad_s == 0.0) at_speed.ripple_speed_rad_s = ripple_speed(run);
+  const model::Outputs out = model::simulate(model, run.inputs, at_speed);
   std::vector<std::vector<double>> series;
   series.reserve(run.outputs.size());
   const double g = run.gear_ratio;

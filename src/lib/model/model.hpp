@@ -410,6 +410,10 @@ struct SimOptions {
   /// speed, and under the brush drop or a shaft torque of unknown shape half the fastest
   /// electrical time constant (L/R = 1.05 ms for the rig's motor: 524 us).
   double max_step_s = 1e-3;
+  /// Motor speed at which a torque ripple's period is resolved, rad/s (0: the no-load speed
+  /// supply_V / Ke). A fit takes a measured run's fastest speed (fit::simulate_as_measured):
+  /// a run that never nears the no-load speed is not stepped for it.
+  double ripple_speed_rad_s = 0.0;
   /// Also resolve each circuit whose decay spans steps: half its L/R (524 us for the rig's
   /// motor, L/R = 1.05 ms). A step's first stage takes the current before an input's change,
   /// so a decay of a few steps would be integrated into the speed coarsely; one over within a
