@@ -301,7 +301,7 @@ std::vector<std::string> fix_parameters(model::Model& model, const std::vector<s
 namespace {
 
 /// A run's fastest measured motor speed with a margin of k_ripple_margin, rad/s (0: no speed
-/// measured), where a torque ripple is resolved (model::SimOptions::ripple_speed_rad_s).
+/// measured): the fastest a torque ripple is resolved at (model::SimOptions::ripple_speed_rad_s).
 constexpr double k_ripple_margin = 1.2;
 double ripple_speed(const Run& run) {
   double fastest = 0.0;

@@ -406,13 +406,14 @@ struct State {
 /// Integrator settings.
 struct SimOptions {
   /// Largest step, s. The circuits' decay is taken exactly (plant.cpp), so L/R does not
-  /// bound it; the clutch spring's period does, a torque ripple's period at the no-load
-  /// speed, and under the brush drop or a shaft torque of unknown shape half the fastest
-  /// electrical time constant (L/R = 1.05 ms for the rig's motor: 524 us).
+  /// bound it; the clutch spring's period does, a torque ripple's period at the speed of the
+  /// moment (up to ripple_speed_rad_s), and under the brush drop or a shaft torque of unknown shape half the
+  /// fastest electrical time constant (L/R = 1.05 ms for the rig's motor: 524 us).
   double max_step_s = 1e-3;
-  /// Motor speed at which a torque ripple's period is resolved, rad/s (0: the no-load speed
-  /// supply_V / Ke). A fit takes a measured run's fastest speed (fit::simulate_as_measured):
-  /// a run that never nears the no-load speed is not stepped for it.
+  /// Fastest motor speed a torque ripple's period is resolved at, rad/s (0: the no-load speed
+  /// supply_V / Ke): the step follows the speed up to it. A fit takes 1.2 times a measured
+  /// run's fastest speed (fit::simulate_as_measured), so a fit's trial that runs away (a
+  /// current drive without friction) is not stepped for speeds the rig never reached.
   double ripple_speed_rad_s = 0.0;
   /// Also resolve each circuit whose decay spans steps: half its L/R (524 us for the rig's
   /// motor, L/R = 1.05 ms). A step's first stage takes the current before an input's change,

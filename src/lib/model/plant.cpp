@@ -516,20 +516,12 @@ class PlantImpl {
   double step_limit() const {
     double h = m_opt.max_step_s;
     const Machine& mm = m_c.p.motor;
-    // A torque of the shaft angle varies within a millisecond at speed. A ripple's phase moves
-    // at most k_phase_per_step in a step at SimOptions::ripple_speed_rad_s; a term of unknown
-    // shape (a discrepancy term) keeps the electrical bound, which resolves the angle as it
-    // always did.
-    bool electrical_bound = m_c.circuit.V_sat_V > 0.0;
-    const double w_free_rad_s =
-        m_opt.ripple_speed_rad_s > 0.0 ? m_opt.ripple_speed_rad_s : m_c.p.supply_V / mm.Ke_V_s_rad;
-    for (const TorqueTerm& term : m_c.motor_torque) {
-      if (term.angle_rate < 0.0) {
-        electrical_bound = true;
-      } else if (term.angle_rate > 0.0) {
-        h = std::min(h, k_phase_per_step / (term.angle_rate * w_free_rad_s));
-      }
-    }
+    // A torque of the shaft angle varies within a millisecond at speed: a ripple's step follows
+    // the speed (integrate, ripple_step_limit); a term of unknown shape (a discrepancy term)
+    // keeps the electrical bound, which resolves the angle as it always did.
+    const bool electrical_bound = m_c.circuit.V_sat_V > 0.0 ||
+                                  std::any_of(m_c.motor_torque.begin(), m_c.motor_torque.end(),
+                                              [](const TorqueTerm& term) { return term.angle_rate < 0.0; });
     // A circuit's bound (SimOptions::circuit_bound): half its L/R where its decay spans steps;
     // where it is over within a quarter of the largest step, a share of the motor's
     // mechanical time constant instead.
@@ -556,17 +548,22 @@ class PlantImpl {
 
   void integrate(double len) {
     const double h_lim = step_limit();
-    if (m_c.circuit.V_sat_V > 0.0 && drop_circuits()) {
-      // The drop's slope changes by up to V_sat / i_sat where the current crosses zero: the
-      // step follows the state there (drop_step_limit), and the interval's last step takes
-      // what is left. So the steps move continuously with the parameters: a step more
-      // appears at length 0, where evenly spread steps would all jump at once.
+    const bool drop = m_c.circuit.V_sat_V > 0.0 && drop_circuits();
+    const double ripple = ripple_rate();
+    if (drop || ripple > 0.0) {
+      // The drop's slope changes by up to V_sat / i_sat where the current crosses zero, and a
+      // ripple's phase moves with the speed: the step follows the state there
+      // (drop_step_limit, ripple_step_limit), and the interval's last step takes what is
+      // left. So the steps move continuously with the parameters: a step more appears at
+      // length 0, where evenly spread steps would all jump at once.
       double t = m_t;
       double remaining = len;
       while (remaining > 1e-15) {
         Vec k1;
         deriv(m_y, t, k1);
-        const double h = std::min(remaining, drop_step_limit(h_lim, k1));
+        double h = drop ? drop_step_limit(h_lim, k1) : h_lim;
+        if (ripple > 0.0) h = ripple_step_limit(h, ripple, k1);
+        h = std::min(remaining, h);
         substep(t, h, &k1);
         t += h;
         remaining -= h;
@@ -584,6 +581,23 @@ class PlantImpl {
       substep(t, h);
       t += h;
     }
+  }
+
+  /// The fastest-varying ripple's phase per rad of shaft angle (TorqueTerm::angle_rate), 0 for none.
+  double ripple_rate() const {
+    double rate = 0.0;
+    for (const TorqueTerm& term : m_c.motor_torque) rate = std::max(rate, term.angle_rate);
+    return rate;
+  }
+
+  /// Step bound under a ripple of `rate`, at most h_max: its phase moves at most
+  /// k_phase_per_step at the fastest speed the step may reach, |w| + |dw/dt| h_max, up to
+  /// SimOptions::ripple_speed_rad_s. k = f(y) at the start.
+  double ripple_step_limit(double h_max, double rate, const Vec& k) const {
+    const double cap_rad_s =
+        m_opt.ripple_speed_rad_s > 0.0 ? m_opt.ripple_speed_rad_s : m_c.p.supply_V / m_c.p.motor.Ke_V_s_rad;
+    const double reach_rad_s = std::min(cap_rad_s, std::abs(m_y[W_M]) + std::abs(k[W_M]) * h_max);
+    return reach_rad_s > 0.0 ? std::min(h_max, k_phase_per_step / (rate * reach_rad_s)) : h_max;
   }
 
   /// Whether a circuit is integrated as a state (and so carries a saturating drop's slope).
