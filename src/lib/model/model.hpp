@@ -407,8 +407,8 @@ struct State {
 struct SimOptions {
   /// Largest step, s. The circuits' decay is taken exactly (plant.cpp), so L/R does not
   /// bound it; the clutch spring's period does, a torque ripple's period at the speed of the
-  /// moment (up to ripple_speed_rad_s), and under the brush drop or a shaft torque of unknown shape half the
-  /// fastest electrical time constant (L/R = 1.05 ms for the rig's motor: 524 us).
+  /// moment (up to ripple_speed_rad_s), and under the brush drop or a shaft torque of unknown
+  /// shape half the fastest electrical time constant (L/R = 1.05 ms for the rig's motor: 524 us).
   double max_step_s = 1e-3;
   /// Fastest motor speed a torque ripple's period is resolved at, rad/s (0: the no-load speed
   /// supply_V / Ke): the step follows the speed up to it. A fit takes 1.2 times a measured

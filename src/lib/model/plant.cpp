@@ -41,10 +41,10 @@ using Vec = std::array<double, k_states>;
 constexpr double k_quasi_static_rate = 2e4;
 /// Events handled inside one integration step before the step is accepted as is.
 constexpr int k_max_events_per_step = 16;
-/// A torque ripple's largest phase advance in one step, rad (step_limit). RK4's stages sample
-/// it 1 rad apart; near pi a step they sample it alike step after step, and the ripple aliases
-/// into a steady torque (the rig's motor with a 40-per-revolution ripple at 330 rad/s: 6.2 rpm
-/// RMS off at 3.0 rad a step, 0.023 rpm at 1.9).
+/// A torque ripple's largest phase advance in one step, rad (ripple_step_limit). RK4's stages
+/// sample it 1 rad apart; near pi a step they sample it alike step after step, and the ripple
+/// aliases into a steady torque (the rig's motor with a 40-per-revolution ripple at 330 rad/s:
+/// 6.2 rpm RMS off at 3.0 rad a step, 0.023 rpm at 1.9).
 constexpr double k_phase_per_step = 2.0;
 /// SimOptions::circuit_bound: a circuit whose L/R is under this share of the largest step is
 /// over within the step, and the step is bound by the motor's mechanical time constant over
@@ -509,10 +509,10 @@ class PlantImpl {
     return y1;
   }
 
-  /// Largest step for accuracy: a fraction of the spring's time scale, of a ripple's period,
-  /// and of the electrical time constants where asked (SimOptions::circuit_bound) or under a
-  /// saturating drop (whose slope the step takes at its start only). The bound holds R/L
-  /// without the drop: it depends on the parameters alone, not on the state.
+  /// Largest step for accuracy: a fraction of the spring's time scale, and of the electrical
+  /// time constants where asked (SimOptions::circuit_bound) or under a saturating drop (whose
+  /// slope the step takes at its start only). The bound holds R/L without the drop: it depends
+  /// on the parameters alone, not on the state (integrate narrows it with the state).
   double step_limit() const {
     double h = m_opt.max_step_s;
     const Machine& mm = m_c.p.motor;

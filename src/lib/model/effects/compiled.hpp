@@ -34,7 +34,7 @@ struct TorqueTerm {
                   double t_s) = nullptr;
   /// How fast it varies with the shaft angle, rad of its phase per rad of shaft: N for a ripple
   /// sin(N theta + phase), 0 for a term without the angle, negative when unknown. The step
-  /// resolves it (plant.cpp, step_limit).
+  /// resolves it (plant.cpp: ripple_step_limit; unknown, step_limit's electrical bound).
   double angle_rate = -1.0;
 
   double operator()(double theta_rad, double omega_rad_s, double i_A, double t_s) const {
