@@ -415,12 +415,15 @@ struct SimOptions {
   /// run's fastest speed (fit::simulate_as_measured), so a fit's trial that runs away (a
   /// current drive without friction) is not stepped for speeds the rig never reached.
   double ripple_speed_rad_s = 0.0;
-  /// Also resolve each circuit whose decay spans steps: half its L/R (524 us for the rig's
-  /// motor, L/R = 1.05 ms). A step's first stage takes the current before an input's change,
-  /// so a decay of a few steps would be integrated into the speed coarsely; one over within a
-  /// quarter of the largest step (a 100:1 gearmotor's 0.1 ms) is taken exactly and bounds
-  /// the step only to a sixteenth of the motor's mechanical time constant J R / (Kt Ke). The
-  /// fits keep it; mcg-sim's runs drop it (within 0.005 rpm RMS).
+  /// Also resolve each circuit whose decay spans steps or a good part of a row: half its L/R
+  /// (524 us for the rig's motor, L/R = 1.05 ms). A step's first stage takes the current
+  /// before an input's change, so a decay of a few steps would be integrated into the speed
+  /// coarsely, and the regularised stick's breakaway between two drive levels moves with Ts
+  /// only through the current's rise. A decay over within a quarter of the largest step and
+  /// of the rows' interval (a 100:1 gearmotor's 0.1 ms; a 73:1 gearmotor's 0.5 ms logged at
+  /// 100 Hz) is taken exactly and bounds the step only to a sixteenth of the motor's
+  /// mechanical time constant J R / (Kt Ke). The fits keep it; mcg-sim's runs drop it (within
+  /// 0.005 rpm RMS).
   bool circuit_bound = true;
   /// Regularised stick, for fitting friction: a stuck motor shaft breaks away at a rate that
   /// grows exponentially with its drive torque, e-fold per 1 % of Ts (plant.cpp,

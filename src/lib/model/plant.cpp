@@ -46,9 +46,9 @@ constexpr int k_max_events_per_step = 16;
 /// aliases into a steady torque (the rig's motor with a 40-per-revolution ripple at 330 rad/s:
 /// 6.2 rpm RMS off at 3.0 rad a step, 0.023 rpm at 1.9).
 constexpr double k_phase_per_step = 2.0;
-/// SimOptions::circuit_bound: a circuit whose L/R is under this share of the largest step is
-/// over within the step, and the step is bound by the motor's mechanical time constant over
-/// k_steps_per_tau_m instead of by half the L/R.
+/// SimOptions::circuit_bound: a circuit whose L/R is under this share of the largest step, or
+/// of the interval between rows where that is longer, bounds the step by the motor's
+/// mechanical time constant over k_steps_per_tau_m; a slower one by half its L/R.
 constexpr double k_fast_circuit_share = 0.25;
 constexpr double k_steps_per_tau_m = 16.0;
 /// The regularised stick's breakaway (SimOptions::smooth_stick): a stuck motor breaks away at
@@ -87,6 +87,7 @@ class PlantImpl {
     MCG_DEMAND(drive.r_load_ohm >= 0.0);
     set_clutch(drive.clutch);
     set_load(drive.r_load_ohm);
+    m_row_s = dt;
     const double t_end = m_t + dt;
     if (m_c.delay_s > 0.0) {
       m_queue.push_back({m_t + m_c.delay_s, drive.v_V, drive.i_cmd_A});
@@ -522,11 +523,12 @@ class PlantImpl {
     const bool electrical_bound = m_c.circuit.V_sat_V > 0.0 ||
                                   std::any_of(m_c.motor_torque.begin(), m_c.motor_torque.end(),
                                               [](const TorqueTerm& term) { return term.angle_rate < 0.0; });
-    // A circuit's bound (SimOptions::circuit_bound): half its L/R where its decay spans steps;
-    // where it is over within a quarter of the largest step, a share of the motor's
-    // mechanical time constant instead.
+    // A circuit's bound (SimOptions::circuit_bound): half its L/R where its decay spans steps
+    // or a good part of a row; where it is over within a quarter of both, a share of the
+    // motor's mechanical time constant instead.
+    const double resolved_s = k_fast_circuit_share * std::max(m_opt.max_step_s, m_row_s);
     const auto circuit = [&](double tau_s, double tau_m_s) {
-      if (electrical_bound || (m_opt.circuit_bound && tau_s > k_fast_circuit_share * m_opt.max_step_s)) {
+      if (electrical_bound || (m_opt.circuit_bound && tau_s > resolved_s)) {
         h = std::min(h, 0.5 * tau_s);
       } else if (m_opt.circuit_bound) {
         h = std::min(h, tau_m_s / k_steps_per_tau_m);
@@ -966,6 +968,7 @@ class PlantImpl {
   Compiled m_c;
   SimOptions m_opt;
   double m_t = 0.0;
+  double m_row_s = 0.0;  ///< the interval between the rows being stepped (step's dt)
   Vec m_y{};
   int m_clutch = 2;
   Coupling m_coupling = Coupling::none;
