@@ -437,6 +437,39 @@ TEST(GapCogging, OrderIsTheStrongestLineOverTheShaftAngle) {
   EXPECT_EQ(angle_orders(model::Model{}, data23.train, 2).front(), 23.0);
 }
 
+// The orders are of the motor's angle: the same run logged behind a 10:1 gearbox (its speed a
+// tenth, its gear ratio 10) still shows 11. Logged every 20 ms instead of every 1 ms, a ripple of
+// 23 a revolution moves pi or more between samples wherever the shaft turns faster than 6.8
+// rad/s, and the samples slower than that do not show it: it is not searched, while order 2
+// (shown below 78 rad/s) is.
+TEST(GapCogging, OrdersAreOfTheMotorAngleAndShownBelowTheSamplesNyquist) {
+  const Program p = prbs(3.0, 2.5, 0.8, 41, 0, k_inf);
+  const table::Table t = measure(p, {"cogging:T_c_Nm=0.0019,N_per_rev=11,phase_rad=-1.2"}, 41, "cog.csv");
+  const GapData data = prepare_gap_data({t}, {t}, model::builtin_rig(), 0.6);
+  fit::Run geared = data.train.front();
+  geared.gear_ratio = 10.0;
+  for (double& x : geared.measured.front()) x /= 10.0;
+  EXPECT_EQ(angle_orders(model::Model{}, {geared}, 2).front(), 11.0);
+
+  const table::Table t23 = measure(p, {"cogging:T_c_Nm=0.0015,N_per_rev=23,phase_rad=0.7"}, 41, "cog23.csv");
+  const GapData data23 = prepare_gap_data({t23}, {t23}, model::builtin_rig(), 0.6);
+  const fit::Run& fine = data23.train.front();
+  fit::Run coarse = fine;
+  const auto every_20th = [](std::vector<double>& v) {
+    std::vector<double> kept;
+    for (std::size_t n = 0; n < v.size(); n += 20) kept.push_back(v[n]);
+    v = kept;
+  };
+  for (auto* v : {&coarse.inputs.t_s, &coarse.inputs.v_V, &coarse.inputs.clutch, &coarse.inputs.r_load_ohm})
+    every_20th(*v);
+  for (auto& m : coarse.measured) every_20th(m);
+  coarse.rpm_estimator.reset();
+  const std::vector<double> shown = angle_orders(model::Model{}, {coarse}, k_max_angle_order);
+  EXPECT_EQ(std::count(shown.begin(), shown.end(), 23.0), 0);
+  EXPECT_EQ(std::count(shown.begin(), shown.end(), 2.0), 1);
+  EXPECT_EQ(angle_orders(model::Model{}, {fine}, 2).front(), 23.0);
+}
+
 /// A candidate as the search leaves it: fitted, scored (one output, rpm), ranked.
 GapCandidate scored(const std::string& name, double score, std::vector<std::string> free) {
   GapCandidate c;

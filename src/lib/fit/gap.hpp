@@ -276,10 +276,18 @@ struct GapReport {
 /// Highest order of the motor angle searched, cycles per revolution.
 inline constexpr std::size_t k_max_angle_order = 100;
 
-/// Cycles per revolution of the strongest position-periodic components of the speed
-/// residual (measured minus `model`) over the runs: P(N) = |sum_n r_n exp(-i N theta_n)|^2
-/// over the moving samples, theta the measured angle (the integral of the measured speed),
-/// N = 2..k_max_angle_order. Returns the `keep` strongest N, strongest first.
+/// Fewest samples that must show an order of the motor angle for it to be searched.
+inline constexpr std::size_t k_min_order_samples = 32;
+
+/// Cycles per revolution of the motor shaft of the strongest position-periodic components of
+/// the speed residual (measured minus `model`) over the runs: the periodogram
+/// P(N) = |sum_n r_n exp(-i N theta_n)|^2 / n(N), theta the motor angle (the integral of the
+/// measured speed times the gear ratio), N = 2..k_max_angle_order. A sample shows order N only
+/// where the ripple moves less than pi between samples, N |w| dt < pi with w the motor's
+/// measured speed: faster, the sampled speed aliases it or (counted over the sample) averages it
+/// out. An order shown by fewer than k_min_order_samples samples is not searched, so on a
+/// gearmotor logged at 100 Hz most orders are not. Returns the `keep` strongest N, strongest
+/// first; none when no order is shown.
 std::vector<double> angle_orders(const model::Model& model, const std::vector<Run>& runs, std::size_t keep);
 
 /// Runs the diagnosis of `model` on `data`.

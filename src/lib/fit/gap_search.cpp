@@ -12,6 +12,7 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <numbers>
 #include <optional>
 #include <type_traits>
 
@@ -1386,6 +1387,8 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
       continue;
     std::string why = not_applicable(plan.plan, data.train);
     if (why.empty()) why = not_excited(plan.plan, data.train);
+    if (why.empty() && !plan.plan.angle_order_key.empty() && orders.empty())
+      why = "not observable: the training samples show no ripple of 2 or more a motor revolution";
     if (!why.empty()) {
       GapCandidate c;
       c.name = plan.name;
@@ -1837,34 +1840,43 @@ void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData&
 }  // namespace gap_detail
 
 std::vector<double> angle_orders(const model::Model& model, const std::vector<Run>& runs, std::size_t keep) {
+  std::vector<std::complex<double>> acc(k_max_angle_order + 1, {0.0, 0.0});
   std::vector<double> power(k_max_angle_order + 1, 0.0);
+  std::vector<std::size_t> shown(k_max_angle_order + 1, 0);
   for (const Run& run : runs) {
     const auto it = std::find(run.outputs.begin(), run.outputs.end(), "rpm");
     if (it == run.outputs.end()) continue;
     const auto o = static_cast<std::size_t>(it - run.outputs.begin());
     const auto& y = run.measured[o];
     const auto sim = simulate_as_measured(model, run);
-    // The measured angle: the trapezoidal integral of the measured speed.
-    std::vector<std::complex<double>> acc(k_max_angle_order + 1, {0.0, 0.0});
+    std::fill(acc.begin(), acc.end(), std::complex<double>{0.0, 0.0});
+    // The motor angle: the trapezoidal integral of the measured speed, times the gear ratio.
     double theta = 0.0;
     for (std::size_t n = 1; n < y.size(); ++n) {
       const double dt = run.inputs.t_s[n] - run.inputs.t_s[n - 1];
       if (std::isfinite(y[n]) && std::isfinite(y[n - 1]))
-        theta += rad_s_from_rpm(0.5 * (y[n] + y[n - 1]) * dt);
+        theta += rad_s_from_rpm(0.5 * (y[n] + y[n - 1]) * dt) * run.gear_ratio;
       const double r = y[n] - sim[o][n];
       if (!std::isfinite(r) || y[n] == 0.0) continue;
+      const double advance_rad = std::abs(rad_s_from_rpm(y[n])) * run.gear_ratio * dt;
       for (std::size_t order = 2; order <= k_max_angle_order; ++order) {
+        if (static_cast<double>(order) * advance_rad >= std::numbers::pi) break;
         acc[order] += r * std::polar(1.0, -static_cast<double>(order) * theta);
+        ++shown[order];
       }
     }
     for (std::size_t order = 2; order <= k_max_angle_order; ++order) power[order] += std::norm(acc[order]);
   }
   std::vector<double> orders;
-  for (std::size_t order = 2; order <= k_max_angle_order; ++order)
-    orders.push_back(static_cast<double>(order));
-  std::stable_sort(orders.begin(), orders.end(), [&](double a, double b) {
-    return power[static_cast<std::size_t>(a)] > power[static_cast<std::size_t>(b)];
-  });
+  for (std::size_t order = 2; order <= k_max_angle_order; ++order) {
+    if (shown[order] >= k_min_order_samples) orders.push_back(static_cast<double>(order));
+  }
+  const auto periodogram = [&](double order) {
+    const auto k = static_cast<std::size_t>(order);
+    return power[k] / static_cast<double>(shown[k]);
+  };
+  std::stable_sort(orders.begin(), orders.end(),
+                   [&](double a, double b) { return periodogram(a) > periodogram(b); });
   orders.resize(std::min(keep, orders.size()));
   return orders;
 }
