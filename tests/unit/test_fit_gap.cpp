@@ -438,7 +438,7 @@ TEST(GapCogging, OrderIsTheStrongestLineOverTheShaftAngle) {
 }
 
 // The orders are of the motor's angle: the same run logged behind a 10:1 gearbox (its speed a
-// tenth, its gear ratio 10) still shows 11. Logged every 20 ms instead of every 1 ms, a ripple of
+// tenth, its gear ratio 10) still shows 11, and so does its speed logged in rad/s. Logged every 20 ms instead of every 1 ms, a ripple of
 // 23 a revolution moves pi or more between samples wherever the shaft turns faster than 6.8
 // rad/s, and the samples slower than that do not show it: it is not searched, while order 2
 // (shown below 78 rad/s) is.
@@ -450,6 +450,11 @@ TEST(GapCogging, OrdersAreOfTheMotorAngleAndShownBelowTheSamplesNyquist) {
   geared.gear_ratio = 10.0;
   for (double& x : geared.measured.front()) x /= 10.0;
   EXPECT_EQ(angle_orders(model::Model{}, {geared}, 2).front(), 11.0);
+  fit::Run omega = data.train.front();
+  ASSERT_EQ(omega.outputs.front(), "rpm");
+  omega.outputs.front() = "omega";
+  for (double& x : omega.measured.front()) x = rad_s_from_rpm(x);
+  EXPECT_EQ(angle_orders(model::Model{}, {omega}, 2).front(), 11.0);
 
   const table::Table t23 = measure(p, {"cogging:T_c_Nm=0.0015,N_per_rev=23,phase_rad=0.7"}, 41, "cog23.csv");
   const GapData data23 = prepare_gap_data({t23}, {t23}, model::builtin_rig(), 0.6);

@@ -280,7 +280,7 @@ inline constexpr std::size_t k_max_angle_order = 100;
 inline constexpr std::size_t k_min_order_samples = 32;
 
 /// Cycles per revolution of the motor shaft of the strongest position-periodic components of
-/// the speed residual (measured minus `model`) over the runs: the periodogram
+/// the speed residual (measured minus `model`, rpm or omega) over the runs: the periodogram
 /// P(N) = |sum_n r_n exp(-i N theta_n)|^2 / n(N), theta the motor angle (the integral of the
 /// measured speed times the gear ratio), N = 2..k_max_angle_order. A sample shows order N only
 /// where the ripple moves less than pi between samples, N |w| dt < pi with w the motor's

@@ -1844,10 +1844,13 @@ std::vector<double> angle_orders(const model::Model& model, const std::vector<Ru
   std::vector<double> power(k_max_angle_order + 1, 0.0);
   std::vector<std::size_t> shown(k_max_angle_order + 1, 0);
   for (const Run& run : runs) {
-    const auto it = std::find(run.outputs.begin(), run.outputs.end(), "rpm");
+    const auto it = std::find_if(run.outputs.begin(), run.outputs.end(),
+                                 [](const std::string& name) { return name == "rpm" || name == "omega"; });
     if (it == run.outputs.end()) continue;
     const auto o = static_cast<std::size_t>(it - run.outputs.begin());
     const auto& y = run.measured[o];
+    const bool rpm = *it == "rpm";
+    const auto rad_s = [rpm](double x) { return rpm ? rad_s_from_rpm(x) : x; };
     const auto sim = simulate_as_measured(model, run);
     std::fill(acc.begin(), acc.end(), std::complex<double>{0.0, 0.0});
     // The motor angle: the trapezoidal integral of the measured speed, times the gear ratio.
@@ -1855,10 +1858,10 @@ std::vector<double> angle_orders(const model::Model& model, const std::vector<Ru
     for (std::size_t n = 1; n < y.size(); ++n) {
       const double dt = run.inputs.t_s[n] - run.inputs.t_s[n - 1];
       if (std::isfinite(y[n]) && std::isfinite(y[n - 1]))
-        theta += rad_s_from_rpm(0.5 * (y[n] + y[n - 1]) * dt) * run.gear_ratio;
+        theta += rad_s(0.5 * (y[n] + y[n - 1]) * dt) * run.gear_ratio;
       const double r = y[n] - sim[o][n];
       if (!std::isfinite(r) || y[n] == 0.0) continue;
-      const double advance_rad = std::abs(rad_s_from_rpm(y[n])) * run.gear_ratio * dt;
+      const double advance_rad = std::abs(rad_s(y[n])) * run.gear_ratio * dt;
       for (std::size_t order = 2; order <= k_max_angle_order; ++order) {
         if (static_cast<double>(order) * advance_rad >= std::numbers::pi) break;
         acc[order] += r * std::polar(1.0, -static_cast<double>(order) * theta);
