@@ -438,10 +438,10 @@ TEST(GapCogging, OrderIsTheStrongestLineOverTheShaftAngle) {
 }
 
 // The orders are of the motor's angle: the same run logged behind a 10:1 gearbox (its speed a
-// tenth, its gear ratio 10) still shows 11, and so does its speed logged in rad/s. Logged every 20 ms instead of every 1 ms, a ripple of
-// 23 a revolution moves pi or more between samples wherever the shaft turns faster than 6.8
-// rad/s, and the samples slower than that do not show it: it is not searched, while order 2
-// (shown below 78 rad/s) is.
+// tenth, its gear ratio 10) still shows 11, and so does its speed logged in rad/s. Logged every
+// 20 ms instead of every 1 ms, a ripple of 23 a revolution moves pi or more between samples
+// wherever the shaft turns faster than 6.8 rad/s, and the samples slower than that do not show
+// it: it is not searched, while order 2 (shown below 78 rad/s) is.
 TEST(GapCogging, OrdersAreOfTheMotorAngleAndShownBelowTheSamplesNyquist) {
   const Program p = prbs(3.0, 2.5, 0.8, 41, 0, k_inf);
   const table::Table t = measure(p, {"cogging:T_c_Nm=0.0019,N_per_rev=11,phase_rad=-1.2"}, 41, "cog.csv");

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <numbers>
 #include <optional>
 #include <sstream>
 
@@ -234,6 +235,30 @@ TEST(FitGreybox, ANegativeViscousCoefficientIsFlagged) {
   EXPECT_TRUE(r.flags[0].undetermined());
   EXPECT_NE(r.warnings[0].find("is a negative viscous friction (it would drive the shaft): physically impossible"),
             std::string::npos)
+      << r.warnings[0];
+}
+
+// A ripple of 5 uN m on the rig's motor moves its speed by far less than the noise: its phase,
+// fitted, has a finite standard error wider than its whole range -pi..pi, which says nothing
+// about it. It is flagged as not determined, as an infinite error would be.
+TEST(FitGreybox, AnErrorBeyondHalfTheRangeIsNotDetermined) {
+  model::Model truth;
+  truth.effects.push_back(model::parse_effect("cogging:T_c_Nm=5e-6,N_per_rev=14,phase_rad=0.7"));
+  FitProblem problem;
+  problem.model = truth;
+  problem.model.effects.back().set("phase_rad", -0.5);
+  problem.runs.push_back(make_run(measure(truth, speed_only_run(), 37, false), {}, problem.model.params));
+  problem.free = {"cogging.phase_rad"};
+  const FitResult r = fit_model(problem);
+  ASSERT_EQ(r.nls.std_errors.size(), 1);
+  EXPECT_TRUE(std::isfinite(r.reported_se(0)));
+  EXPECT_GT(r.reported_se(0), std::numbers::pi);
+  ASSERT_EQ(r.flags.size(), 1U);
+  EXPECT_EQ(r.flags[0].kind, FitFlag::Kind::undetermined);
+  EXPECT_NE(r.warnings[0].find("cogging.phase_rad: not determined by the data (standard error "),
+            std::string::npos)
+      << r.warnings[0];
+  EXPECT_NE(r.warnings[0].find(" rad beyond half its range -3.14159 to 3.14159)"), std::string::npos)
       << r.warnings[0];
 }
 

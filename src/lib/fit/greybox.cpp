@@ -535,6 +535,14 @@ void fit_warnings(const NlsResult& n, const std::vector<std::pair<double, double
     } else if (!std::isfinite(se)) {
       add(Kind::undetermined, {n.names[k]},
           fmt::format("{}: not determined by the data (infinite standard error)", n.names[k]));
+    } else if (const double reported = result.reported_se(k);
+               std::isfinite(hi - lo) && reported > 0.5 * (hi - lo)) {
+      // Within one error of anywhere in its range (a phase known to +- 78 rad): no value at all.
+      add(Kind::undetermined, {n.names[k]},
+          fmt::format(
+              "{}: not determined by the data (standard error {:.3g}{} beyond half its range {:.6g} to "
+              "{:.6g})",
+              n.names[k], reported, unit, lo, hi));
     } else if ((k < n.rough.size() && n.rough[k]) || se <= 1e-9 * std::abs(v)) {
       add(Kind::too_precise, {n.names[k]},
           fmt::format("{}: standard error {:.3g}{} is too small to be true: the residual is not smooth "
@@ -720,7 +728,6 @@ FitResult fit_model(const FitProblem& problem) {
   // A fit its time budget stopped starts no further simulation: the caller reports it cut short.
   if (!result.nls.stopped && problem.evaluate_runs)
     result.runs = evaluate_model(result.model, problem.runs, problem.sim);
-  fit_warnings(result.nls, bounds, units, result);
   // Lag-1 autocorrelation of the residuals within each (run, output) block.
   double lag0 = 0.0;
   double lag1 = 0.0;
@@ -738,6 +745,7 @@ FitResult fit_model(const FitProblem& problem) {
   }
   const double rho = lag0 > 0.0 ? std::clamp(lag1 / lag0, 0.0, 0.9999) : 0.0;
   result.se_widening = std::sqrt((1.0 + rho) / (1.0 - rho));
+  fit_warnings(result.nls, bounds, units, result);
   return result;
 }
 
