@@ -78,28 +78,50 @@ TEST(ModelAccuracy, HalvingTheStepChangesRpmByLessThanFiveHundredthsRms) {
   EXPECT_LT(rms, 0.05);
 }
 
+/// A motor alone (no clutch, no generator) with equal Kt and Ke and Coulomb and static levels.
+Model motor_alone(double R_ohm, double L_H, double K, double J_kg_m2, double Tc_Nm, double Ts_Nm,
+                  double supply_V) {
+  Model m;
+  Machine& mm = m.params.motor;
+  mm.R_ohm = R_ohm;
+  mm.L_H = L_H;
+  mm.Kt_Nm_A = K;
+  mm.Ke_V_s_rad = K;
+  mm.J_kg_m2 = J_kg_m2;
+  mm.friction.Tc_Nm = Tc_Nm;
+  mm.friction.Ts_Nm = Ts_Nm;
+  m.params.supply_V = supply_V;
+  return m;
+}
+
+/// 10 s of levels in steps of `step_V` (-4..4 of them) that reverse and stop the motor, rows dt_s apart.
+Inputs reversing_levels(double dt_s, double step_V) {
+  return program(
+      10.0, dt_s,
+      [step_V](double t) {
+        const double s =
+            std::sin(2.0 * std::numbers::pi * 0.7 * t) + 0.6 * std::sin(2.0 * std::numbers::pi * 2.3 * t);
+        return std::round(4.0 * s) * step_V;
+      },
+      [](double) { return 0; }, [](double) { return k_open_circuit; });
+}
+
+/// The run stops more than 20 rows and turns both ways faster than `rpm`.
+void expect_stops_and_reverses(const Outputs& out, double rpm) {
+  std::size_t at_rest = 0;
+  for (double w : out.omega_rad_s) at_rest += w == 0.0 ? 1 : 0;
+  EXPECT_GT(at_rest, 20u);
+  EXPECT_GT(*std::max_element(out.rpm.begin(), out.rpm.end()), rpm);
+  EXPECT_LT(*std::min_element(out.rpm.begin(), out.rpm.end()), -rpm);
+}
+
 // A 100:1 gearmotor at 50 Hz (L/R = 0.1 ms, mechanical time constant 33 ms) on levels that
 // reverse and stop it: its circuit's decay is over within a quarter of the 1 ms step, so the
 // fits' step is not held to half its L/R (SimOptions::circuit_bound), and the speed is still
 // within 0.03 rpm RMS of 10 us steps.
 TEST(ModelAccuracy, ACircuitOverWithinAStepDoesNotBoundTheFitsStep) {
-  Model m;
-  Machine& mm = m.params.motor;
-  mm.R_ohm = 10.0;
-  mm.L_H = 1e-3;
-  mm.Kt_Nm_A = 0.3476;
-  mm.Ke_V_s_rad = 0.3476;
-  mm.J_kg_m2 = 4e-4;
-  mm.friction.Tc_Nm = mm.friction.Ts_Nm = 0.0109;
-  m.params.supply_V = 5.0;
-  const Inputs in = program(
-      10.0, 0.02,
-      [](double t) {
-        const double s =
-            std::sin(2.0 * std::numbers::pi * 0.7 * t) + 0.6 * std::sin(2.0 * std::numbers::pi * 2.3 * t);
-        return std::round(4.0 * s) * 1.2;
-      },
-      [](double) { return 0; }, [](double) { return k_open_circuit; });
+  const Model m = motor_alone(10.0, 1e-3, 0.3476, 4e-4, 0.0109, 0.0109, 5.0);
+  const Inputs in = reversing_levels(0.02, 1.2);
   const SimOptions fit;
   SimOptions unbound;
   unbound.circuit_bound = false;
@@ -108,11 +130,7 @@ TEST(ModelAccuracy, ACircuitOverWithinAStepDoesNotBoundTheFitsStep) {
   const Outputs a = simulate(m, in, fit);
   const Outputs b = simulate(m, in, unbound);
   const Outputs c = simulate(m, in, fine);
-  std::size_t at_rest = 0;
-  for (double w : c.omega_rad_s) at_rest += w == 0.0 ? 1 : 0;
-  EXPECT_GT(at_rest, 20u);
-  EXPECT_GT(*std::max_element(c.rpm.begin(), c.rpm.end()), 100.0);
-  EXPECT_LT(*std::min_element(c.rpm.begin(), c.rpm.end()), -100.0);
+  expect_stops_and_reverses(c, 100.0);
   EXPECT_EQ(a.rpm, b.rpm);
   EXPECT_LT(rms_difference(a.rpm, c.rpm), 0.03);
   // The rig's motor (L/R = 1.05 ms) is resolved: half its L/R.
@@ -127,38 +145,18 @@ TEST(ModelAccuracy, ACircuitOverWithinAStepDoesNotBoundTheFitsStep) {
 // rpm at the output shaft, against 1.3 rpm of one encoder count a row). Logged at 1 kHz, the
 // same circuit is resolved.
 TEST(ModelAccuracy, ACircuitOverWithinARowDoesNotBoundTheFitsStep) {
-  Model m;
-  Machine& mm = m.params.motor;
-  mm.R_ohm = 2.82;
-  mm.L_H = 1.41e-3;
-  mm.Kt_Nm_A = 0.0142;
-  mm.Ke_V_s_rad = 0.0142;
-  mm.J_kg_m2 = 3.27e-6;
-  mm.friction.Tc_Nm = 0.0064;
-  mm.friction.Ts_Nm = 0.0074;
-  m.params.supply_V = 12.0;
-  const auto levels = [](double t) {
-    const double s =
-        std::sin(2.0 * std::numbers::pi * 0.7 * t) + 0.6 * std::sin(2.0 * std::numbers::pi * 2.3 * t);
-    return std::round(4.0 * s) * 2.5;
-  };
-  const auto no_clutch = [](double) { return 0; };
-  const auto open = [](double) { return k_open_circuit; };
+  const Model m = motor_alone(2.82, 1.41e-3, 0.0142, 3.27e-6, 0.0064, 0.0074, 12.0);
   SimOptions unbound;
   unbound.circuit_bound = false;
   SimOptions fine;
   fine.max_step_s = 1e-5;
-  const Inputs slow = program(10.0, 0.01, levels, no_clutch, open);
+  const Inputs slow = reversing_levels(0.01, 2.5);
   const Outputs a = simulate(m, slow, SimOptions{});
   const Outputs c = simulate(m, slow, fine);
-  std::size_t at_rest = 0;
-  for (double w : c.omega_rad_s) at_rest += w == 0.0 ? 1 : 0;
-  EXPECT_GT(at_rest, 20u);
-  EXPECT_GT(*std::max_element(c.rpm.begin(), c.rpm.end()), 3000.0);
-  EXPECT_LT(*std::min_element(c.rpm.begin(), c.rpm.end()), -3000.0);
+  expect_stops_and_reverses(c, 3000.0);
   EXPECT_EQ(a.rpm, simulate(m, slow, unbound).rpm);
   EXPECT_LT(rms_difference(a.rpm, c.rpm), 0.25);
-  const Inputs fast = program(10.0, 0.001, levels, no_clutch, open);
+  const Inputs fast = reversing_levels(0.001, 2.5);
   EXPECT_NE(simulate(m, fast, SimOptions{}).rpm, simulate(m, fast, unbound).rpm);
 }
 
