@@ -3,7 +3,7 @@
 # without friction or dead band: one row per rig with what gap named against the withheld truth
 # and its wall time against the budget (one thread, bench/bench_gap_rigs.sh). GAP_RIGS lists the
 # rigs as KIND:SEED (default: deadband:1 gearmotor:2 current:3); GAP_RIGS_BUDGET the budget. A
-# last row runs the gearmotor rig (7518 rows at 100 Hz) on two threads against the goal of a
+# last row runs the gearmotor rig (7500 rows at 100 Hz) on two threads against the goal of a
 # 7000-row file in 10 s.
 # Sourced by scripts/bench.sh (row, met, wanted, $work, $raw, $root, $tools).
 if wanted gap_rigs; then

@@ -226,7 +226,7 @@ struct RunFit {
 struct FitFlag {
   enum class Kind {
     at_bound,      ///< the value sits at (within k_at_bound of) a bound of its range
-    undetermined,  ///< infinite standard error: the data do not determine it
+    undetermined,  ///< infinite standard error, or one beyond half its range: the data do not determine it
     too_precise,   ///< a standard error too small to be true (the residual is not smooth in it)
     correlated,    ///< two parameters correlated beyond k_max_correlation
     impossible,    ///< a physically impossible value (negative viscous, inertia, resistance, ...)
