@@ -16,7 +16,7 @@ Measured measured_of(const Run& run, std::array<double, 2> i_map) {
   Measured m;
   const std::size_t rows = run.inputs.t_s.size();
   for (std::size_t o = 0; o < run.outputs.size(); ++o) {
-    const double per = run.outputs[o] == "rpm" ? k_rad_s_per_rpm : run.outputs[o] == "omega" ? 1.0 : 0.0;
+    const double per = rad_s_per_unit(run.outputs[o]);
     if (per > 0.0) {
       m.w.resize(rows);
       for (std::size_t n = 0; n < rows; ++n) m.w[n] = run.measured[o][n] * per * run.gear_ratio;

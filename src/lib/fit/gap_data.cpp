@@ -179,9 +179,7 @@ model::DriveScale drive_scale(const model::Params& p, const std::vector<Run>& ru
       if (std::isfinite(u)) torque_Nm = std::max(torque_Nm, std::abs(current ? p.motor.Kt_Nm_A * u : u));
     }
     for (std::size_t o = 0; o < run.outputs.size(); ++o) {
-      const double to_rad_s = run.outputs[o] == "rpm"     ? k_rad_s_per_rpm
-                              : run.outputs[o] == "omega" ? 1.0
-                                                          : 0.0;
+      const double to_rad_s = rad_s_per_unit(run.outputs[o]);
       for (double y : run.measured[o]) {
         if (std::isfinite(y)) speed_rad_s = std::max(speed_rad_s, std::abs(y) * to_rad_s * run.gear_ratio);
       }

@@ -1845,12 +1845,11 @@ std::vector<double> angle_orders(const model::Model& model, const std::vector<Ru
   std::vector<std::size_t> shown(k_max_angle_order + 1, 0);
   for (const Run& run : runs) {
     const auto it = std::find_if(run.outputs.begin(), run.outputs.end(),
-                                 [](const std::string& name) { return name == "rpm" || name == "omega"; });
+                                 [](const std::string& name) { return rad_s_per_unit(name) > 0.0; });
     if (it == run.outputs.end()) continue;
     const auto o = static_cast<std::size_t>(it - run.outputs.begin());
     const auto& y = run.measured[o];
-    const bool rpm = *it == "rpm";
-    const auto rad_s = [rpm](double x) { return rpm ? rad_s_from_rpm(x) : x; };
+    const double to_motor_rad_s = rad_s_per_unit(*it) * run.gear_ratio;
     const auto sim = simulate_as_measured(model, run);
     std::fill(acc.begin(), acc.end(), std::complex<double>{0.0, 0.0});
     // The motor angle: the trapezoidal integral of the measured speed, times the gear ratio.
@@ -1858,10 +1857,10 @@ std::vector<double> angle_orders(const model::Model& model, const std::vector<Ru
     for (std::size_t n = 1; n < y.size(); ++n) {
       const double dt = run.inputs.t_s[n] - run.inputs.t_s[n - 1];
       if (std::isfinite(y[n]) && std::isfinite(y[n - 1]))
-        theta += rad_s(0.5 * (y[n] + y[n - 1]) * dt) * run.gear_ratio;
+        theta += 0.5 * (y[n] + y[n - 1]) * to_motor_rad_s * dt;
       const double r = y[n] - sim[o][n];
       if (!std::isfinite(r) || y[n] == 0.0) continue;
-      const double advance_rad = std::abs(rad_s(y[n])) * run.gear_ratio * dt;
+      const double advance_rad = std::abs(y[n]) * to_motor_rad_s * dt;
       for (std::size_t order = 2; order <= k_max_angle_order; ++order) {
         if (static_cast<double>(order) * advance_rad >= std::numbers::pi) break;
         acc[order] += r * std::polar(1.0, -static_cast<double>(order) * theta);

@@ -298,6 +298,10 @@ std::vector<std::string> fix_parameters(model::Model& model, const std::vector<s
   return names;
 }
 
+double rad_s_per_unit(std::string_view name) {
+  return name == "rpm" ? k_rad_s_per_rpm : name == "omega" ? 1.0 : 0.0;
+}
+
 namespace {
 
 /// A run's fastest measured motor speed with a margin of k_ripple_margin, rad/s (0: no speed
@@ -306,7 +310,7 @@ constexpr double k_ripple_margin = 1.2;
 double ripple_speed(const Run& run) {
   double fastest = 0.0;
   for (std::size_t k = 0; k < run.outputs.size(); ++k) {
-    const double to_rad_s = run.outputs[k] == "rpm" ? k_rad_s_per_rpm : run.outputs[k] == "omega" ? 1.0 : 0.0;
+    const double to_rad_s = rad_s_per_unit(run.outputs[k]);
     for (double x : run.measured[k]) {
       if (std::isfinite(x)) fastest = std::max(fastest, std::abs(x) * to_rad_s);
     }

@@ -72,6 +72,10 @@ struct Run {
   std::string torque_column;  ///< its name (DriveInput::torque_column)
 };
 
+/// rad/s per unit of a run's measured output `name` (rpm: pi / 30, omega: 1), 0 for an output that
+/// is not a speed; times Run::gear_ratio, the motor's.
+double rad_s_per_unit(std::string_view name);
+
 /// Settles how the run's speed was measured: `gear_override` (a command's --gear-ratio) wins;
 /// else the capture's metadata; else the model INI's `[measurement]` (`ini`); else a ratio of 1
 /// and no filter. A capture and an INI that state different values throw mcg::Error naming the
