@@ -262,6 +262,25 @@ TEST(FitGreybox, AnErrorBeyondHalfTheRangeIsNotDetermined) {
       << r.warnings[0];
 }
 
+// A phase is periodic: a fit starting just across -pi from the truth steps over it and comes
+// back wrapped into the range, where a bounded phase would stop at -pi, flagged at its bound.
+TEST(FitGreybox, APhaseWrapsRatherThanStoppingAtItsBound) {
+  model::Model truth;
+  truth.effects.push_back(model::parse_effect("cogging:T_c_Nm=2e-3,N_per_rev=14,phase_rad=3.0"));
+  FitProblem problem;
+  problem.model = truth;
+  problem.model.effects.back().set("phase_rad", -2.9);
+  problem.runs.push_back(make_run(measure(truth, speed_only_run(), 38, false), {}, problem.model.params));
+  problem.free = {"cogging.phase_rad"};
+  const FitResult r = fit_model(problem);
+  ASSERT_TRUE(r.nls.converged);
+  EXPECT_TRUE(r.flags.empty()) << r.warnings[0];
+  const double se = r.reported_se(0);
+  EXPECT_LT(se, 0.05);
+  EXPECT_NEAR(r.nls.values[0], 3.0, 4.0 * se);
+  EXPECT_DOUBLE_EQ(r.model.effects.back().get("phase_rad"), r.nls.values[0]);
+}
+
 TEST(FitGreybox, AParameterAtItsBoundIsFlagged) {
   FitProblem problem;
   model::Model truth;

@@ -506,7 +506,8 @@ namespace {
 
 /// The honest-numbers checks of FitResult::warnings and ::flags.
 void fit_warnings(const NlsResult& n, const std::vector<std::pair<double, double>>& bounds,
-                  const std::vector<std::string>& units, FitResult& result) {
+                  const std::vector<double>& periods, const std::vector<std::string>& units,
+                  FitResult& result) {
   auto add = [&](FitFlag::Kind kind, std::vector<std::string> names, std::string text,
                  double bound = std::numeric_limits<double>::quiet_NaN()) {
     result.flags.push_back({kind, std::move(names), bound});
@@ -524,7 +525,7 @@ void fit_warnings(const NlsResult& n, const std::vector<std::pair<double, double
       add(Kind::impossible, {n.names[k]}, fmt::format("{} = {:.6g}{} {}", n.names[k], v, unit, why));
       continue;
     }
-    const BoundSide side = bound_reached(v, n.std_errors[i], lo, hi);
+    const BoundSide side = periods[k] > 0.0 ? BoundSide::none : bound_reached(v, n.std_errors[i], lo, hi);
     if (side != BoundSide::none) {
       const bool lower = side == BoundSide::lower;
       add(Kind::at_bound, {n.names[k]},
@@ -632,7 +633,10 @@ FitResult fit_model(const FitProblem& problem) {
   std::vector<model::ParamInfo> infos = model::parameters(problem.model);
   for (auto& info : infos) {
     const auto it = problem.bounds.find(info.name);
-    if (it != problem.bounds.end()) std::tie(info.lower, info.upper) = it->second;
+    if (it == problem.bounds.end()) continue;
+    // Bounds the user gives a phase are a constraint: it is no longer wrapped.
+    std::tie(info.lower, info.upper) = it->second;
+    info.period = 0.0;
   }
   for (const auto& [follower, leader] : problem.ties) {
     for (const auto& name : {follower, leader}) {
@@ -647,6 +651,7 @@ FitResult fit_model(const FitProblem& problem) {
   std::vector<std::string> units;
   std::vector<ParameterSpec> specs;
   std::vector<std::pair<double, double>> bounds;
+  std::vector<double> periods;
   std::set<std::string> seen;
   for (const auto& name : problem.free) {
     if (!seen.insert(name).second) fail("parameter {} is listed twice", quote(name));
@@ -667,8 +672,15 @@ FitResult fit_model(const FitProblem& problem) {
     }
     specs.push_back(spec);
     bounds.emplace_back(it->lower, it->upper);
+    periods.push_back(it->period);
     units.push_back(it->unit);
   }
+  // A periodic parameter moves freely; the model sees it wrapped into its range.
+  const auto in_range = [&](std::size_t i, double v) {
+    if (periods[i] <= 0.0 || !std::isfinite(v)) return v;
+    const double from_lower = std::fmod(v - bounds[i].first, periods[i]);
+    return bounds[i].first + (from_lower < 0.0 ? from_lower + periods[i] : from_lower);
+  };
 
   // Per (run, output): the normalisation std(y) sqrt(N) and the offset of its block.
   std::vector<std::vector<double>> norm(problem.runs.size());
@@ -695,7 +707,7 @@ FitResult fit_model(const FitProblem& problem) {
   const ResidualFunction residual = [&](const Eigen::VectorXd& p, Eigen::VectorXd& out) {
     model::Model m = problem.model;
     for (std::size_t i = 0; i < specs.size(); ++i) {
-      const double v = p[static_cast<Eigen::Index>(i)];
+      const double v = in_range(i, p[static_cast<Eigen::Index>(i)]);
       if (!(v >= bounds[i].first && v <= bounds[i].second)) {
         out.setConstant(k_nan);
         return;
@@ -720,6 +732,10 @@ FitResult fit_model(const FitProblem& problem) {
 
   FitResult result;
   result.nls = least_squares(specs, total, residual, problem.nls);
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    auto& v = result.nls.values[static_cast<Eigen::Index>(i)];
+    v = in_range(i, v);
+  }
   if (problem.jackknife_stretches > 1 && result.nls.converged) {
     result.se_jackknife = jackknife(specs, total, residual, problem, offset, result.nls.values);
     if (!result.se_jackknife.empty()) result.jackknife_stretches = problem.jackknife_stretches;
@@ -749,7 +765,7 @@ FitResult fit_model(const FitProblem& problem) {
   }
   const double rho = lag0 > 0.0 ? std::clamp(lag1 / lag0, 0.0, 0.9999) : 0.0;
   result.se_widening = std::sqrt((1.0 + rho) / (1.0 - rho));
-  fit_warnings(result.nls, bounds, units, result);
+  fit_warnings(result.nls, bounds, periods, units, result);
   return result;
 }
 

@@ -97,6 +97,9 @@ struct EffectParamSpec {
   double upper;
   std::string unit;
   std::string doc;
+  /// A periodic parameter's period (a phase: 2 pi), 0 for none. Its range is one period, and a
+  /// fit wraps it into the range rather than bounding it: no phase is ever "at a bound".
+  double period = 0.0;
 };
 
 struct Compiled;
@@ -354,6 +357,7 @@ struct ParamInfo {
   double lower;
   double upper;
   std::string unit;
+  double period = 0.0;  ///< EffectParamSpec::period; 0 for a bounded parameter
 };
 
 /// The nominal parameters (named "section.key" as in the INI form, e.g. "motor.J_kg_m2",

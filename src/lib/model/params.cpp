@@ -376,6 +376,7 @@ std::vector<ParamInfo> parameters(const Model& model) {
             info.lower = p.lower;
             info.upper = p.upper;
             info.unit = p.unit;
+            info.period = p.period;
           }
         }
       }

@@ -106,6 +106,7 @@ void write_effect_catalog_roff(std::ostream& out) {
       params += fmt::format("{} ({}, {}..{}{}{}): {}", p.name, config::format_number(p.default_value),
                             config::format_number(p.lower), config::format_number(p.upper),
                             p.unit == "1" ? "" : " ", p.unit == "1" ? "" : p.unit, p.doc);
+      if (p.period > 0.0) params += ", periodic (a fit wraps it into its range)";
     }
     // Each sentence on its own line: roff starts no line with a control character here.
     std::string summary = e.summary;
@@ -121,10 +122,6 @@ const EffectSpec* find_effect(std::string_view name) {
   }
   return nullptr;
 }
-
-namespace {
-
-}  // namespace
 
 std::string unknown_effect_hint(std::string_view name, bool candidates_only) {
   // The nearest names: every name `name` begins (a prefix names a family), else the closest.

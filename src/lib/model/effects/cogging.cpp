@@ -3,6 +3,8 @@
 // armature. The diagnosis starts amplitudes from a quarter to the whole Coulomb level (the
 // rig's, scaled by the torque the drive can apply over the rig's stall torque), eight phases,
 // and the orders the residual's spectrum over the measured angle shows strongest.
+#include <numbers>
+
 #include "model/effects/compiled.hpp"
 
 namespace mcg::model::effects {
@@ -40,7 +42,8 @@ EffectSpec cogging() {
       "T_cog = T_c sin(N theta + phase), theta = motor angle since the start; shifts breakaway too",
       {{"T_c_Nm", 1e-3, 0.0, 0.02, "N m", "amplitude"},
        {"N_per_rev", 14.0, 1.0, 200.0, "1/rev", "cycles per revolution"},
-       {"phase_rad", 0.0, -3.141592653589793, 3.141592653589793, "rad", "phase at theta = 0"}},
+       {"phase_rad", 0.0, -std::numbers::pi, std::numbers::pi, "rad", "phase at theta = 0",
+        2.0 * std::numbers::pi}},
       compile,
       EffectPlan::fit({"T_c_Nm", "phase_rad"},
                       {{0.0006, 0.001, 0.0016, 0.0025}, {-2.75, -1.96, -1.18, -0.39, 0.39, 1.18, 1.96, 2.75}},
