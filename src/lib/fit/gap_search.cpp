@@ -388,6 +388,8 @@ constexpr int k_profile_half_points = 16;
 /// Scans of the breakaway profile at most: one around the fit, then, while the least cost lies
 /// at the scan's edge, again around that edge.
 constexpr int k_profile_scans = 3;
+/// Profiles of a breakaway level at most, each followed by a refit of the other levels around it.
+constexpr int k_breakaway_rounds = 2;
 
 /// The breakaway level `key` of a friction effect, fitted on the regularised stick, profiled on
 /// the exact stick-slip the final score uses: the training cost at values around the fit, the
@@ -399,10 +401,11 @@ constexpr int k_profile_scans = 3;
 /// steps: the error then says how little the data tell. A fit that left the level at its
 /// bound, or without a finite error, gives no scale to scan by: the scan then starts over the
 /// motor's whole Coulomb level above the bound (a breakaway is seldom more than twice the
-/// Coulomb level). Returns the note for the status.
+/// Coulomb level). Returns the note for the status, which names the regularised fit's value and
+/// error (regularised, regularised_se: the level before any profile moved it).
 std::string profile_breakaway(GapCandidate& c, const std::string& key, const FitResult& fit,
                               const std::vector<Run>& runs, std::chrono::steady_clock::time_point deadline,
-                              SimulationMemo& memo) {
+                              SimulationMemo& memo, double regularised, double regularised_se) {
   const auto it = std::find(c.free.begin(), c.free.end(), key);
   if (it == c.free.end()) return {};
   const auto k = static_cast<std::size_t>(it - c.free.begin());
@@ -509,8 +512,8 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
                     "is more than {:.2g})",
                     key, half));
   return fmt::format("{} profiled on the exact stick: {:.4g} +- {}{:.2g} (regularised fit {:.4g} +- {:.2g})",
-                     key, points[best], open ? "more than " : "", open ? half : profile_se, value,
-                     jacobian_se);
+                     key, points[best], open ? "more than " : "", open ? half : profile_se, regularised,
+                     regularised_se);
 }
 
 /// A level of an added effect that a fit drove to its zero bound is trapped there: the fit moves
@@ -828,33 +831,49 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     if (spec == nullptr || spec->plan.breakaway_key.empty()) continue;
     const std::string key = e + "." + spec->plan.breakaway_key;
     const auto k = static_cast<std::size_t>(std::find(c.free.begin(), c.free.end(), key) - c.free.begin());
-    // A breakaway the regularised fit left at its bound or without a finite error had the other
-    // levels fitted around the wrong value: once the profile has found it, they are refitted
-    // with it held there, on the exact stick-slip the profile used, and it keeps its place and
-    // its profile error.
-    const bool collapsed =
-        k >= c.std_errors.size() || !std::isfinite(c.std_errors[k]) ||
-        std::any_of(c.flags.begin(), c.flags.end(), [&](const FitFlag& f) {
-          return f.kind == FitFlag::Kind::at_bound && f.names == std::vector<std::string>{key};
-        });
-    std::string note = profile_breakaway(c, key, fit, data.train, settings.deadline, memo);
-    if (note.empty()) continue;
-    profiled.push_back(std::move(note));
-    const double value = c.values[k];
-    const double se = c.std_errors[k];
-    if (!collapsed || !std::isfinite(se) || std::chrono::steady_clock::now() >= settings.deadline) continue;
-    std::vector<FitFlag> own;
-    for (const FitFlag& f : c.flags) {
-      if (f.names == std::vector<std::string>{key}) own.push_back(f);
+    // A breakaway the regularised fit left at its bound or without a finite error, or one the
+    // profile moved beyond the fit's own error of it, had the other levels fitted around the
+    // wrong value (a Coulomb level and a viscous drag that traded with it, several of their
+    // errors off): once the profile has found it, they are refitted with it held there, on the
+    // exact stick-slip the profile used, and it keeps its place and its profile error. The
+    // profile, taken with the others held, is then taken again around the refitted levels,
+    // until it stays within its error (k_breakaway_rounds at most).
+    std::string note;
+    const double regularised = k < c.values.size() ? c.values[k] : std::numeric_limits<double>::quiet_NaN();
+    const double regularised_se =
+        k < c.std_errors.size() ? c.std_errors[k] : std::numeric_limits<double>::quiet_NaN();
+    for (int round = 0; round < k_breakaway_rounds; ++round) {
+      const double fitted = k < c.values.size() ? c.values[k] : std::numeric_limits<double>::quiet_NaN();
+      const double fitted_se =
+          k < c.std_errors.size() ? c.std_errors[k] : std::numeric_limits<double>::quiet_NaN();
+      const bool collapsed =
+          !std::isfinite(fitted_se) || std::any_of(c.flags.begin(), c.flags.end(), [&](const FitFlag& f) {
+            return f.kind == FitFlag::Kind::at_bound && f.names == std::vector<std::string>{key};
+          });
+      std::string again =
+          profile_breakaway(c, key, fit, data.train, settings.deadline, memo, regularised, regularised_se);
+      if (again.empty()) break;
+      note = std::move(again);
+      const double value = c.values[k];
+      const double se = c.std_errors[k];
+      const bool moved = std::abs(value - fitted) > fitted_se;
+      if (!(collapsed || moved) || !std::isfinite(se) ||
+          std::chrono::steady_clock::now() >= settings.deadline)
+        break;
+      std::vector<FitFlag> own;
+      for (const FitFlag& f : c.flags) {
+        if (f.names == std::vector<std::string>{key}) own.push_back(f);
+      }
+      const bool smooth = problem.sim.smooth_stick;
+      problem.sim.smooth_stick = false;
+      refit_pinned(key, value);
+      problem.sim.smooth_stick = smooth;
+      c.free.insert(c.free.begin() + static_cast<std::ptrdiff_t>(k), key);
+      c.values.insert(c.values.begin() + static_cast<std::ptrdiff_t>(k), value);
+      c.std_errors.insert(c.std_errors.begin() + static_cast<std::ptrdiff_t>(k), se);
+      c.flags.insert(c.flags.end(), own.begin(), own.end());
     }
-    const bool smooth = problem.sim.smooth_stick;
-    problem.sim.smooth_stick = false;
-    refit_pinned(key, value);
-    problem.sim.smooth_stick = smooth;
-    c.free.insert(c.free.begin() + static_cast<std::ptrdiff_t>(k), key);
-    c.values.insert(c.values.begin() + static_cast<std::ptrdiff_t>(k), value);
-    c.std_errors.insert(c.std_errors.begin() + static_cast<std::ptrdiff_t>(k), se);
-    c.flags.insert(c.flags.end(), own.begin(), own.end());
+    if (!note.empty()) profiled.push_back(std::move(note));
   }
   // A breakaway the runs never excite (no start from rest near it) leaves a friction effect's
   // static excess undetermined, even on the exact stick's profile, while its Coulomb and
