@@ -1140,10 +1140,11 @@ TEST(GapSearch, StartingGridsScaleWithTheModelAndTheDrive) {
   EXPECT_DOUBLE_EQ(scale("friction_asymmetry", small, model::voltage_drive_scale(small))[0], 0.25);
 }
 
-// gap's standard errors are the fit's widened for the residuals' autocorrelation
-// (FitResult::reported_se, as mcg-fit model reports them): the refit of the nominal parameters,
-// whose residual the withheld dead time leaves strongly autocorrelated, carries the errors the
-// fit gives at its values times the widening.
+// gap's standard errors are the fit's widened for the residuals' autocorrelation, or its
+// linearised jackknife's where wider (FitResult::reported_se, as mcg-fit model reports them):
+// the refit of the nominal parameters, whose residual the withheld dead time leaves strongly
+// autocorrelated, carries the errors the fit gives at its values, more than twice the
+// Jacobian's.
 TEST(GapSearch, StandardErrorsAreWidenedForAutocorrelation) {
   const GapData data = current_driven_data();
   GapSettings settings;
@@ -1162,6 +1163,8 @@ TEST(GapSearch, StandardErrorsAreWidenedForAutocorrelation) {
   problem.model = pm->model;
   problem.runs = data.train;
   problem.free = pm->free;
+  problem.jackknife_stretches = k_gap_jackknife_stretches;
+  problem.jackknife_linearised = true;
   const FitResult at = fit_model(problem);
   EXPECT_GT(at.se_widening, 2.0);
   std::size_t finite = 0;

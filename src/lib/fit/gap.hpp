@@ -74,6 +74,9 @@ inline constexpr double k_gap_data_floor_factor = 2.0;
 /// A correlated pair leaves a parameter undetermined when its standard error exceeds this
 /// share of its value.
 inline constexpr double k_gap_max_relative_error = 0.5;
+/// Stretches of the linearised jackknife every candidate's standard errors take where it is
+/// wider than the Jacobian's (FitProblem::jackknife_linearised).
+inline constexpr std::size_t k_gap_jackknife_stretches = 10;
 
 /// Most effects named together (A+B+C).
 inline constexpr std::size_t k_gap_max_mixture = 3;

@@ -571,6 +571,11 @@ FitProblem candidate_problem(const std::vector<std::string>& effects, const GapD
   problem.nls.ftol = 1e-5;
   problem.nls.check_smoothness = false;
   problem.evaluate_runs = false;  // the candidate is scored by evaluate() and training_speed_rms()
+  // Standard errors no smaller than a jackknife's over stretches of the runs (a quantised speed
+  // at rest, a dead band trading with a Coulomb level: the Jacobian's error takes the residual
+  // for the noise), linearised so that it costs no simulation.
+  problem.jackknife_stretches = k_gap_jackknife_stretches;
+  problem.jackknife_linearised = true;
   // Jacobians by finite differences throughout: Broyden's updates between them (NlsOptions::
   // broyden) saved a fifth of the public cases' time but lost a two-effect mixture, whose
   // single fits stopped early on updated Jacobians.

@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -572,19 +573,21 @@ void apply_ties(model::Model& m, const std::vector<std::pair<std::string, std::s
   for (const auto& [follower, leader] : ties) model::set_parameter(m, follower, model::get_parameter(m, leader));
 }
 
-/// The delete-one-stretch jackknife of FitResult::se_jackknife: the runs' rows cut into
-/// problem.jackknife_stretches contiguous stretches of about equal length (a run of its share,
-/// at least one), each left out of the residual in turn and the fit repeated from `fitted`.
-/// Empty when a refit fails to converge (its spread would then be the solver's, not the data's).
-std::vector<double> jackknife(std::vector<ParameterSpec> specs, std::size_t total,
-                              const ResidualFunction& residual, const FitProblem& problem,
-                              const std::vector<std::size_t>& offset, const Eigen::VectorXd& fitted) {
-  // Each stretch: per run, a row range [from, to) whose residuals (every output) are zeroed.
-  struct Stretch {
-    std::size_t run;
-    std::size_t from;
-    std::size_t to;
-  };
+/// Eigenvalues of a stretch's scaled normal matrix below this share of its largest are taken as 0
+/// (the linearised jackknife's undetermined directions).
+constexpr double k_jackknife_rank_floor = 1e-12;
+
+/// One stretch of the delete-one-stretch jackknife: in run `run`, the rows [from, to), whose
+/// residuals (every output) it leaves out.
+struct Stretch {
+  std::size_t run;
+  std::size_t from;
+  std::size_t to;
+};
+
+/// The runs' rows cut into problem.jackknife_stretches contiguous stretches of about equal
+/// length (a run of its share, at least one).
+std::vector<Stretch> jackknife_stretches(const FitProblem& problem) {
   std::size_t rows = 0;
   for (const Run& run : problem.runs) rows += run.inputs.t_s.size();
   std::vector<Stretch> stretches;
@@ -596,10 +599,77 @@ std::vector<double> jackknife(std::vector<ParameterSpec> specs, std::size_t tota
     const std::size_t pieces = std::clamp<std::size_t>(share, 1, n);
     for (std::size_t k = 0; k < pieces; ++k) stretches.push_back({r, k * n / pieces, (k + 1) * n / pieces});
   }
+  return stretches;
+}
+
+/// Standard errors from the jackknife's values p_(i), one per stretch:
+/// se^2 = (g - 1) / g sum_i (p_(i) - mean)^2.
+std::vector<double> jackknife_spread(const std::vector<Eigen::VectorXd>& fits) {
+  if (fits.size() < 2) return {};
+  const auto g = static_cast<double>(fits.size());
+  const Eigen::Index count = fits.front().size();
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(count);
+  for (const auto& f : fits) mean += f / g;
+  Eigen::VectorXd var = Eigen::VectorXd::Zero(count);
+  for (const auto& f : fits) var += (f - mean).cwiseAbs2();
+  var *= (g - 1.0) / g;
+  std::vector<double> se;
+  for (Eigen::Index i = 0; i < count; ++i) se.push_back(std::sqrt(var[i]));
+  return se;
+}
+
+/// The linearised jackknife (FitProblem::jackknife_linearised): with J the fit's Jacobian, r
+/// its residuals and J_s, r_s their rows of stretch s, leaving s out moves the values by the
+/// Gauss-Newton step dp_s = -(J^T J - J_s^T J_s)^-1 (J^T r - J_s^T r_s), taken in columns scaled
+/// to unit norm. Empty when some parameter's error is not finite.
+std::vector<double> linear_jackknife(const NlsResult& n, const FitProblem& problem,
+                                     const std::vector<std::size_t>& offset) {
+  const Eigen::MatrixXd& jac = n.jacobian;
+  const Eigen::Index count = jac.cols();
+  if (count == 0 || jac.rows() != n.residuals.size() || !jac.allFinite() || !n.std_errors.allFinite())
+    return {};
+  const Eigen::VectorXd norms = jac.colwise().norm().transpose();
+  if (!(norms.minCoeff() > 0.0)) return {};
+  const Eigen::MatrixXd scaled = jac * norms.cwiseInverse().asDiagonal();
+  const Eigen::MatrixXd gram = scaled.transpose() * scaled;
+  const Eigen::VectorXd grad = scaled.transpose() * n.residuals;
+  std::vector<Eigen::VectorXd> steps;
+  for (const Stretch& s : jackknife_stretches(problem)) {
+    const Run& run = problem.runs[s.run];
+    const std::size_t len = run.inputs.t_s.size();
+    Eigen::MatrixXd gram_s = gram;
+    Eigen::VectorXd grad_s = grad;
+    for (std::size_t o = 0; o < run.outputs.size(); ++o) {
+      const auto at = static_cast<Eigen::Index>(offset[s.run] + o * len + s.from);
+      const auto rows = static_cast<Eigen::Index>(s.to - s.from);
+      const auto block = scaled.middleRows(at, rows);
+      gram_s -= block.transpose() * block;
+      grad_s -= block.transpose() * n.residuals.segment(at, rows);
+    }
+    // A direction the other stretches leave undetermined (a breakaway only this stretch starts
+    // from) takes no step: the spread then says nothing of it, rather than infinitely much.
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(gram_s);
+    if (eig.info() != Eigen::Success) return {};
+    const Eigen::VectorXd& lambda = eig.eigenvalues();
+    const double floor = k_jackknife_rank_floor * lambda.cwiseAbs().maxCoeff();
+    const Eigen::VectorXd inverse = lambda.unaryExpr([floor](double l) { return l > floor ? 1.0 / l : 0.0; });
+    const Eigen::VectorXd step =
+        -(eig.eigenvectors() * inverse.asDiagonal() * eig.eigenvectors().transpose() * grad_s);
+    steps.push_back(step.cwiseQuotient(norms));
+  }
+  return jackknife_spread(steps);
+}
+
+/// The delete-one-stretch jackknife of FitResult::se_jackknife: each stretch
+/// (jackknife_stretches()) left out of the residual in turn and the fit repeated from `fitted`.
+/// Empty when a refit fails to converge (its spread would then be the solver's, not the data's).
+std::vector<double> jackknife(std::vector<ParameterSpec> specs, std::size_t total,
+                              const ResidualFunction& residual, const FitProblem& problem,
+                              const std::vector<std::size_t>& offset, const Eigen::VectorXd& fitted) {
+  const std::vector<Stretch> stretches = jackknife_stretches(problem);
   for (std::size_t i = 0; i < specs.size(); ++i) specs[i].initial = fitted[static_cast<Eigen::Index>(i)];
   NlsOptions options = problem.nls;
   options.check_smoothness = false;
-  const auto count = static_cast<Eigen::Index>(specs.size());
   std::vector<Eigen::VectorXd> fits;
   for (const Stretch& s : stretches) {
     const Run& run = problem.runs[s.run];
@@ -615,15 +685,7 @@ std::vector<double> jackknife(std::vector<ParameterSpec> specs, std::size_t tota
     if (!r.converged) return {};
     fits.push_back(r.values);
   }
-  const auto g = static_cast<double>(fits.size());
-  Eigen::VectorXd mean = Eigen::VectorXd::Zero(count);
-  for (const auto& f : fits) mean += f / g;
-  Eigen::VectorXd var = Eigen::VectorXd::Zero(count);
-  for (const auto& f : fits) var += (f - mean).cwiseAbs2();
-  var *= (g - 1.0) / g;
-  std::vector<double> se;
-  for (Eigen::Index i = 0; i < count; ++i) se.push_back(std::sqrt(var[i]));
-  return se;
+  return jackknife_spread(fits);
 }
 
 }  // namespace
@@ -736,7 +798,10 @@ FitResult fit_model(const FitProblem& problem) {
     auto& v = result.nls.values[static_cast<Eigen::Index>(i)];
     v = in_range(i, v);
   }
-  if (problem.jackknife_stretches > 1 && result.nls.converged) {
+  if (problem.jackknife_stretches > 1 && problem.jackknife_linearised) {
+    result.se_jackknife = linear_jackknife(result.nls, problem, offset);
+    if (!result.se_jackknife.empty()) result.jackknife_stretches = problem.jackknife_stretches;
+  } else if (problem.jackknife_stretches > 1 && result.nls.converged) {
     result.se_jackknife = jackknife(specs, total, residual, problem, offset, result.nls.values);
     if (!result.se_jackknife.empty()) result.jackknife_stretches = problem.jackknife_stretches;
   }

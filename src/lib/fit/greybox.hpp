@@ -178,6 +178,10 @@ struct FitProblem {
   /// Contiguous stretches of the runs the delete-one-stretch jackknife leaves out in turn
   /// (FitResult::se_jackknife); 0: no jackknife (each stretch costs a refit).
   std::size_t jackknife_stretches = 0;
+  /// The jackknife by one Gauss-Newton step per stretch left out, from the optimum on the fit's
+  /// own Jacobian, instead of a refit: the same spread to first order, at no simulation, also
+  /// for a fit that spent its budget. A search that fits many candidates takes it.
+  bool jackknife_linearised = false;
   /// Simulate the runs once more at the optimum for FitResult::runs (a caller that only needs
   /// the model and its statistics saves that simulation).
   bool evaluate_runs = true;

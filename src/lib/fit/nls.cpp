@@ -412,6 +412,7 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
   result.broyden_jacobians = functor.broyden_jacobians();
   const Eigen::VectorXd dp_du = coords.derivative(result.values);
   const Eigen::MatrixXd jac_p = jac_u * dp_du.cwiseInverse().asDiagonal();
+  result.jacobian = jac_p;
   // A log parameter driven to its zero bound (many orders of magnitude below its start) has a
   // Jacobian column of rounding noise divided by almost nothing: it is held where it is for the
   // statistics (infinite error: the bound, not the data, fixes it), so that it does not make

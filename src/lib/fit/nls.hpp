@@ -71,6 +71,8 @@ struct NlsResult {
   Eigen::VectorXd std_errors;
   Eigen::MatrixXd correlation;
   Eigen::VectorXd residuals;  ///< at the optimum
+  /// dr/dp at the optimum (m x n), the statistics' Jacobian; empty when the fit was stopped.
+  Eigen::MatrixXd jacobian;
   double cost = 0.0;          ///< |r|^2
   double sigma = 0.0;         ///< sqrt(|r|^2 / (m - n)), NaN if m == n
   /// Per parameter: the residual is not smooth at the optimum (the Jacobian column at the
