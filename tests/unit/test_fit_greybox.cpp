@@ -241,15 +241,21 @@ TEST(FitGreybox, ANegativeViscousCoefficientIsFlagged) {
 // A ripple of 5 uN m on the rig's motor moves its speed by far less than the noise: its phase,
 // fitted, has a finite standard error wider than its whole range -pi..pi, which says nothing
 // about it. It is flagged as not determined, as an infinite error would be.
-TEST(FitGreybox, AnErrorBeyondHalfTheRangeIsNotDetermined) {
+/// The rig's motor with the ripple `cogging` (an effect's text), its speed measured with noise
+/// seed `seed`, and the ripple's phase fitted alone from `start_rad`.
+FitResult fit_ripple_phase(const std::string& cogging, double start_rad, unsigned seed) {
   model::Model truth;
-  truth.effects.push_back(model::parse_effect("cogging:T_c_Nm=5e-6,N_per_rev=14,phase_rad=0.7"));
+  truth.effects.push_back(model::parse_effect(cogging));
   FitProblem problem;
   problem.model = truth;
-  problem.model.effects.back().set("phase_rad", -0.5);
-  problem.runs.push_back(make_run(measure(truth, speed_only_run(), 37, false), {}, problem.model.params));
+  problem.model.effects.back().set("phase_rad", start_rad);
+  problem.runs.push_back(make_run(measure(truth, speed_only_run(), seed, false), {}, problem.model.params));
   problem.free = {"cogging.phase_rad"};
-  const FitResult r = fit_model(problem);
+  return fit_model(problem);
+}
+
+TEST(FitGreybox, AnErrorBeyondHalfTheRangeIsNotDetermined) {
+  const FitResult r = fit_ripple_phase("cogging:T_c_Nm=5e-6,N_per_rev=14,phase_rad=0.7", -0.5, 37);
   ASSERT_EQ(r.nls.std_errors.size(), 1);
   EXPECT_TRUE(std::isfinite(r.reported_se(0)));
   EXPECT_GT(r.reported_se(0), std::numbers::pi);
@@ -265,14 +271,7 @@ TEST(FitGreybox, AnErrorBeyondHalfTheRangeIsNotDetermined) {
 // A phase is periodic: a fit starting just across -pi from the truth steps over it and comes
 // back wrapped into the range, where a bounded phase would stop at -pi, flagged at its bound.
 TEST(FitGreybox, APhaseWrapsRatherThanStoppingAtItsBound) {
-  model::Model truth;
-  truth.effects.push_back(model::parse_effect("cogging:T_c_Nm=2e-3,N_per_rev=14,phase_rad=3.0"));
-  FitProblem problem;
-  problem.model = truth;
-  problem.model.effects.back().set("phase_rad", -2.9);
-  problem.runs.push_back(make_run(measure(truth, speed_only_run(), 38, false), {}, problem.model.params));
-  problem.free = {"cogging.phase_rad"};
-  const FitResult r = fit_model(problem);
+  const FitResult r = fit_ripple_phase("cogging:T_c_Nm=2e-3,N_per_rev=14,phase_rad=3.0", -2.9, 38);
   ASSERT_TRUE(r.nls.converged);
   EXPECT_TRUE(r.flags.empty()) << r.warnings[0];
   const double se = r.reported_se(0);
