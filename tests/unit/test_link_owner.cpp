@@ -2,10 +2,12 @@
 // controller's set at a time, and a set its writer left or abandoned is discarded, never
 // committed half-written. The board is a line that accepts every write.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdlib>
 #include <mutex>
+#include <string>
 #include <thread>
 
 #include "link/frame.hpp"
@@ -60,7 +62,9 @@ class AcceptingBoard : public Port {
   Decoder m_decoder;
   Bytes m_out;
   std::vector<Bytes> m_writes;
-  std::string m_name = "staging-test-board";
+  // The owner's socket is named after the port: one per test process, since ctest runs the
+  // tests of this suite side by side in one runtime directory.
+  std::string m_name = "staging-test-board-" + std::to_string(::getpid());
 };
 
 class LinkOwner : public ::testing::Test {
