@@ -847,26 +847,26 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     // exact stick-slip the profile used, and it keeps its place and its profile error. The
     // profile, taken with the others held, is then taken again around the refitted levels,
     // until it stays within its error (k_breakaway_rounds at most).
+    if (k >= c.values.size() || k >= c.std_errors.size()) continue;
     std::string note;
-    const double regularised = k < c.values.size() ? c.values[k] : std::numeric_limits<double>::quiet_NaN();
-    const double regularised_se =
-        k < c.std_errors.size() ? c.std_errors[k] : std::numeric_limits<double>::quiet_NaN();
+    const double regularised = c.values[k];
+    const double regularised_se = c.std_errors[k];
+    const bool collapsed =
+        !std::isfinite(regularised_se) || std::any_of(c.flags.begin(), c.flags.end(), [&](const FitFlag& f) {
+          return f.kind == FitFlag::Kind::at_bound && f.names == std::vector<std::string>{key};
+        });
     for (int round = 0; round < k_breakaway_rounds; ++round) {
-      const double fitted = k < c.values.size() ? c.values[k] : std::numeric_limits<double>::quiet_NaN();
-      const double fitted_se =
-          k < c.std_errors.size() ? c.std_errors[k] : std::numeric_limits<double>::quiet_NaN();
-      const bool collapsed =
-          !std::isfinite(fitted_se) || std::any_of(c.flags.begin(), c.flags.end(), [&](const FitFlag& f) {
-            return f.kind == FitFlag::Kind::at_bound && f.names == std::vector<std::string>{key};
-          });
+      const double fitted = c.values[k];
+      const double fitted_se = c.std_errors[k];
       std::string again =
           profile_breakaway(c, key, fit, data.train, settings.deadline, memo, regularised, regularised_se);
       if (again.empty()) break;
       note = std::move(again);
       const double value = c.values[k];
       const double se = c.std_errors[k];
+      // A collapsed fit is refitted once; after that only a profile that moves the level is.
       const bool moved = std::abs(value - fitted) > fitted_se;
-      if (!(collapsed || moved) || !std::isfinite(se) ||
+      if (!((round == 0 && collapsed) || moved) || !std::isfinite(se) ||
           std::chrono::steady_clock::now() >= settings.deadline)
         break;
       std::vector<FitFlag> own;
