@@ -1008,6 +1008,42 @@ TEST(GapPins, AnInfiniteErrorWhoseGivenValueCostsIsPinnedWhereTheFitLeftIt) {
   EXPECT_TRUE(c.flags.empty()) << c.warnings.front();
 }
 
+// A diagnosis without a friction effect fits the nominal static_scale on the exact stick, where
+// the training cost is a staircase in it (a start from rest moves by whole samples): a fit that
+// ends on a stair's edge takes a finite difference across it, and its Jacobian reports an error
+// of almost nothing (the public clutch_compliance case: 1.198 +- 1.3e-06, truth 1). After the
+// verdict the scale is profiled as a friction effect's breakaway is, and the error is the
+// data's again: as wide as a fit that did not end on an edge says, and covering the truth.
+TEST(GapPins, TheNominalStaticScaleOfADiagnosisIsProfiledNotLockedOnAStep) {
+  const std::vector<std::string> truth{"param_mismatch:static_scale=1.0"};
+  const table::Table train = measure(steps(3.0, 0.0, 1.0, 7, 0, false), truth, 1, "train.csv");
+  const table::Table validate = measure(steps(3.0, 0.0, 1.0, 8, 0, false), truth, 2, "validate.csv");
+  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+  FitProblem problem;
+  problem.model.effects = {model::parse_effect("param_mismatch:static_scale=1.3")};
+  problem.runs = data.train;
+  problem.free = {"param_mismatch.J_scale", "param_mismatch.coulomb_scale", "param_mismatch.static_scale"};
+  const FitResult fit = fit_model(problem);
+  GapCandidate c = candidate_of("param_mismatch", {}, fit);
+  c.status = "fitted";
+  ASSERT_EQ(c.free[2], "param_mismatch.static_scale");
+  const double honest_se = c.std_errors[2];
+  ASSERT_TRUE(std::isfinite(honest_se) && honest_se > 0.05) << fit.nls.values[2] << " +- " << honest_se;
+  // What a fit that ended on an edge reports.
+  c.std_errors[2] = 1e-6 * c.values[2];
+  GapSettings settings;
+  settings.threads = 2;
+  gap_detail::profile_nominal_breakaway(c, data, gap_detail::noise_floors(data), settings);
+  const double value = c.values[2];
+  const double se = c.std_errors[2];
+  EXPECT_GT(se, 0.5 * honest_se) << fmt::format("{} +- {} (fit {} +- {})", value, se, fit.nls.values[2],
+                                                honest_se);
+  EXPECT_LT(std::abs(value - 1.0), 2.0 * se) << fmt::format("{} +- {}", value, se);
+  EXPECT_EQ(model::get_parameter(c.model, "param_mismatch.static_scale"), value);
+  EXPECT_NE(c.status.find("param_mismatch.static_scale profiled on the exact stick: "), std::string::npos)
+      << c.status;
+}
+
 /// A current-driven motor alone as a servo logs it: the current loop's command `i` held at
 /// `levels_A` for `hold_s` each, the speed as omega with 0.5 rad/s of white noise (seeded).
 table::Table current_driven(const model::Model& rig, const std::vector<double>& levels_A, double hold_s,

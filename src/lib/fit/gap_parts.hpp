@@ -192,6 +192,12 @@ std::optional<model::Model> split_offset(const model::Model& m, const std::vecto
 /// Throws unless every name is a candidate effect of the catalog (--exclude).
 void check_excluded(const std::vector<std::string>& excluded);
 
+/// The training residuals the fit objective sums: (simulated - measured) / the measured
+/// channel's spread (root of its sum of squared deviations), run by run, output by output,
+/// sample by sample (0 where the measurement is missing or the channel constant), simulated
+/// with `options`. `memo`: the search's, or none.
+Eigen::VectorXd training_residuals(const model::Model& model, const std::vector<Run>& runs,
+                                   const model::SimOptions& options = {}, SimulationMemo* memo = nullptr);
 /// The fit objective on the training runs (sum over runs and outputs of the squared NRMSE),
 /// used to pick a starting point on a grid; simulated with `options` (a fit's, to compare with
 /// its cost). `memo`: the search's, or none.
@@ -240,6 +246,14 @@ void converge_diagnosis(GapCandidate& c, const GapData& data, const std::vector<
 /// verdict, stay as they are. Nothing is done after the time budget.
 void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData& data,
                    const std::vector<OutputFloor>& floors, const GapSettings& settings);
+/// After the verdict, the nominal static friction scale of diagnosis `c`, when free and fitted
+/// on the exact stick (no friction effect among `c`'s), is profiled as a friction effect's
+/// breakaway is (the exact stick's cost is flat between the drive levels that bracket a
+/// breakaway, and a fit locked on a level's edge reports an error of nothing): `c` takes the
+/// profile's value and error, its status says so, and it is scored again. Nothing is done after
+/// the time budget.
+void profile_nominal_breakaway(GapCandidate& c, const GapData& data, const std::vector<OutputFloor>& floors,
+                               const GapSettings& settings);
 
 // --- decision --------------------------------------------------------------------------
 

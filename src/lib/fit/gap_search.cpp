@@ -391,7 +391,8 @@ constexpr int k_profile_scans = 3;
 /// Profiles of a breakaway level at most, each followed by a refit of the other levels around it.
 constexpr int k_breakaway_rounds = 2;
 
-/// The breakaway level `key` of a friction effect, fitted on the regularised stick, profiled on
+/// The breakaway level `key` of a friction effect, fitted on the regularised stick (or the
+/// nominal static_scale, fitted on the exact stick), profiled on
 /// the exact stick-slip the final score uses: the training cost at values around the fit, the
 /// other parameters held. The value moves to the profile's least cost, and its standard error
 /// is the half-width of the values whose cost lies within one standard error's worth of it
@@ -401,26 +402,29 @@ constexpr int k_breakaway_rounds = 2;
 /// steps: the error then says how little the data tell. A fit that left the level at its
 /// bound, or without a finite error, gives no scale to scan by: the scan then starts over the
 /// motor's whole Coulomb level above the bound (a breakaway is seldom more than twice the
-/// Coulomb level). Returns the note for the status, which names the regularised fit's value and
-/// error (regularised, regularised_se: the level before any profile moved it).
-std::string profile_breakaway(GapCandidate& c, const std::string& key, const FitResult& fit,
+/// Coulomb level; for a scale, the scale 1). Returns the note for the status, which names the
+/// `fitted_on` fit's value and error (regularised, regularised_se: the level before any profile
+/// moved it).
+std::string profile_breakaway(GapCandidate& c, const std::string& key, double residuals, double se_widening,
                               const std::vector<Run>& runs, std::chrono::steady_clock::time_point deadline,
-                              SimulationMemo& memo, double regularised, double regularised_se) {
+                              SimulationMemo& memo, double regularised, double regularised_se,
+                              std::string_view fitted_on = "regularised fit") {
   const auto it = std::find(c.free.begin(), c.free.end(), key);
   if (it == c.free.end()) return {};
   const auto k = static_cast<std::size_t>(it - c.free.begin());
   if (k >= c.values.size() || k >= c.std_errors.size()) return {};
   const double value = c.values[k];
   const double jacobian_se = c.std_errors[k];
-  const auto residuals = static_cast<double>(fit.nls.residuals.size());
   if (!std::isfinite(value) || residuals < 1.0) return {};
   double lower = 0.0;
   for (const model::ParamInfo& info : model::parameters(c.model)) {
     if (info.name == key) lower = info.lower;
   }
-  const double coulomb_Nm = model::Compiled(c.model).p.motor.friction.Tc_Nm;
+  // The size of a level: the motor's Coulomb torque, or 1 for a nominal scale (static_scale).
+  const double coulomb_Nm =
+      key.starts_with("param_mismatch.") ? 1.0 : model::Compiled(c.model).p.motor.friction.Tc_Nm;
   // The profile spans five of the solver's own (unwidened) errors.
-  const double solver_se = jacobian_se / fit.se_widening;
+  const double solver_se = jacobian_se / se_widening;
   const bool collapsed = !std::isfinite(solver_se) || !(value - lower > 0.05 * coulomb_Nm);
   double centre_value = collapsed ? lower + 0.5 * coulomb_Nm : value;
   double half = collapsed ? 0.5 * coulomb_Nm
@@ -464,7 +468,7 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
       half = std::max(0.3 * centre_value, 2.0 * step);
     }
   }
-  const double threshold = costs[best] / residuals * fit.se_widening * fit.se_widening;
+  const double threshold = costs[best] / residuals * se_widening * se_widening;
   std::size_t lo = best;
   std::size_t hi = best;
   while (lo > 0 && costs[lo - 1] <= costs[best] + threshold) --lo;
@@ -511,8 +515,8 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, const Fit
         fmt::format("{}: its profile on the exact stick does not close within the values scanned (its error "
                     "is more than {:.2g})",
                     key, half));
-  return fmt::format("{} profiled on the exact stick: {:.4g} +- {}{:.2g} (regularised fit {:.4g} +- {:.2g})",
-                     key, points[best], open ? "more than " : "", open ? half : profile_se, regularised,
+  return fmt::format("{} profiled on the exact stick: {:.4g} +- {}{:.2g} ({} {:.4g} +- {:.2g})", key,
+                     points[best], open ? "more than " : "", open ? half : profile_se, fitted_on, regularised,
                      regularised_se);
 }
 
@@ -859,7 +863,8 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
       const double fitted = c.values[k];
       const double fitted_se = c.std_errors[k];
       std::string again =
-          profile_breakaway(c, key, fit, data.train, settings.deadline, memo, regularised, regularised_se);
+          profile_breakaway(c, key, static_cast<double>(fit.nls.residuals.size()), fit.se_widening,
+                            data.train, settings.deadline, memo, regularised, regularised_se);
       if (again.empty()) break;
       note = std::move(again);
       const double value = c.values[k];
@@ -1308,16 +1313,21 @@ Evaluation evaluate(const model::Model& model, const GapData& data, const std::v
   return ev;
 }
 
-/// The fit objective on the training runs (sum over runs and outputs of the squared NRMSE),
-/// used to pick a starting point on a grid.
-double training_cost(const model::Model& model, const std::vector<Run>& runs, SimulationMemo* memo,
-                     const model::SimOptions& options) {
-  double cost = 0.0;
+Eigen::VectorXd training_residuals(const model::Model& model, const std::vector<Run>& runs,
+                                   const model::SimOptions& options, SimulationMemo* memo) {
+  Eigen::Index total = 0;
+  for (const Run& run : runs) {
+    for (const auto& y : run.measured) total += static_cast<Eigen::Index>(y.size());
+  }
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(total);
+  Eigen::Index at = 0;
   for (const Run& run : runs) {
     const auto sim =
         memo != nullptr ? memo->simulate(model, run, options) : simulate_as_measured(model, run, options);
     for (std::size_t o = 0; o < run.outputs.size(); ++o) {
       const auto& y = run.measured[o];
+      const Eigen::Index start = at;
+      at += static_cast<Eigen::Index>(y.size());
       double mean = 0.0;
       std::size_t count = 0;
       for (double v : y) {
@@ -1328,16 +1338,23 @@ double training_cost(const model::Model& model, const std::vector<Run>& runs, Si
       }
       if (count < 2) continue;
       mean /= static_cast<double>(count);
-      double err = 0.0;
       double spread = 0.0;
-      for (std::size_t n = 0; n < y.size(); ++n) {
-        if (!std::isfinite(y[n])) continue;
-        err += (sim[o][n] - y[n]) * (sim[o][n] - y[n]);
-        spread += (y[n] - mean) * (y[n] - mean);
+      for (double v : y) {
+        if (std::isfinite(v)) spread += (v - mean) * (v - mean);
       }
-      if (spread > 0.0) cost += err / spread;
+      if (!(spread > 0.0)) continue;
+      const double weight = 1.0 / std::sqrt(spread);
+      for (std::size_t n = 0; n < y.size(); ++n) {
+        if (std::isfinite(y[n])) out[start + static_cast<Eigen::Index>(n)] = weight * (sim[o][n] - y[n]);
+      }
     }
   }
+  return out;
+}
+
+double training_cost(const model::Model& model, const std::vector<Run>& runs, SimulationMemo* memo,
+                     const model::SimOptions& options) {
+  const double cost = training_residuals(model, runs, options, memo).squaredNorm();
   return std::isfinite(cost) ? cost : std::numeric_limits<double>::infinity();
 }
 
@@ -1813,6 +1830,34 @@ void converge_diagnosis(GapCandidate& c, const GapData& data, const std::vector<
                      c.converged ? "fitted (on to convergence after the verdict)"
                                  : "fitted; budget spent, also after the verdict");
   }
+}
+
+void profile_nominal_breakaway(GapCandidate& c, const GapData& data, const std::vector<OutputFloor>& floors,
+                               const GapSettings& settings) {
+  const std::string key = "param_mismatch.static_scale";
+  const auto expired = [&] { return std::chrono::steady_clock::now() >= settings.deadline; };
+  if (!c.evaluated || c.values.size() != c.free.size() || c.std_errors.size() != c.free.size() ||
+      std::find(c.free.begin(), c.free.end(), key) == c.free.end() ||
+      std::any_of(c.effects.begin(), c.effects.end(), is_friction) || expired())
+    return;
+  if (settings.progress) settings.progress(fmt::format("profiling {}'s static friction scale", c.name));
+  const auto k = static_cast<std::size_t>(std::find(c.free.begin(), c.free.end(), key) - c.free.begin());
+  const double fitted = c.values[k];
+  // The training residuals as the fit weighs them, for their count and correlation.
+  const model::SimOptions sim = candidate_problem(c.effects, data, settings).sim;
+  const Eigen::VectorXd residuals = training_residuals(c.model, data.train, sim);
+  SimulationMemo memo;
+  const std::string note = profile_breakaway(
+      c, key, static_cast<double>(residuals.size()), ar1_widening(residuals, data.train), data.train,
+      settings.deadline, memo, fitted, c.std_errors[k], "fit on the exact stick");
+  if (note.empty()) return;
+  c.status += "; " + note;
+  if (c.values[k] == fitted) return;
+  const Evaluation ev = evaluate(c.model, data, floors);
+  c.score = ev.score;
+  c.rms = ev.rms;
+  c.fpe = fpe(ev.score, c.free.size(), static_cast<double>(validation_count(data) * floors.size()));
+  c.train_rms_rpm = training_speed_rms(c.model, data.train, sim);
 }
 
 void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData& data,

@@ -813,25 +813,29 @@ FitResult fit_model(const FitProblem& problem) {
   // A fit its time budget stopped starts no further simulation: the caller reports it cut short.
   if (!result.nls.stopped && problem.evaluate_runs)
     result.runs = evaluate_model(result.model, problem.runs, problem.sim);
+  result.se_widening = ar1_widening(result.nls.residuals, problem.runs);
+  fit_warnings(result.nls, bounds, periods, units, result);
+  return result;
+}
+
+double ar1_widening(const Eigen::VectorXd& residuals, const std::vector<Run>& runs) {
   // Lag-1 autocorrelation of the residuals within each (run, output) block.
   double lag0 = 0.0;
   double lag1 = 0.0;
   Eigen::Index at = 0;
-  for (const Run& run : problem.runs) {
+  for (const Run& run : runs) {
     for (const auto& y : run.measured) {
       const auto len = static_cast<Eigen::Index>(y.size());
-      for (Eigen::Index k = 0; k < len && at + k < result.nls.residuals.size(); ++k) {
-        const double r = result.nls.residuals[at + k];
+      for (Eigen::Index k = 0; k < len && at + k < residuals.size(); ++k) {
+        const double r = residuals[at + k];
         lag0 += r * r;
-        if (k > 0) lag1 += r * result.nls.residuals[at + k - 1];
+        if (k > 0) lag1 += r * residuals[at + k - 1];
       }
       at += len;
     }
   }
   const double rho = lag0 > 0.0 ? std::clamp(lag1 / lag0, 0.0, 0.9999) : 0.0;
-  result.se_widening = std::sqrt((1.0 + rho) / (1.0 - rho));
-  fit_warnings(result.nls, bounds, periods, units, result);
-  return result;
+  return std::sqrt((1.0 + rho) / (1.0 - rho));
 }
 
 std::string pinned_text(const PinnedParameter& pin) {

@@ -266,6 +266,11 @@ inline constexpr std::string_view k_pinned_bound = "pinned at its bound: the fit
 /// below the Coulomb level acts alike, but not above it), the value the fit left it at.
 inline constexpr std::string_view k_pinned_left = "pinned at the value the fit left: not set by these runs";
 
+/// FitResult::se_widening of `residuals` laid out as a fit of `runs` lays them out (run by run,
+/// output by output, sample by sample): sqrt((1 + rho) / (1 - rho)), rho the lag-1
+/// autocorrelation within each (run, output) block, pooled, clamped to [0, 0.9999].
+double ar1_widening(const Eigen::VectorXd& residuals, const std::vector<Run>& runs);
+
 /// "NAME = VALUE why": how the reports say a pin (six significant digits, never -0).
 std::string pinned_text(const PinnedParameter& pin);
 
