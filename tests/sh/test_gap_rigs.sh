@@ -143,4 +143,21 @@ case $named in
       awk -v s="$scores" 'BEGIN { split(s, f, " "); exit !(f[2] > 0 && f[1] <= 1.02 * f[2]) }' ;;
   *) fail "deadband 10: diagnosis $named, expected a dead band or a brush drop beside friction_levels" ;;
 esac
+# Gearmotor seed 21 (87:1, 200 Hz, 2436 counts a turn of the output): the breakaway's profile on
+# the exact stick undulates by a few likelihood units (whole samples of each start from rest),
+# its least cost 34 % above the truth and a second one near it. Its error was the one-unit
+# stretch around the least cost (+- 2.8e-5, the fit's 9e-5 reported: 4.1 errors off); it now
+# counts the whole profile's reach and must cover the truth within 2 errors.
+dir="$work/gearmotor-21"
+rig gearmotor 21 "$dir"
+mapfile -t drive <"$dir/args"
+mcg-fit gap "${drive[@]}" --config "$dir/given.ini" --train "$dir/train.csv" --validate "$dir/validate.csv" \
+  >"$dir/gap.csv" 2>"$dir/gap.err" || fail "gearmotor 21: gap: exit $?: $(tail -1 "$dir/gap.err")"
+row=$(grep -v '^#' "$dir/gap.csv" | sed -n 2p)
+echo "gearmotor 21: $(cut -d, -f1,4,15 <<<"$row")"
+[[ $(cut -d, -f1 <<<"$row") == friction_levels ]] && pass ||
+  fail "gearmotor 21: diagnosis $(cut -d, -f1 <<<"$row"), expected friction_levels"
+near_truth "gearmotor 21: friction_levels.Ts_excess_Nm" \
+  "$(grep -o 'friction_levels.Ts_excess_Nm=[^ ,]*' <<<"$row" | cut -d= -f2 || true)" \
+  "$(awk '$1 == "friction_levels.Ts_excess_Nm" { print $2 }' "$dir/truth")" 0.5 2
 finish gap_rigs

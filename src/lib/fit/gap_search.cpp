@@ -395,9 +395,10 @@ constexpr int k_breakaway_rounds = 2;
 /// nominal static_scale, fitted on the exact stick), profiled on
 /// the exact stick-slip the final score uses: the training cost at values around the fit, the
 /// other parameters held. The value moves to the profile's least cost, and its standard error
-/// is the half-width of the values whose cost lies within one standard error's worth of it
-/// (a likelihood ratio of 1: cost_min / M for M residuals, times the AR(1) widening squared,
-/// since a simulation error is autocorrelated), when that is wider than the Jacobian's. A
+/// is the reach of the values whose cost lies within one standard error's worth of it (a
+/// likelihood ratio of 1: cost_min / M for M residuals, times the AR(1) widening squared, since
+/// a simulation error is autocorrelated), or half that of two errors' worth, when that is wider
+/// than the Jacobian's. A
 /// staircase whose steps bracket the breakaway coarsely gives a flat profile between the
 /// steps: the error then says how little the data tell. A fit that left the level at its
 /// bound, or without a finite error, gives no scale to scan by: the scan then starts over the
@@ -473,7 +474,19 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, double re
   std::size_t hi = best;
   while (lo > 0 && costs[lo - 1] <= costs[best] + threshold) --lo;
   while (hi + 1 < points.size() && costs[hi + 1] <= costs[best] + threshold) ++hi;
-  const double profile_se = 0.5 * (points[hi] - points[lo]) + 0.5 * step;
+  // On the exact stick the profile is no parabola: a start from rest moves by whole samples,
+  // and the cost undulates by a few likelihood units (a gearmotor's second least cost near the
+  // truth, 1.5 errors up, 4 errors of the one-unit stretch away). The error is each side's reach
+  // (a profile is seldom symmetric) of the costs within one unit, and half the reach of those
+  // within four (two errors), whichever is widest.
+  double reach = 0.5 * (points[hi] - points[lo]);
+  for (int errors = 1; errors <= 2; ++errors) {
+    for (std::size_t n = 0; n < points.size(); ++n) {
+      if (costs[n] <= costs[best] + errors * errors * threshold)
+        reach = std::max(reach, std::abs(points[n] - points[best]) / errors);
+    }
+  }
+  const double profile_se = reach + 0.5 * step;
   open = (lo == 0 && points[0] > lower) || hi + 1 == points.size();
   model::set_parameter(c.model, key, points[best]);
   c.values[k] = points[best];
