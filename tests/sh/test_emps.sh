@@ -116,4 +116,10 @@ gap_param friction_levels.c1_Nm_s_rad 203.5034
 gap_param param_mismatch.J_scale 1.0012 0.05
 gap_closes_most "$work/gap.txt"
 warnings_hold_values "$work/gap.txt"
+# A linear axis' parameters keep the shaft's names (so that every INI reads back) and the summary
+# says what their units are along the axis; no sentence names a shaft unit.
+check "gap says what the _Nm names are on a linear axis" \
+  grep -qx 'linear axis: the shaft stands for the axis, a rad of it a m of travel: parameters named _Nm are in N, _Nm_s_rad in N s/m, _kg_m2 in kg, _rad_s in m/s' "$work/gap.txt"
+check "no line of gap's summary names N m or kg m^2" \
+  eval '! grep -E "[0-9] (N m|kg m\^2)" "$work/gap.txt"'
 finish emps

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "common/units.hpp"
 #include "fit/discrepancy.hpp"
 #include "fit/greybox.hpp"
 #include "model/model.hpp"
@@ -396,6 +397,34 @@ TEST(FitDiscrepancy, SpeedReadingErringOncePerRevolution) {
   EXPECT_LT(std::abs(t->phase_rad - 0.6), 2.0 * t->phase_se_rad + 0.02);
   EXPECT_EQ(placed(d, "shaft"), nullptr);
   EXPECT_LT(d.rms_after_rpm, 0.2 * d.rms_before_rpm);
+}
+
+// The fit holds a speed reading's offset in rpm, as its residual; the report gives it in the
+// data's own unit and names the measured column: omega_measured = omega + 1.047 rad/s, not
+// "rpm_measured = rpm + 10 rpm" on a file that measures omega.
+TEST(FitDiscrepancy, ASpeedReadingIsReportedInTheDataUnit) {
+  DiscrepancyTerm offset;
+  offset.place = "speed reading";
+  offset.basis = "rpm offset";
+  offset.coefficient = 10.0;
+  offset.std_error = 0.5;
+  offset.unit = "rpm";
+  SpeedUnit omega;
+  omega.name = "rad/s";
+  omega.key = "rad_s";
+  omega.column = "omega";
+  omega.per_rpm = k_rad_s_per_rpm;
+  const DiscrepancyTerm t = in_speed_unit(offset, omega);
+  EXPECT_DOUBLE_EQ(t.coefficient, 10.0 * k_rad_s_per_rpm);
+  EXPECT_DOUBLE_EQ(t.std_error, 0.5 * k_rad_s_per_rpm);
+  EXPECT_EQ(t.unit, "rad/s");
+  EXPECT_EQ(t.equation, "omega_measured = omega + 1.047 rad/s");
+  EXPECT_EQ(in_speed_unit(offset, SpeedUnit{}).equation, "rpm_measured = rpm + 10 rpm");
+  DiscrepancyTerm gain = offset;
+  gain.basis = "rpm gain";
+  gain.coefficient = 1.02;
+  EXPECT_EQ(in_speed_unit(gain, omega).equation, "omega_measured = 1.02 omega");
+  EXPECT_EQ(in_speed_unit(gain, omega).coefficient, 1.02);
 }
 
 TEST(FitDiscrepancy, JointRefitWithTheNominalScales) {

@@ -635,13 +635,19 @@ std::string explained_text(const DiscrepancyResult& d, bool summary, const Speed
                         ? fmt::format("validation {} RMS {} -> {}", col, g(before, 4), g(after, 4))
                         : fmt::format("validation {} RMS {} (not theirs to move)", col, g(before, 4)));
   } else {
+    // Decimals enough to show the noise floor to three figures (two for rpm's usual floors; a
+    // linear axis' m/s floor of 9e-5 needs seven).
+    const double size = floor > 0.0 ? floor : before;
+    const int dec = std::isfinite(size) && size > 0.0
+                        ? std::clamp(2 - static_cast<int>(std::floor(std::log10(size))), 2, 9)
+                        : 2;
     parts.push_back(speed_moved
-                        ? fmt::format("added to the model, validation {} RMS {:.2f} -> {:.2f} {} (noise "
-                                      "floor {:.2f})",
-                                      col, before, after, unit.name, floor)
+                        ? fmt::format("added to the model, validation {} RMS {:.{}f} -> {:.{}f} {} (noise "
+                                      "floor {:.{}f})",
+                                      col, before, dec, after, dec, unit.name, floor, dec)
                         : fmt::format("the simulated speed is not theirs to move: validation {} RMS "
-                                      "{:.2f} {} (noise floor {:.2f})",
-                                      col, before, unit.name, floor));
+                                      "{:.{}f} {} (noise floor {:.{}f})",
+                                      col, before, dec, unit.name, floor, dec));
   }
   std::string out;
   for (std::size_t k = 0; k < parts.size(); ++k) out += (k == 0 ? "" : "; ") + parts[k];

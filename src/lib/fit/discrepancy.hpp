@@ -62,6 +62,11 @@ DiscrepancyResult fit_discrepancy(const model::Model& reference, const GapData& 
 /// in `unit`.
 std::string explained_text(const DiscrepancyResult& d, bool summary, const SpeedUnit& unit = {});
 
+/// Term `t` as the report gives it in the data's speed `unit`: a speed reading's equation names
+/// the measured column (omega_measured = omega (1 + ...)), and its offset (held in rpm, as the
+/// fit's residual) is converted, with its error and unit. Other terms are returned as they are.
+DiscrepancyTerm in_speed_unit(DiscrepancyTerm t, const SpeedUnit& unit);
+
 /// The verdict's ", closing 85 % of the rest": what the terms close of the speed gap above
 /// the noise; when the terms that survive act beside the shaft without moving the simulated
 /// speed (the circuit, the current reading), what they close in their own domain.

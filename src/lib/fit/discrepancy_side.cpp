@@ -252,18 +252,33 @@ Finding fit_speed_reading(const model::Model& model, const GapData& data, const 
   for (std::size_t j = 0; j < d.terms.size(); ++j) {
     DiscrepancyTerm t = d.terms[j];
     t.place = "speed reading";
-    if (t.basis == "rpm gain") {
-      t.coefficient += 1.0;
-      t.equation = fmt::format("rpm_measured = {:.4g} rpm", t.coefficient);
-    } else if (t.basis == "rpm offset") {
-      t.equation = fmt::format("rpm_measured = rpm {} rpm", signed_number(t.coefficient));
-    } else {
-      t.equation = fmt::format("rpm_measured = rpm (1 {} * sin({:g} theta {} rad))",
-                               signed_number(t.coefficient), t.order, signed_number(t.phase_rad));
-    }
-    out.terms.push_back(std::move(t));
+    if (t.basis == "rpm gain") t.coefficient += 1.0;
+    out.terms.push_back(in_speed_unit(std::move(t), SpeedUnit{}));
   }
   return out;
 }
 
 }  // namespace mcg::fit::discrepancy_detail
+
+namespace mcg::fit {
+
+DiscrepancyTerm in_speed_unit(DiscrepancyTerm t, const SpeedUnit& unit) {
+  if (t.place != "speed reading") return t;
+  const std::string& col = unit.column;
+  if (t.basis == "rpm gain") {
+    t.equation = fmt::format("{0}_measured = {1:.4g} {0}", col, t.coefficient);
+  } else if (t.basis == "rpm offset") {
+    t.coefficient *= unit.per_rpm;
+    t.std_error *= unit.per_rpm;
+    t.unit = unit.name;
+    t.equation = fmt::format("{0}_measured = {0} {1} {2}", col,
+                             discrepancy_detail::signed_number(t.coefficient), unit.name);
+  } else {
+    t.equation = fmt::format("{0}_measured = {0} (1 {1} * sin({2:g} theta {3} rad))", col,
+                             discrepancy_detail::signed_number(t.coefficient), t.order,
+                             discrepancy_detail::signed_number(t.phase_rad));
+  }
+  return t;
+}
+
+}  // namespace mcg::fit

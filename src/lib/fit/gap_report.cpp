@@ -3,9 +3,12 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <ostream>
+#include <string_view>
+#include <utility>
 
 #include "common/checked.hpp"
 #include "common/demand.hpp"
@@ -138,6 +141,42 @@ double at_or_nan(const std::vector<double>& v, std::size_t k) { return k < v.siz
 /// sqrt(max(0, rms^2 - floor^2)): the part of an RMS above the noise.
 double above_noise(double rms, double floor) {
   return std::isfinite(rms) ? std::sqrt(std::max(0.0, rms * rms - floor * floor)) : k_nan;
+}
+
+/// The runs are a linear axis' (--linear): the shaft stands for it, a rad of it a m of travel.
+bool linear_axis(const GapReport& report) { return report.speed_unit.key == "m_s"; }
+
+/// What the parameters' names say on a linear axis (the header's linear_axis, the summary's line).
+constexpr std::string_view k_linear_axis_note =
+    "the shaft stands for the axis, a rad of it a m of travel: parameters named _Nm are in N, _Nm_s_rad in "
+    "N s/m, _kg_m2 in kg, _rad_s in m/s";
+
+/// `text` with each shaft unit named as the linear axis' (N m: N, N m s/rad: N s/m, kg m^2: kg,
+/// rad/s: m/s), when `linear`; an angle (a phase in rad) stays one.
+std::string axis_units(std::string text, bool linear) {
+  if (!linear) return text;
+  static constexpr std::pair<std::string_view, std::string_view> k_units[] = {{"N m s^3/rad^3", "N s^3/m^3"},
+                                                                              {"N m s^2/rad^2", "N s^2/m^2"},
+                                                                              {"N m s/rad", "N s/m"},
+                                                                              {"N m/rad", "N/m"},
+                                                                              {"N m/A", "N/A"},
+                                                                              {"kg m^2", "kg"},
+                                                                              {"N m", "N"},
+                                                                              {"rad/s", "m/s"}};
+  const auto letter = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '^'; };
+  for (const auto& [rotary, linear_unit] : k_units) {
+    for (std::size_t at = text.find(rotary); at != std::string::npos; at = text.find(rotary, at)) {
+      const std::size_t end = at + rotary.size();
+      if ((at > 0 && letter(text[at - 1])) ||
+          (end < text.size() && (letter(text[end]) || text[end] == '/'))) {
+        at = end;
+        continue;
+      }
+      text.replace(at, rotary.size(), linear_unit);
+      at += linear_unit.size();
+    }
+  }
+  return text;
 }
 
 std::string number(double v, int digits = 4) {
@@ -285,9 +324,14 @@ void write_gap_csv(std::ostream& out, const GapReport& report) {
                        number(u * f.noise.chain), number(u * f.noise.data)));
   }
   w.meta("validation_samples", std::to_string(report.validation_samples));
+  const bool linear = linear_axis(report);
+  if (linear) w.meta("linear_axis", std::string(k_linear_axis_note));
   if (report.discrepancy) {
     const DiscrepancyResult& d = *report.discrepancy;
-    for (const auto& t : d.terms) w.meta("discrepancy_term", t.equation + "  (" + t.reading + ")");
+    for (const auto& term : d.terms) {
+      const DiscrepancyTerm t = in_speed_unit(term, report.speed_unit);
+      w.meta("discrepancy_term", axis_units(t.equation + "  (" + t.reading + ")", linear));
+    }
     for (const auto& t : d.dropped) w.meta("discrepancy_dropped", t + " (the held-out runs do not gain)");
     if (!d.joint.empty()) w.meta("discrepancy_joint", d.joint);
     for (const auto& sd : d.seeds) {
@@ -352,7 +396,9 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
         << " (+- one standard error): " << params_text(diag) << "\n";
   }
   for (const PinnedParameter& pin : diag.pinned) out << "note: " << pinned_text(pin) << "\n";
-  for (const auto& w : diag.warnings) out << "warning: " << w << "\n";
+  const bool linear = linear_axis(report);
+  if (linear) out << "linear axis: " << k_linear_axis_note << "\n";
+  for (const auto& w : diag.warnings) out << "warning: " << axis_units(w, linear) << "\n";
   if (report.discrepancy) {
     const DiscrepancyResult& d = *report.discrepancy;
     if (d.terms.empty()) {
@@ -360,11 +406,14 @@ void write_gap_text(std::ostream& out, const GapReport& report) {
     } else {
       out << fmt::format(
           "discrepancy (catalog-free, {} of {} library terms kept): what the model lacks, on the motor "
-          "shaft, in its circuit or in a reading, w in rad/s at the motor, theta in rad:\n",
-          d.terms.size(), d.library_size);
-      for (const auto& t : d.terms) {
-        out << fmt::format("  {}: {}   (+- {:.2g} {})   {}\n", t.place, t.equation, t.std_error, t.unit,
-                           t.reading);
+          "shaft, in its circuit or in a reading, {}:\n",
+          d.terms.size(), d.library_size,
+          linear ? "w in m/s along the axis, theta in m" : "w in rad/s at the motor, theta in rad");
+      for (const auto& term : d.terms) {
+        const DiscrepancyTerm t = in_speed_unit(term, unit);
+        out << axis_units(fmt::format("  {}: {}   (+- {:.2g}{})   {}\n", t.place, t.equation, t.std_error,
+                                      t.unit == "1" ? "" : " " + t.unit, t.reading),
+                          linear);
       }
       for (const auto& t : d.dropped) out << "  left out, the held-out runs do not gain: " << t << "\n";
       if (!d.joint.empty()) out << "  joint refit with the nominal scales: " << d.joint << "\n";
