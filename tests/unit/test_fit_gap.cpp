@@ -1044,6 +1044,46 @@ TEST(GapPins, TheNominalStaticScaleOfADiagnosisIsProfiledNotLockedOnAStep) {
       << c.status;
 }
 
+// A datasheet's rotor without the load it drives: the truth's inertia is three times the given
+// one, beyond J_scale's default range 0.5 to 2. The fit leaves the scale at its bound 2 with an
+// error that determines it; after the verdict it is refitted within 0.125 to 8 and lands on the
+// truth, unflagged, and the status says so. A range the user set in [bounds] stays theirs.
+TEST(GapPins, ANominalScaleAtItsDefaultBoundIsRefittedInAWiderRange) {
+  // The rig has twice the datasheet's inertia, and the model is given two thirds of that.
+  const std::vector<std::string> truth{"param_mismatch:J_scale=2"};
+  const table::Table train = measure(steps(3.0, 2.0, 9.0, 9, 0, false), truth, 1, "train.csv");
+  const table::Table validate = measure(steps(3.0, 2.0, 9.0, 10, 0, false), truth, 2, "validate.csv");
+  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
+  FitProblem problem;
+  problem.model.params.motor.J_kg_m2 /= 1.5;
+  problem.model.effects = {model::default_effect("param_mismatch")};
+  problem.runs = data.train;
+  problem.free = {"param_mismatch.J_scale", "param_mismatch.coulomb_scale"};
+  const FitResult fit = fit_model(problem);
+  GapCandidate c = candidate_of("param_mismatch", {}, fit);
+  c.status = "fitted";
+  const auto at_bound = [](const GapCandidate& x) {
+    return std::any_of(x.flags.begin(), x.flags.end(), [](const FitFlag& f) {
+      return f.kind == FitFlag::Kind::at_bound && f.names.front() == "param_mismatch.J_scale";
+    });
+  };
+  ASSERT_TRUE(at_bound(c)) << c.values[0] << " +- " << c.std_errors[0];
+  GapSettings settings;
+  settings.threads = 2;
+  GapCandidate theirs = c;
+  settings.bounds["param_mismatch.J_scale"] = {0.5, 2.0};
+  gap_detail::widen_diagnosis_scales(theirs, data, gap_detail::noise_floors(data), settings);
+  EXPECT_EQ(theirs.values, c.values);
+  EXPECT_EQ(theirs.status, "fitted");
+  settings.bounds.clear();
+  gap_detail::widen_diagnosis_scales(c, data, gap_detail::noise_floors(data), settings);
+  ASSERT_EQ(c.free[0], "param_mismatch.J_scale");
+  EXPECT_FALSE(at_bound(c));
+  EXPECT_LT(std::abs(c.values[0] - 3.0), std::max(2.0 * c.std_errors[0], 0.03))
+      << c.values[0] << " +- " << c.std_errors[0];
+  EXPECT_EQ(c.status, "fitted; param_mismatch.J_scale at its default bound, refitted within 0.125 to 8");
+}
+
 /// A current-driven motor alone as a servo logs it: the current loop's command `i` held at
 /// `levels_A` for `hold_s` each, the speed as omega with 0.5 rad/s of white noise (seeded).
 table::Table current_driven(const model::Model& rig, const std::vector<double>& levels_A, double hold_s,

@@ -343,6 +343,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
   if (report.diagnosis != "none" && report.diagnosis != "unexplained") {
     converge_diagnosis(report.candidates.front(), data, report.floors, settings);
     pin_diagnosis(report.candidates.front(), model, data, report.floors, settings);
+    widen_diagnosis_scales(report.candidates.front(), data, report.floors, settings);
     profile_nominal_breakaway(report.candidates.front(), data, report.floors, settings);
   }
 

@@ -74,6 +74,10 @@ inline constexpr double k_gap_data_floor_factor = 2.0;
 /// A correlated pair leaves a parameter undetermined when its standard error exceeds this
 /// share of its value.
 inline constexpr double k_gap_max_relative_error = 0.5;
+/// A nominal scale the diagnosis leaves at a bound of its default range (J_scale 0.5 to 2: a
+/// datasheet's rotor without the wheel it drives), with an error that determines it, is refitted
+/// within that range widened by this factor each way (0.125 to 8), unless [bounds] names it.
+inline constexpr double k_gap_scale_widening = 4.0;
 /// Stretches of the linearised jackknife every candidate's standard errors take where it is
 /// wider than the Jacobian's (FitProblem::jackknife_linearised).
 inline constexpr std::size_t k_gap_jackknife_stretches = 10;

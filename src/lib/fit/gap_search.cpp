@@ -14,6 +14,7 @@
 #include <mutex>
 #include <numbers>
 #include <optional>
+#include <ranges>
 #include <type_traits>
 
 #include "common/demand.hpp"
@@ -1842,6 +1843,45 @@ void converge_diagnosis(GapCandidate& c, const GapData& data, const std::vector<
     c.status.replace(0, k_fitted_budget_spent.size(),
                      c.converged ? "fitted (on to convergence after the verdict)"
                                  : "fitted; budget spent, also after the verdict");
+  }
+}
+
+void widen_diagnosis_scales(GapCandidate& c, const GapData& data, const std::vector<OutputFloor>& floors,
+                            const GapSettings& settings) {
+  const auto expired = [&] { return std::chrono::steady_clock::now() >= settings.deadline; };
+  if (!c.evaluated || c.values.size() != c.free.size() || c.std_errors.size() != c.free.size() || expired())
+    return;
+  std::map<std::string, std::pair<double, double>> widened;
+  const std::vector<model::ParamInfo> infos = model::parameters(c.model);
+  for (const FitFlag& f : c.flags) {
+    if (f.kind != FitFlag::Kind::at_bound || f.names.size() != 1) continue;
+    const std::string& key = f.names.front();
+    const auto it = std::find(c.free.begin(), c.free.end(), key);
+    if (!key.starts_with("param_mismatch.") || settings.bounds.contains(key) || it == c.free.end()) continue;
+    const auto k = static_cast<std::size_t>(it - c.free.begin());
+    if (!(c.std_errors[k] <= k_gap_max_relative_error * std::abs(c.values[k]))) continue;
+    const auto info = std::find_if(infos.begin(), infos.end(), [&](const auto& p) { return p.name == key; });
+    if (info != infos.end() && info->lower > 0.0)
+      widened[key] = {info->lower / k_gap_scale_widening, info->upper * k_gap_scale_widening};
+  }
+  if (widened.empty()) return;
+  if (settings.progress)
+    settings.progress(fmt::format("refitting {} with {} beyond the default range", c.name,
+                                  fmt::join(std::views::keys(widened), " ")));
+  const std::vector<std::string> profiled = profiled_keys(c);
+  FitProblem problem = diagnosis_problem(c, profiled, data, settings);
+  for (const auto& [key, range] : widened) problem.bounds[key] = range;
+  const FitResult r = fit_model(problem);
+  if (r.nls.stopped || expired() ||
+      !(training_cost(r.model, data.train, nullptr, problem.sim) <=
+        training_cost(c.model, data.train, nullptr, problem.sim)))
+    return;
+  const std::string status = c.status;
+  adopt(c, r, profiled, data, floors, problem.sim);
+  c.status = status;
+  for (const auto& [key, range] : widened) {
+    c.status += fmt::format("; {} at its default bound, refitted within {:g} to {:g}", key, range.first,
+                            range.second);
   }
 }
 
