@@ -442,6 +442,22 @@ TEST(FitDiscrepancy, JointRefitWithTheNominalScales) {
   expect_term(d, "sin(1 theta + phase)", 0.002, 0.5);
 }
 
+TEST(FitDiscrepancy, TheJointRefitStartsFromAScaleBeyondItsDefaultRange) {
+  // The reference holds J_scale 3 (a diagnosis refitted it beyond the default 0.5 to 2, and the
+  // truth has it): the joint refit starts there, rather than clamped to 2, and keeps it.
+  model::Model truth;
+  truth.params.motor.J_kg_m2 *= 3.0;
+  truth.shaft_terms.push_back({"imbalance", nullptr, {1.0, 0.5, 0.0, 0.002}, once_per_rev});
+  model::Model reference;
+  reference.effects.push_back(model::default_effect("param_mismatch"));
+  model::set_parameter(reference, "param_mismatch.J_scale", 3.0);
+  const DiscrepancyResult d = fit_discrepancy(reference, data_of(truth, 1.6), {}, rpm_floor());
+  SCOPED_TRACE(listing(d));
+  ASSERT_NE(d.joint.find("->"), std::string::npos) << d.joint;
+  EXPECT_NEAR(model::get_parameter(d.model, "param_mismatch.J_scale"), 3.0, 0.03);
+  expect_term(d, "sin(1 theta + phase)", 0.002, 0.5);
+}
+
 TEST(FitDiscrepancy, SeededCoggingPhaseIsRecoveredByTheCatalogFit) {
   // End to end: the term's harmonic starts the catalog's cogging, whose fit on the training
   // run keeps the order and brings amplitude and phase to the truth.

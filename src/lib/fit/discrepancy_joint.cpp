@@ -48,7 +48,9 @@ JointFit joint_refit(const model::Model& model, std::size_t first_term, const st
     const auto info = std::find_if(infos.begin(), infos.end(), [&](const auto& p) { return p.name == name; });
     MCG_DEMAND(info != infos.end());
     specs.push_back({name, info->value, Transform::linear, std::max(std::abs(info->value), 1e-3)});
-    bounds.emplace_back(info->lower, info->upper);
+    // The reference's own value stays within reach: a diagnosis may hold a scale beyond its
+    // default range (widen_diagnosis_scales(), or the user's [bounds]).
+    bounds.emplace_back(std::min(info->lower, info->value), std::max(info->upper, info->value));
   }
   const std::size_t n_nominal = specs.size();
   for (std::size_t s = first_term; s < start.shaft_terms.size(); ++s) {
