@@ -979,22 +979,40 @@ TEST(GapConverge, TheDiagnosisIsFittedOnToConvergence) {
   EXPECT_LT(c.score, score_before);
 }
 
+/// Staircase runs of the built-in rig with `truth` (levels `lo_V` to `hi_V`, 3 s, program seeds
+/// `seed` and `seed + 1`), and the candidate "param_mismatch" that a fit of `free` from `start`
+/// (param_mismatch added to it) leaves on their training part, its status "fitted".
+struct StaircaseFit {
+  GapData data;
+  FitResult fit;
+  GapCandidate c;
+};
+StaircaseFit staircase_fit(const std::string& truth, double lo_V, double hi_V, std::uint64_t seed,
+                           model::Model start, const std::string& mismatch,
+                           const std::vector<std::string>& free) {
+  const table::Table train = measure(steps(3.0, lo_V, hi_V, seed, 0, false), {truth}, 1, "train.csv");
+  const table::Table validate =
+      measure(steps(3.0, lo_V, hi_V, seed + 1, 0, false), {truth}, 2, "validate.csv");
+  StaircaseFit out{prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6), {}, {}};
+  FitProblem problem;
+  problem.model = std::move(start);
+  problem.model.effects = {model::parse_effect(mismatch)};
+  problem.runs = out.data.train;
+  problem.free = free;
+  out.fit = fit_model(problem);
+  out.c = candidate_of("param_mismatch", {}, out.fit);
+  out.c.status = "fitted";
+  return out;
+}
+
 // A static level below the Coulomb level acts as the Coulomb level does: the runs of a rig whose
 // static friction is that low leave the nominal static scale where the fit left it (an infinite
 // error), and holding it at the given 1 would put a stiction in the model that the runs do not
 // have. It is pinned where the fit left it, and said so.
 TEST(GapPins, AnInfiniteErrorWhoseGivenValueCostsIsPinnedWhereTheFitLeftIt) {
-  const std::vector<std::string> effect{"param_mismatch:static_scale=0.3"};
-  const table::Table train = measure(steps(3.0, 0.2, 0.35, 5, 0, false), effect, 1, "train.csv");
-  const table::Table validate = measure(steps(3.0, 0.2, 0.35, 6, 0, false), effect, 2, "validate.csv");
-  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
-  FitProblem problem;
-  problem.model.effects = {model::parse_effect("param_mismatch:static_scale=0.3")};
-  problem.runs = data.train;
-  problem.free = {"param_mismatch.J_scale", "param_mismatch.static_scale"};
-  const FitResult fit = fit_model(problem);
-  GapCandidate c = candidate_of("param_mismatch", {}, fit);
-  c.status = "fitted";
+  auto [data, fit, c] = staircase_fit("param_mismatch:static_scale=0.3", 0.2, 0.35, 5, model::Model{},
+                                      "param_mismatch:static_scale=0.3",
+                                      {"param_mismatch.J_scale", "param_mismatch.static_scale"});
   ASSERT_FALSE(std::isfinite(c.std_errors[1])) << c.values[1] << " +- " << c.std_errors[1];
   GapSettings settings;
   settings.threads = 2;
@@ -1015,17 +1033,9 @@ TEST(GapPins, AnInfiniteErrorWhoseGivenValueCostsIsPinnedWhereTheFitLeftIt) {
 // verdict the scale is profiled as a friction effect's breakaway is, and the error is the
 // data's again: as wide as a fit that did not end on an edge says, and covering the truth.
 TEST(GapPins, TheNominalStaticScaleOfADiagnosisIsProfiledNotLockedOnAStep) {
-  const std::vector<std::string> truth{"param_mismatch:static_scale=1.0"};
-  const table::Table train = measure(steps(3.0, 0.0, 1.0, 7, 0, false), truth, 1, "train.csv");
-  const table::Table validate = measure(steps(3.0, 0.0, 1.0, 8, 0, false), truth, 2, "validate.csv");
-  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
-  FitProblem problem;
-  problem.model.effects = {model::parse_effect("param_mismatch:static_scale=1.3")};
-  problem.runs = data.train;
-  problem.free = {"param_mismatch.J_scale", "param_mismatch.coulomb_scale", "param_mismatch.static_scale"};
-  const FitResult fit = fit_model(problem);
-  GapCandidate c = candidate_of("param_mismatch", {}, fit);
-  c.status = "fitted";
+  auto [data, fit, c] = staircase_fit(
+      "param_mismatch:static_scale=1.0", 0.0, 1.0, 7, model::Model{}, "param_mismatch:static_scale=1.3",
+      {"param_mismatch.J_scale", "param_mismatch.coulomb_scale", "param_mismatch.static_scale"});
   ASSERT_EQ(c.free[2], "param_mismatch.static_scale");
   const double honest_se = c.std_errors[2];
   ASSERT_TRUE(std::isfinite(honest_se) && honest_se > 0.05) << fit.nls.values[2] << " +- " << honest_se;
@@ -1050,18 +1060,10 @@ TEST(GapPins, TheNominalStaticScaleOfADiagnosisIsProfiledNotLockedOnAStep) {
 // truth, unflagged, and the status says so. A range the user set in [bounds] stays theirs.
 TEST(GapPins, ANominalScaleAtItsDefaultBoundIsRefittedInAWiderRange) {
   // The rig has twice the datasheet's inertia, and the model is given two thirds of that.
-  const std::vector<std::string> truth{"param_mismatch:J_scale=2"};
-  const table::Table train = measure(steps(3.0, 2.0, 9.0, 9, 0, false), truth, 1, "train.csv");
-  const table::Table validate = measure(steps(3.0, 2.0, 9.0, 10, 0, false), truth, 2, "validate.csv");
-  const GapData data = prepare_gap_data({train}, {validate}, model::builtin_rig(), 0.6);
-  FitProblem problem;
-  problem.model.params.motor.J_kg_m2 /= 1.5;
-  problem.model.effects = {model::default_effect("param_mismatch")};
-  problem.runs = data.train;
-  problem.free = {"param_mismatch.J_scale", "param_mismatch.coulomb_scale"};
-  const FitResult fit = fit_model(problem);
-  GapCandidate c = candidate_of("param_mismatch", {}, fit);
-  c.status = "fitted";
+  model::Model given;
+  given.params.motor.J_kg_m2 /= 1.5;
+  auto [data, fit, c] = staircase_fit("param_mismatch:J_scale=2", 2.0, 9.0, 9, given, "param_mismatch",
+                                      {"param_mismatch.J_scale", "param_mismatch.coulomb_scale"});
   const auto at_bound = [](const GapCandidate& x) {
     return std::any_of(x.flags.begin(), x.flags.end(), [](const FitFlag& f) {
       return f.kind == FitFlag::Kind::at_bound && f.names.front() == "param_mismatch.J_scale";
