@@ -1771,6 +1771,17 @@ FitProblem diagnosis_problem(const GapCandidate& c, const std::vector<std::strin
   return problem;
 }
 
+/// `c` scored again on its model: validation score, RMS and FPE, and the training speed RMS
+/// simulated with `sim`.
+void rescore(GapCandidate& c, const GapData& data, const std::vector<OutputFloor>& floors,
+             const model::SimOptions& sim) {
+  const Evaluation ev = evaluate(c.model, data, floors);
+  c.score = ev.score;
+  c.rms = ev.rms;
+  c.fpe = fpe(ev.score, c.free.size(), static_cast<double>(validation_count(data) * floors.size()));
+  c.train_rms_rpm = training_speed_rms(c.model, data.train, sim);
+}
+
 /// `c` takes refit `r`'s model, values, errors and findings; its profiled breakaways keep the
 /// profile's; it is scored again.
 void adopt(GapCandidate& c, const FitResult& r, const std::vector<std::string>& profiled, const GapData& data,
@@ -1811,11 +1822,7 @@ void adopt(GapCandidate& c, const FitResult& r, const std::vector<std::string>& 
   c.std_errors = std::move(errors);
   c.flags = std::move(flags);
   c.warnings = std::move(warnings);
-  const Evaluation ev = evaluate(c.model, data, floors);
-  c.score = ev.score;
-  c.rms = ev.rms;
-  c.fpe = fpe(ev.score, c.free.size(), static_cast<double>(validation_count(data) * floors.size()));
-  c.train_rms_rpm = training_speed_rms(c.model, data.train, sim);
+  rescore(c, data, floors, sim);
 }
 
 }  // namespace
@@ -1905,12 +1912,7 @@ void profile_nominal_breakaway(GapCandidate& c, const GapData& data, const std::
       settings.deadline, memo, fitted, c.std_errors[k], "fit on the exact stick");
   if (note.empty()) return;
   c.status += "; " + note;
-  if (c.values[k] == fitted) return;
-  const Evaluation ev = evaluate(c.model, data, floors);
-  c.score = ev.score;
-  c.rms = ev.rms;
-  c.fpe = fpe(ev.score, c.free.size(), static_cast<double>(validation_count(data) * floors.size()));
-  c.train_rms_rpm = training_speed_rms(c.model, data.train, sim);
+  if (c.values[k] != fitted) rescore(c, data, floors, sim);
 }
 
 void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData& data,
