@@ -249,7 +249,8 @@ void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData&
 /// After the verdict, each nominal scale diagnosis `c` left at a bound of its default range, with
 /// a standard error within k_gap_max_relative_error of its value and no [bounds] of the user's,
 /// is refitted within the range widened by k_gap_scale_widening (its profiled breakaways held):
-/// `c` takes the refit when it costs no more on the training runs, and its status says so.
+/// `c` takes the refit (from its own values: it costs no more on the training runs), and its
+/// status says so.
 /// Nothing is done after the time budget.
 void widen_diagnosis_scales(GapCandidate& c, const GapData& data, const std::vector<OutputFloor>& floors,
                             const GapSettings& settings);

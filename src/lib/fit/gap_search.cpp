@@ -480,7 +480,7 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, double re
   // truth, 1.5 errors up, 4 errors of the one-unit stretch away). The error is each side's reach
   // (a profile is seldom symmetric) of the costs within one unit, and half the reach of those
   // within four (two errors), whichever is widest.
-  double reach = 0.5 * (points[hi] - points[lo]);
+  double reach = 0.0;
   for (int errors = 1; errors <= 2; ++errors) {
     for (std::size_t n = 0; n < points.size(); ++n) {
       if (costs[n] <= costs[best] + errors * errors * threshold)
@@ -1342,22 +1342,9 @@ Eigen::VectorXd training_residuals(const model::Model& model, const std::vector<
       const auto& y = run.measured[o];
       const Eigen::Index start = at;
       at += static_cast<Eigen::Index>(y.size());
-      double mean = 0.0;
-      std::size_t count = 0;
-      for (double v : y) {
-        if (std::isfinite(v)) {
-          mean += v;
-          ++count;
-        }
-      }
-      if (count < 2) continue;
-      mean /= static_cast<double>(count);
-      double spread = 0.0;
-      for (double v : y) {
-        if (std::isfinite(v)) spread += (v - mean) * (v - mean);
-      }
-      if (!(spread > 0.0)) continue;
-      const double weight = 1.0 / std::sqrt(spread);
+      const double spread = deviation_norm(y);
+      if (spread == 0.0) continue;
+      const double weight = 1.0 / spread;
       for (std::size_t n = 0; n < y.size(); ++n) {
         if (std::isfinite(y[n])) out[start + static_cast<Eigen::Index>(n)] = weight * (sim[o][n] - y[n]);
       }
@@ -1878,11 +1865,10 @@ void widen_diagnosis_scales(GapCandidate& c, const GapData& data, const std::vec
   const std::vector<std::string> profiled = profiled_keys(c);
   FitProblem problem = diagnosis_problem(c, profiled, data, settings);
   for (const auto& [key, range] : widened) problem.bounds[key] = range;
+  // Started from the diagnosis' values, the refit costs no more on the training runs (the
+  // solver takes only steps that lower the cost).
   const FitResult r = fit_model(problem);
-  if (r.nls.stopped || expired() ||
-      !(training_cost(r.model, data.train, nullptr, problem.sim) <=
-        training_cost(c.model, data.train, nullptr, problem.sim)))
-    return;
+  if (r.nls.stopped || expired()) return;
   const std::string status = c.status;
   adopt(c, r, profiled, data, floors, problem.sim);
   c.status = status;
@@ -1903,8 +1889,9 @@ void profile_nominal_breakaway(GapCandidate& c, const GapData& data, const std::
   if (settings.progress) settings.progress(fmt::format("profiling {}'s static friction scale", c.name));
   const auto k = static_cast<std::size_t>(std::find(c.free.begin(), c.free.end(), key) - c.free.begin());
   const double fitted = c.values[k];
-  // The training residuals as the fit weighs them, for their count and correlation.
-  const model::SimOptions sim = candidate_problem(c.effects, data, settings).sim;
+  // The training residuals as the fit weighs them, for their count and correlation, on the exact
+  // stick the diagnosis (no friction effect) was fitted on.
+  const model::SimOptions sim;
   const Eigen::VectorXd residuals = training_residuals(c.model, data.train, sim);
   SimulationMemo memo;
   const std::string note = profile_breakaway(

@@ -346,18 +346,25 @@ std::vector<std::vector<double>> simulate_as_measured(const model::Model& model,
   return series;
 }
 
-double fit_percent(const std::vector<double>& measured, const std::vector<double>& simulated) {
+double deviation_norm(const std::vector<double>& y) {
   std::size_t count = 0;
-  const double mean = mean_of_finite(measured, count);
-  double err = 0.0;
-  double spread = 0.0;
-  for (std::size_t k = 0; k < measured.size(); ++k) {
-    if (!std::isfinite(measured[k])) continue;
-    err += (measured[k] - simulated[k]) * (measured[k] - simulated[k]);
-    spread += (measured[k] - mean) * (measured[k] - mean);
+  const double mean = mean_of_finite(y, count);
+  if (count < 2) return 0.0;
+  double sq = 0.0;
+  for (double v : y) {
+    if (std::isfinite(v)) sq += (v - mean) * (v - mean);
   }
+  return std::sqrt(sq);
+}
+
+double fit_percent(const std::vector<double>& measured, const std::vector<double>& simulated) {
+  double err = 0.0;
+  for (std::size_t k = 0; k < measured.size(); ++k) {
+    if (std::isfinite(measured[k])) err += (measured[k] - simulated[k]) * (measured[k] - simulated[k]);
+  }
+  const double spread = deviation_norm(measured);
   if (spread == 0.0) return err == 0.0 ? 100.0 : -std::numeric_limits<double>::infinity();
-  return 100.0 * (1.0 - std::sqrt(err / spread));
+  return 100.0 * (1.0 - std::sqrt(err) / spread);
 }
 
 RunResiduals residuals(const model::Model& model, const Run& run, const model::SimOptions& options) {
@@ -752,16 +759,10 @@ FitResult fit_model(const FitProblem& problem) {
     const Run& run = problem.runs[r];
     offset[r] = total;
     for (std::size_t o = 0; o < run.outputs.size(); ++o) {
-      std::size_t count = 0;
-      const double mean = mean_of_finite(run.measured[o], count);
-      double sq = 0.0;
-      for (double y : run.measured[o]) {
-        if (std::isfinite(y)) sq += (y - mean) * (y - mean);
-      }
-      if (count < 2 || sq == 0.0) {
+      const double spread = deviation_norm(run.measured[o]);
+      if (spread == 0.0)
         fail("{}: column {} is constant: no excitation to fit", run.source, quote(run.outputs[o]));
-      }
-      norm[r].push_back(std::sqrt(sq));
+      norm[r].push_back(spread);
       total += run.measured[o].size();
     }
   }

@@ -145,6 +145,10 @@ std::vector<std::string> fix_parameters(model::Model& model, const std::vector<s
 std::vector<std::vector<double>> simulate_as_measured(const model::Model& model, const Run& run,
                                                       const model::SimOptions& options = {});
 
+/// |y - mean(y)| over the finite samples of y: the spread a fit divides a measured channel's
+/// residuals by (0 when fewer than two samples are finite, or all are equal).
+double deviation_norm(const std::vector<double>& y);
+
 /// MATLAB compare's fit: 100 (1 - |y - y_sim| / |y - mean(y)|) over the finite samples of y.
 /// -inf when y is constant and y_sim differs from it, 100 when both agree.
 double fit_percent(const std::vector<double>& measured, const std::vector<double>& simulated);
