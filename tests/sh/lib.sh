@@ -111,7 +111,8 @@ gap_on_real() {
     for sub in "$@"; do [[ $a == "${sub%%=*}" ]] && a=${sub#*=}; done
     args+=("$a")
   done
-  (cd "$dir" && mcg-fit gap "${args[@]}" --format text) >"$work/gap.txt" 2>"$work/gap.err" || true
+  (cd "$dir" && mcg-fit gap "${args[@]}" --format text --residuals "$work/gap_residuals.csv") \
+    >"$work/gap.txt" 2>"$work/gap.err" || true
   diagnosis=$(sed -n 's/^diagnosis: //p' "$work/gap.txt")
   # shellcheck disable=SC2053 # WANT is a pattern
   if [[ $diagnosis == $want ]]; then

@@ -122,4 +122,8 @@ check "gap says what the _Nm names are on a linear axis" \
   grep -qx 'linear axis: the shaft stands for the axis, a rad of it a m of travel: parameters named _Nm are in N, _Nm_s_rad in N s/m, _kg_m2 in kg, _rad_s in m/s' "$work/gap.txt"
 check "no line of gap's summary names N m or kg m^2" \
   eval '! grep -E "[0-9] (N m|kg m\^2)" "$work/gap.txt"'
+# Its residuals, plotted unedited, carry the axis' unit.
+check "the residuals of a linear axis plot in m/s" \
+  eval 'mcg-plot-gnuplot "$work/gap_residuals.csv" -y omega_res_before,omega_res_after --script "$work/res.gp" &&
+    grep -qx "set ylabel '"'"'omega_res_before (m/s), omega_res_after (m/s)'"'"'" "$work/res.gp"'
 finish emps

@@ -40,6 +40,25 @@ TEST(PlotLabels, CarryTheDataContractUnits) {
   EXPECT_EQ(label_for("mystery"), "mystery");
 }
 
+TEST(PlotLabels, AReportsColumnsTakeTheirMeasurementsUnit) {
+  EXPECT_EQ(label_for("rpm_res_after"), "rpm_res_after (rev/min)");
+  EXPECT_EQ(label_for("omega_before"), "omega_before (rad/s)");
+  EXPECT_EQ(label_for("i_after"), "i_after (A)");
+  EXPECT_EQ(label_for("mystery_after"), "mystery_after");
+  EXPECT_EQ(label_for("_after"), "_after");
+}
+
+TEST(PlotLabels, ALinearAxisSpeedIsInMetresPerSecond) {
+  EXPECT_EQ(label_for("omega", true), "omega (m/s)");
+  EXPECT_EQ(label_for("omega_res_before", true), "omega_res_before (m/s)");
+  EXPECT_EQ(label_for("theta", true), "theta (m)");
+  EXPECT_EQ(label_for("t", true), "t (s)");
+  Spec spec;
+  spec.output = {Output::Kind::svg, "axis.svg", "", 800, 600};
+  const auto script = build_script(spec, {input("# linear_axis: yes\nt,omega\n0,0.1\n0.001,0.2\n")});
+  EXPECT_NE(script.find("\nset ylabel 'omega (m/s)'\n"), std::string::npos);
+}
+
 TEST(PlotKind, FollowsTheExtension) {
   EXPECT_EQ(kind_from_path("a.png"), Output::Kind::png);
   EXPECT_EQ(kind_from_path("dir.x/A.SVG"), Output::Kind::svg);

@@ -465,6 +465,7 @@ void write_gap_residuals(std::ostream& out, const GapReport& report, const GapDa
   table::Writer w(out);
   if (!report.source.empty()) w.meta("source", report.source);
   w.meta("diagnosis", report.diagnosis);
+  if (linear_axis(report)) w.meta("linear_axis", std::string(k_linear_axis_note));
   for (std::size_t r = 0; r < data.validate.size(); ++r) {
     w.meta(fmt::format("run_{}", r + 1), data.validate[r].run.source);
   }

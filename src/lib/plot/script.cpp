@@ -197,11 +197,11 @@ std::string rlocus_extras(const table::Table& tbl, std::string& plot) {
   return out;
 }
 
-std::string join_labels(const std::vector<std::string>& names) {
+std::string join_labels(const std::vector<std::string>& names, bool linear_axis) {
   std::string text;
   for (const std::string& name : names) {
     if (!text.empty()) text += ", ";
-    text += label_for(name);
+    text += label_for(name, linear_axis);
   }
   return text;
 }
@@ -287,9 +287,19 @@ std::string quote(std::string_view text) {
   return out;
 }
 
-std::string label_for(std::string_view column) {
+std::string label_for(std::string_view column, bool linear_axis) {
+  if (linear_axis && column == "omega") return "omega (m/s)";
+  if (linear_axis && column == "theta") return "theta (m)";
   for (const auto& [name, label] : k_labels) {
     if (name == column) return std::string(label);
+  }
+  // A report's columns on a contract column: its measurement, simulations and residuals.
+  for (std::string_view suffix : {"_res_before", "_res_after", "_before", "_after"}) {
+    if (column.size() <= suffix.size() || column.substr(column.size() - suffix.size()) != suffix) continue;
+    const std::string base = label_for(column.substr(0, column.size() - suffix.size()), linear_axis);
+    const std::size_t unit = base.rfind(" (");
+    if (unit == std::string::npos) break;
+    return std::string(column) + base.substr(unit);
   }
   return std::string(column);
 }
@@ -354,10 +364,11 @@ std::string build_script(const Spec& spec, const std::vector<Input>& inputs) {
     out += plot + "\n";
   } else {
     if (title) out += fmt::format("set title {}\n", quote(*title));
-    out += fmt::format("set xlabel {}\n", quote(label_for(s.x)));
-    if (!s.y.empty()) out += fmt::format("set ylabel {}\n", quote(join_labels(s.y)));
+    const bool linear = inputs.front().table.meta.get("linear_axis").has_value();
+    out += fmt::format("set xlabel {}\n", quote(label_for(s.x, linear)));
+    if (!s.y.empty()) out += fmt::format("set ylabel {}\n", quote(join_labels(s.y, linear)));
     if (!s.y2.empty()) {
-      out += fmt::format("set y2label {}\n", quote(join_labels(s.y2)));
+      out += fmt::format("set y2label {}\n", quote(join_labels(s.y2, linear)));
       out += "set ytics nomirror\nset y2tics\n";
     }
     if (spec.logx) out += "set logscale x\n";

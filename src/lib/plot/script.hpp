@@ -19,8 +19,10 @@ std::string quote(std::string_view text);
 
 /// Axis label of a column with its unit from the data contract: "rpm (rev/min)", "t (s)";
 /// f_hz, mag_db and phase_deg read "frequency (Hz)", "magnitude (dB)", "phase (deg)".
-/// Unknown columns are labelled by name alone.
-std::string label_for(std::string_view column);
+/// A column a report derives from one of these (mcg-fit gap's omega_before, rpm_res_after) takes
+/// its unit. On a linear axis (a table whose metadata hold linear_axis, as mcg-fit gap --linear
+/// writes) omega holds m/s and theta m. Unknown columns are labelled by name alone.
+std::string label_for(std::string_view column, bool linear_axis = false);
 
 /// rlocus: im against re of mcg-design rlocus, equal axes, each branch its own line, the
 /// open-loop poles (k = 0) marked, the asymptotes and the stability boundary from its metadata.
