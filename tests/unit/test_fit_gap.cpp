@@ -1026,6 +1026,27 @@ TEST(GapPins, AnInfiniteErrorWhoseGivenValueCostsIsPinnedWhereTheFitLeftIt) {
   EXPECT_TRUE(c.flags.empty()) << c.warnings.front();
 }
 
+/// A staircase fit of the nominal static scale (truth 1, started at 1.3, free with J and the
+/// Coulomb scale) whose error is then replaced by `reported` times its value, profiled after the
+/// verdict as a diagnosis' is; honest_se is the fit's own error.
+struct ProfiledStaticScale {
+  StaircaseFit s;
+  double honest_se = 0.0;
+};
+ProfiledStaticScale profiled_static_scale(double reported) {
+  ProfiledStaticScale p{staircase_fit(
+      "param_mismatch:static_scale=1.0", 0.0, 1.0, 7, model::Model{}, "param_mismatch:static_scale=1.3",
+      {"param_mismatch.J_scale", "param_mismatch.coulomb_scale", "param_mismatch.static_scale"})};
+  GapCandidate& c = p.s.c;
+  EXPECT_EQ(c.free[2], "param_mismatch.static_scale");
+  p.honest_se = c.std_errors[2];
+  c.std_errors[2] = reported * c.values[2];
+  GapSettings settings;
+  settings.threads = 2;
+  gap_detail::profile_nominal_breakaway(c, p.s.data, gap_detail::noise_floors(p.s.data), settings);
+  return p;
+}
+
 // A diagnosis without a friction effect fits the nominal static_scale on the exact stick, where
 // the training cost is a staircase in it (a start from rest moves by whole samples): a fit that
 // ends on a stair's edge takes a finite difference across it, and its Jacobian reports an error
@@ -1033,25 +1054,56 @@ TEST(GapPins, AnInfiniteErrorWhoseGivenValueCostsIsPinnedWhereTheFitLeftIt) {
 // verdict the scale is profiled as a friction effect's breakaway is, and the error is the
 // data's again: as wide as a fit that did not end on an edge says, and covering the truth.
 TEST(GapPins, TheNominalStaticScaleOfADiagnosisIsProfiledNotLockedOnAStep) {
-  auto [data, fit, c] = staircase_fit(
-      "param_mismatch:static_scale=1.0", 0.0, 1.0, 7, model::Model{}, "param_mismatch:static_scale=1.3",
-      {"param_mismatch.J_scale", "param_mismatch.coulomb_scale", "param_mismatch.static_scale"});
-  ASSERT_EQ(c.free[2], "param_mismatch.static_scale");
-  const double honest_se = c.std_errors[2];
-  ASSERT_TRUE(std::isfinite(honest_se) && honest_se > 0.05) << fit.nls.values[2] << " +- " << honest_se;
-  // What a fit that ended on an edge reports.
-  c.std_errors[2] = 1e-6 * c.values[2];
-  GapSettings settings;
-  settings.threads = 2;
-  gap_detail::profile_nominal_breakaway(c, data, gap_detail::noise_floors(data), settings);
-  const double value = c.values[2];
-  const double se = c.std_errors[2];
-  EXPECT_GT(se, 0.5 * honest_se) << fmt::format("{} +- {} (fit {} +- {})", value, se, fit.nls.values[2],
+  const auto [s, honest_se] = profiled_static_scale(1e-6);
+  ASSERT_TRUE(std::isfinite(honest_se) && honest_se > 0.05) << s.fit.nls.values[2] << " +- " << honest_se;
+  const double value = s.c.values[2];
+  const double se = s.c.std_errors[2];
+  EXPECT_GT(se, 0.5 * honest_se) << fmt::format("{} +- {} (fit {} +- {})", value, se, s.fit.nls.values[2],
                                                 honest_se);
   EXPECT_LT(std::abs(value - 1.0), 2.0 * se) << fmt::format("{} +- {}", value, se);
-  EXPECT_EQ(model::get_parameter(c.model, "param_mismatch.static_scale"), value);
-  EXPECT_NE(c.status.find("param_mismatch.static_scale profiled on the exact stick: "), std::string::npos)
-      << c.status;
+  EXPECT_EQ(model::get_parameter(s.c.model, "param_mismatch.static_scale"), value);
+  EXPECT_NE(s.c.status.find("param_mismatch.static_scale profiled on the exact stick: "), std::string::npos)
+      << s.c.status;
+}
+
+// A breakaway the regularised fit left flat (an error a hundred times its size: a split that
+// trained on few slow rows) scanned five such errors wide, in steps wider than the level, with
+// the points below it cut at the bound: the least cost between them was never seen, the profile
+// was called open and the report said "+- more than 0.16" (an infinite error) of a level of
+// 0.0009 N m. The scan now stays within the level's own size and reaches down to the bound; the
+// profile closes on the truth, and its error replaces the flat fit's.
+TEST(GapPins, ABreakawayTheRegularisedFitLeftFlatIsResolvedByItsProfile) {
+  const auto [s, honest_se] = profiled_static_scale(100.0);
+  ASSERT_TRUE(std::isfinite(honest_se)) << s.fit.nls.values[2];
+  const double value = s.c.values[2];
+  const double se = s.c.std_errors[2];
+  ASSERT_TRUE(std::isfinite(se)) << s.c.status;
+  EXPECT_LT(se, 3.0 * honest_se) << fmt::format("{} +- {} (fit {} +- {})", value, se, s.fit.nls.values[2],
+                                                honest_se);
+  EXPECT_LT(std::abs(value - 1.0), 2.0 * se) << fmt::format("{} +- {}", value, se);
+  EXPECT_EQ(s.c.status.find("+- inf"), std::string::npos) << s.c.status;
+  for (const std::string& w : s.c.warnings) EXPECT_EQ(w.find("does not close"), std::string::npos) << w;
+}
+
+// A profile that does not close sets a level's error to infinity after the fit drew its flags: the
+// row must flag it, once, with a warning, and leave a level the fit flagged itself as it is.
+TEST(GapPins, AnInfiniteErrorIsFlaggedOnTheRow) {
+  GapCandidate c;
+  c.free = {"friction_levels.Tc_Nm", "friction_levels.Ts_excess_Nm", "hbridge.deadband"};
+  c.values = {0.02, 0.03, 1e-12};
+  const double inf = std::numeric_limits<double>::infinity();
+  c.std_errors = {1e-4, inf, inf};
+  c.flags = {{FitFlag::Kind::at_bound, {"hbridge.deadband"}, 0.0}};
+  c.warnings = {
+      "hbridge.deadband = 1e-12 is at its lower bound",
+      "friction_levels.Ts_excess_Nm: its profile on the exact stick does not close within the values "
+      "scanned (its least cost lies at the edge of the values scanned)"};
+  gap_detail::flag_infinite_errors(c);
+  gap_detail::flag_infinite_errors(c);
+  ASSERT_EQ(c.flags.size(), 2U);
+  EXPECT_EQ(c.flags[1].kind, FitFlag::Kind::undetermined);
+  EXPECT_EQ(c.flags[1].names, std::vector<std::string>{"friction_levels.Ts_excess_Nm"});
+  EXPECT_EQ(c.warnings.size(), 2U);
 }
 
 // A datasheet's rotor without the load it drives: the truth's inertia is three times the given

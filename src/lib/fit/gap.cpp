@@ -346,6 +346,7 @@ GapReport diagnose_gap(const model::Model& model, const GapData& data, const Gap
     widen_diagnosis_scales(report.candidates.front(), data, report.floors, settings);
     profile_nominal_breakaway(report.candidates.front(), data, report.floors, settings);
   }
+  for (GapCandidate& c : report.candidates) flag_infinite_errors(c);
 
   const bool diagnosed = report.diagnosis != "unexplained";
   // The discrepancy terms are a fit of their own: one the time budget leaves no room for is not begun.

@@ -254,6 +254,10 @@ void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData&
 /// Nothing is done after the time budget.
 void widen_diagnosis_scales(GapCandidate& c, const GapData& data, const std::vector<OutputFloor>& floors,
                             const GapSettings& settings);
+/// Flags every free parameter of `c` whose standard error is not finite and that no flag of its
+/// own names (an open profile sets the error after the fit's flags were drawn) as undetermined,
+/// with a warning when it has none. Display only: called after the verdict.
+void flag_infinite_errors(GapCandidate& c);
 /// After the verdict, the nominal static friction scale of diagnosis `c`, when free and fitted
 /// on the exact stick (no friction effect among `c`'s), is profiled as a friction effect's
 /// breakaway is (the exact stick's cost is flat between the drive levels that bracket a

@@ -375,6 +375,25 @@ bool gauge_trade(const std::vector<FitFlag>& flags, std::string_view key) {
   });
 }
 
+/// True when, on runs that measure speed alone under a voltage drive, `flags` leave an added
+/// effect's viscous level (a key in N m s/rad) at its bound or undetermined. Speed alone sets the
+/// steady state's slope and offset in the drive, (Kt/R) / (c + Kt Ke/R) and Tc / (c + Kt Ke/R),
+/// and the time constant J / (c + Kt Ke/R): Kt and the viscous level c trade exactly along a
+/// family the fit may leave at c = 0, where no correlation is computed (a 4.9 s training part
+/// put the level at 0 and Kt_scale at 1.07 +- 0.0002, truth 1). The trade a gauge pin on
+/// Kt_scale breaks.
+bool viscous_trade(const std::vector<FitFlag>& flags, const std::vector<Run>& runs) {
+  if (measures_current(runs) || std::any_of(runs.begin(), runs.end(), [](const Run& r) {
+        return drive_kind(r) != model::DriveKind::voltage;
+      }))
+    return false;
+  return std::any_of(flags.begin(), flags.end(), [](const FitFlag& f) {
+    return (f.kind == FitFlag::Kind::at_bound || f.kind == FitFlag::Kind::undetermined) &&
+           f.names.size() == 1 && !f.names.front().starts_with("param_mismatch.") &&
+           f.names.front().ends_with("_Nm_s_rad");
+  });
+}
+
 /// True when `flags` say the data leave parameter `key` undetermined, too precise to believe,
 /// or traded against another.
 bool loose_flagged(const std::vector<FitFlag>& flags, std::string_view key) {
@@ -429,8 +448,13 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, double re
   const double solver_se = jacobian_se / se_widening;
   const bool collapsed = !std::isfinite(solver_se) || !(value - lower > 0.05 * coulomb_Nm);
   double centre_value = collapsed ? lower + 0.5 * coulomb_Nm : value;
-  double half = collapsed ? 0.5 * coulomb_Nm
-                          : std::max(0.3 * std::abs(value), 5.0 * (std::isfinite(solver_se) ? solver_se : 0.0));
+  // Five errors, but not past the level's own size: an error far beyond it (a flat regularised
+  // fit) would scan in steps wider than the level, and the exact stick's least cost between
+  // them would be missed; the scans move on while the least cost lies at an edge.
+  double half =
+      collapsed ? 0.5 * coulomb_Nm
+                : std::max(0.3 * std::abs(value), std::min(5.0 * (std::isfinite(solver_se) ? solver_se : 0.0),
+                                                           std::max(std::abs(value), coulomb_Nm)));
   if (!(half > 0.0)) return {};
   std::vector<double> points;
   std::vector<double> costs;
@@ -439,10 +463,12 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, double re
   bool open = true;
   for (int scan = 0; scan < k_profile_scans && open; ++scan) {
     step = half / k_profile_half_points;
+    // Below the centre the scan ends at the bound, with as many points as above: a level
+    // nearer its bound than half the scan is resolved there, not stepped over.
+    const double step_below = std::min(step, (centre_value - lower) / k_profile_half_points);
     points.clear();
-    for (int n = -k_profile_half_points; n <= k_profile_half_points; ++n) {
-      const double x = centre_value + step * n;
-      if (x >= lower) points.push_back(x);
+    for (int n = step_below > 0.0 ? -k_profile_half_points : 0; n <= k_profile_half_points; ++n) {
+      points.push_back(std::max(lower, centre_value + (n < 0 ? step_below : step) * n));
     }
     costs.assign(points.size(), std::numeric_limits<double>::infinity());
     parallel::for_each(points.size(), 0, [&](std::size_t n) {
@@ -488,12 +514,21 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, double re
     }
   }
   const double profile_se = reach + 0.5 * step;
-  open = (lo == 0 && points[0] > lower) || hi + 1 == points.size();
+  const bool open_below = lo == 0 && points[0] > lower;
+  const bool open_above = hi + 1 == points.size();
+  open = open_below || open_above;
+  // What the scan shows of an open profile's error: the reach to the edge it did not close at.
+  const double open_reach = std::max(open_below ? points[best] - points.front() : 0.0,
+                                     open_above ? points.back() - points[best] : 0.0);
   model::set_parameter(c.model, key, points[best]);
   c.values[k] = points[best];
-  c.std_errors[k] = open                         ? std::numeric_limits<double>::infinity()
-                    : std::isfinite(jacobian_se) ? std::max(jacobian_se, profile_se)
-                                                 : profile_se;
+  // The fit's error counts where it speaks of this level: beyond the level's own size it is the
+  // regularised stick's flatness, which the closed profile on the exact stick has replaced.
+  const bool jacobian_speaks =
+      std::isfinite(jacobian_se) && jacobian_se <= std::max(std::abs(value), coulomb_Nm);
+  c.std_errors[k] = open              ? std::numeric_limits<double>::infinity()
+                    : jacobian_speaks ? std::max(jacobian_se, profile_se)
+                                      : profile_se;
   // The profile's word on this one level replaces the fit's: off its bound it is no longer at
   // it, and a closed profile determines it.
   std::erase_if(c.flags, [&](const FitFlag& f) {
@@ -523,15 +558,18 @@ std::string profile_breakaway(GapCandidate& c, const std::string& key, double re
       if (rest != std::string::npos) w = fmt::format("{} = {:.6g}{}", key, points[best], w.substr(rest));
     }
   }
+  // An open profile's least cost may lie on the scan's last value, a reach of nothing: then that
+  // is what is said (flag_infinite_errors flags the level after the verdict).
+  const std::string open_text = open_reach > 0.0
+                                    ? fmt::format("its error is more than {:.2g}", open_reach)
+                                    : std::string("its least cost lies at the edge of the values scanned");
   if (open && std::none_of(c.warnings.begin(), c.warnings.end(),
                            [&](const std::string& w) { return w.starts_with(key + ": "); }))
-    c.warnings.push_back(
-        fmt::format("{}: its profile on the exact stick does not close within the values scanned (its error "
-                    "is more than {:.2g})",
-                    key, half));
-  return fmt::format("{} profiled on the exact stick: {:.4g} +- {}{:.2g} ({} {:.4g} +- {:.2g})", key,
-                     points[best], open ? "more than " : "", open ? half : profile_se, fitted_on, regularised,
-                     regularised_se);
+    c.warnings.push_back(fmt::format(
+        "{}: its profile on the exact stick does not close within the values scanned ({})", key, open_text));
+  const std::string error = open ? fmt::format("inf, {}", open_text) : fmt::format("{:.2g}", profile_se);
+  return fmt::format("{} profiled on the exact stick: {:.4g} +- {} ({} {:.4g} +- {:.2g})", key, points[best],
+                     error, fitted_on, regularised, regularised_se);
 }
 
 /// A level of an added effect that a fit drove to its zero bound is trapped there: the fit moves
@@ -848,8 +886,36 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   std::vector<std::string> pinned;
   for (const std::string_view pin : k_gauge_pins) {
     const std::string key(pin);
-    if (!gauge_trade(c.flags, key) || expired()) continue;
+    if (expired()) break;
+    if (gauge_trade(c.flags, key)) {
+      refit_pinned(key, 1.0);
+      pinned.push_back(key);
+      continue;
+    }
+    if (key != "param_mismatch.Kt_scale" || std::find(c.free.begin(), c.free.end(), key) == c.free.end() ||
+        !viscous_trade(c.flags, data.train))
+      continue;
+    // Along the trade, Kt_scale s with no viscous level is the point c = (s - 1) Kt0 Ke0 / R of
+    // the gauge (Kt_eff = s Kt0): the pinned fit starts there, where a level stuck at its zero
+    // bound (fitted in log coordinates) could never move from. Below s = 1 the gauge would need a
+    // negative level; a pinned fit that costs more than the solver's tolerance is not the trade.
+    const double s_kt = model::get_parameter(c.model, key);
+    if (!(s_kt > 1.0)) continue;
+    const model::Compiled nominal(c.model);
+    const double c_seed = (s_kt - 1.0) / (s_kt * s_kt) * nominal.p.motor.Kt_Nm_A *
+                          nominal.p.motor.Ke_V_s_rad / nominal.p.motor.R_ohm;
+    const GapCandidate unpinned = c;
+    const FitResult unpinned_fit = fit;
+    for (const FitFlag& f : unpinned.flags) {
+      if (viscous_trade({f}, data.train) && std::isfinite(c_seed) && c_seed > 0.0)
+        model::set_parameter(c.model, f.names.front(), c_seed);
+    }
     refit_pinned(key, 1.0);
+    if (!(fit.nls.cost <= (1.0 + k_no_worse_than_extended) * unpinned_fit.nls.cost)) {
+      c = unpinned;
+      fit = unpinned_fit;
+      continue;
+    }
     pinned.push_back(key);
   }
   std::vector<std::string> profiled;
@@ -1900,6 +1966,20 @@ void profile_nominal_breakaway(GapCandidate& c, const GapData& data, const std::
   if (note.empty()) return;
   c.status += "; " + note;
   if (c.values[k] != fitted) rescore(c, data, floors, sim);
+}
+
+void flag_infinite_errors(GapCandidate& c) {
+  for (std::size_t k = 0; k < c.free.size() && k < c.std_errors.size(); ++k) {
+    const std::string& key = c.free[k];
+    if (std::isfinite(c.std_errors[k]) || std::any_of(c.flags.begin(), c.flags.end(), [&](const FitFlag& f) {
+          return f.names == std::vector<std::string>{key};
+        }))
+      continue;
+    c.flags.push_back({FitFlag::Kind::undetermined, {key}, std::numeric_limits<double>::quiet_NaN()});
+    if (std::none_of(c.warnings.begin(), c.warnings.end(),
+                     [&](const std::string& w) { return w.starts_with(key + ": "); }))
+      c.warnings.push_back(fmt::format("{}: not determined by the data (infinite standard error)", key));
+  }
 }
 
 void pin_diagnosis(GapCandidate& c, const model::Model& as_given, const GapData& data,
