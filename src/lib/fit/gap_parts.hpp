@@ -256,7 +256,8 @@ void widen_diagnosis_scales(GapCandidate& c, const GapData& data, const std::vec
                             const GapSettings& settings);
 /// Flags every free parameter of `c` whose standard error is not finite and that no flag of its
 /// own names (an open profile sets the error after the fit's flags were drawn) as undetermined,
-/// with a warning when it has none. Display only: called after the verdict.
+/// with a warning when it has none; the same effect's other parameters get a warning that their
+/// errors hold it fixed. Display only: called after the verdict.
 void flag_infinite_errors(GapCandidate& c);
 /// After the verdict, the nominal static friction scale of diagnosis `c`, when free and fitted
 /// on the exact stick (no friction effect among `c`'s), is profiled as a friction effect's

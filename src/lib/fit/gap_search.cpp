@@ -1969,16 +1969,31 @@ void profile_nominal_breakaway(GapCandidate& c, const GapData& data, const std::
 }
 
 void flag_infinite_errors(GapCandidate& c) {
-  for (std::size_t k = 0; k < c.free.size() && k < c.std_errors.size(); ++k) {
+  const std::size_t n = std::min(c.free.size(), std::min(c.std_errors.size(), c.values.size()));
+  for (std::size_t k = 0; k < n; ++k) {
     const std::string& key = c.free[k];
-    if (std::isfinite(c.std_errors[k]) || std::any_of(c.flags.begin(), c.flags.end(), [&](const FitFlag& f) {
-          return f.names == std::vector<std::string>{key};
-        }))
-      continue;
-    c.flags.push_back({FitFlag::Kind::undetermined, {key}, std::numeric_limits<double>::quiet_NaN()});
-    if (std::none_of(c.warnings.begin(), c.warnings.end(),
-                     [&](const std::string& w) { return w.starts_with(key + ": "); }))
-      c.warnings.push_back(fmt::format("{}: not determined by the data (infinite standard error)", key));
+    if (std::isfinite(c.std_errors[k])) continue;
+    if (std::none_of(c.flags.begin(), c.flags.end(),
+                     [&](const FitFlag& f) { return f.names == std::vector<std::string>{key}; })) {
+      c.flags.push_back({FitFlag::Kind::undetermined, {key}, std::numeric_limits<double>::quiet_NaN()});
+      if (std::none_of(c.warnings.begin(), c.warnings.end(),
+                       [&](const std::string& w) { return w.starts_with(key + ": "); }))
+        c.warnings.push_back(fmt::format("{}: not determined by the data (infinite standard error)", key));
+    }
+    // The errors of the same effect's other parameters hold this one where the fit left it (a
+    // friction effect's Coulomb and viscous levels trade with its breakaway): they are smaller
+    // than the data allow.
+    const std::string effect = key.substr(0, key.find('.') + 1);
+    std::vector<std::string> held;
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j != k && std::isfinite(c.std_errors[j]) && c.free[j].starts_with(effect))
+        held.push_back(c.free[j]);
+    }
+    if (held.empty() || effect == "param_mismatch.") continue;
+    c.warnings.push_back(
+        fmt::format("{}: standard errors with {} held at {:.4g}, which the data do not set "
+                    "(they may be further off than their errors say)",
+                    fmt::join(held, ", "), key, c.values[k]));
   }
 }
 
