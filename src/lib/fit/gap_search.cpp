@@ -375,23 +375,26 @@ bool gauge_trade(const std::vector<FitFlag>& flags, std::string_view key) {
   });
 }
 
+/// True when flag `f` leaves an added effect's viscous level (a key in N m s/rad) at its bound or
+/// undetermined.
+bool viscous_loose(const FitFlag& f) {
+  return (f.kind == FitFlag::Kind::at_bound || f.kind == FitFlag::Kind::undetermined) &&
+         f.names.size() == 1 && !f.names.front().starts_with("param_mismatch.") &&
+         f.names.front().ends_with("_Nm_s_rad");
+}
+
 /// True when, on runs that measure speed alone under a voltage drive, `flags` leave an added
-/// effect's viscous level (a key in N m s/rad) at its bound or undetermined. Speed alone sets the
-/// steady state's slope and offset in the drive, (Kt/R) / (c + Kt Ke/R) and Tc / (c + Kt Ke/R),
-/// and the time constant J / (c + Kt Ke/R): Kt and the viscous level c trade exactly along a
-/// family the fit may leave at c = 0, where no correlation is computed (a 4.9 s training part
-/// put the level at 0 and Kt_scale at 1.07 +- 0.0002, truth 1). The trade a gauge pin on
-/// Kt_scale breaks.
+/// effect's viscous level loose (viscous_loose). Speed alone sets the steady state's slope and
+/// offset in the drive, (Kt/R) / (c + Kt Ke/R) and Tc / (c + Kt Ke/R), and the time constant
+/// J / (c + Kt Ke/R): Kt and the viscous level c trade exactly along a family the fit may leave
+/// at c = 0, where no correlation is computed (a 4.9 s training part put the level at 0 and
+/// Kt_scale at 1.07 +- 0.0002, truth 1). The trade a gauge pin on Kt_scale breaks.
 bool viscous_trade(const std::vector<FitFlag>& flags, const std::vector<Run>& runs) {
   if (measures_current(runs) || std::any_of(runs.begin(), runs.end(), [](const Run& r) {
         return drive_kind(r) != model::DriveKind::voltage;
       }))
     return false;
-  return std::any_of(flags.begin(), flags.end(), [](const FitFlag& f) {
-    return (f.kind == FitFlag::Kind::at_bound || f.kind == FitFlag::Kind::undetermined) &&
-           f.names.size() == 1 && !f.names.front().starts_with("param_mismatch.") &&
-           f.names.front().ends_with("_Nm_s_rad");
-  });
+  return std::any_of(flags.begin(), flags.end(), viscous_loose);
 }
 
 /// True when `flags` say the data leave parameter `key` undetermined, too precise to believe,
@@ -906,9 +909,10 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
                           nominal.p.motor.Ke_V_s_rad / nominal.p.motor.R_ohm;
     const GapCandidate unpinned = c;
     const FitResult unpinned_fit = fit;
-    for (const FitFlag& f : unpinned.flags) {
-      if (viscous_trade({f}, data.train) && std::isfinite(c_seed) && c_seed > 0.0)
-        model::set_parameter(c.model, f.names.front(), c_seed);
+    if (std::isfinite(c_seed) && c_seed > 0.0) {
+      for (const FitFlag& f : unpinned.flags) {
+        if (viscous_loose(f)) model::set_parameter(c.model, f.names.front(), c_seed);
+      }
     }
     refit_pinned(key, 1.0);
     if (!(fit.nls.cost <= (1.0 + k_no_worse_than_extended) * unpinned_fit.nls.cost)) {
