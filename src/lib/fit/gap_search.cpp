@@ -987,6 +987,18 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     unexcited.push_back(key);
     std::erase_if(profiled, [&](const std::string& note) { return note.starts_with(key + " "); });
   }
+  // A mixture holds at 0 the breakaway the model it extends pinned there (the key is not among
+  // its free ones): its row says so as that model's does.
+  for (const auto& e : job.effects) {
+    const model::EffectSpec* spec = find_plan(e);
+    if (job.effects.size() < 2 || spec == nullptr || spec->plan.breakaway_key.empty()) continue;
+    const std::string key = e + "." + spec->plan.breakaway_key;
+    const std::vector<std::string> fitted = fitted_keys(*spec, data.train);
+    if (std::find(fitted.begin(), fitted.end(), spec->plan.breakaway_key) == fitted.end()) continue;
+    if (std::find(c.free.begin(), c.free.end(), key) != c.free.end()) continue;
+    if (std::find(unexcited.begin(), unexcited.end(), key) != unexcited.end()) continue;
+    if (model::get_parameter(c.model, key) == 0.0) unexcited.push_back(key);
+  }
   if (expired()) {
     cut_short(fit);
     return c;
