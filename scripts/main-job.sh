@@ -47,4 +47,4 @@ echo "  plant.ini                 fitted plant: $(sed -n 's/^tf = \([^;]*[^; ]\)
 echo "  pi.ini                    PI for 50 deg: $(sed -n 's/^difference_equation = \([^;]*[^; ]\) *;.*/\1/p' pi.ini)"
 echo "  verify.csv, verify.png    the PI on the nonlinear model (420 -> 520 rpm)"
 echo "  gap.csv, gap.txt          diagnosis: $(awk -F, '!/^#/ && n++ == 1 { print $1 }' gap.csv)"
-sed -n '1,12s/^/    /p' gap.txt
+sed -n '1,12{s/^./    &/;p}' gap.txt
