@@ -174,6 +174,8 @@ struct GapCandidate {
   std::string status;                 ///< "as given", "fitted", "not converged", "not excited: ..."
   model::Model model;                 ///< the fitted model
   std::vector<std::string> free;      ///< fitted parameter names
+  /// Breakaway keys held at 0, not free: no start from rest in the training runs sets them.
+  std::vector<std::string> unexcited;
   std::vector<double> values;
   std::vector<double> std_errors;
   std::size_t added_parameters = 0;   ///< parameters of the added effects

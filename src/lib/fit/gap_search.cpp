@@ -211,6 +211,9 @@ struct Job {
   /// stage1_free). The fit ends no worse on the training runs than this model
   /// (k_no_worse_than_extended).
   std::optional<model::Model> extends = std::nullopt;
+  /// A mixture's: the breakaway keys the model it extends holds at 0 (GapCandidate::unexcited),
+  /// not free here either.
+  std::vector<std::string> unexcited{};
 };
 
 /// How much more than the model it extends a mixture's fit may cost on the training runs, relative:
@@ -977,7 +980,7 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
   // static excess undetermined, even on the exact stick's profile, while its Coulomb and
   // viscous levels are not: pin the excess at 0 (breakaway at the Coulomb level) and say so,
   // rather than set the effect aside.
-  std::vector<std::string> unexcited;
+  std::vector<std::string> unexcited = job.unexcited;
   for (const auto& e : job.effects) {
     const model::EffectSpec* spec = find_plan(e);
     if (c.determined() || spec == nullptr || spec->plan.breakaway_key.empty() || expired()) continue;
@@ -987,23 +990,12 @@ GapCandidate run_job(const Job& job, const GapData& data, const std::vector<Outp
     unexcited.push_back(key);
     std::erase_if(profiled, [&](const std::string& note) { return note.starts_with(key + " "); });
   }
-  // A mixture holds at 0 the breakaway the model it extends pinned there (the key is not among
-  // its free ones): its row says so as that model's does.
-  for (const auto& e : job.effects) {
-    const model::EffectSpec* spec = find_plan(e);
-    if (job.effects.size() < 2 || spec == nullptr || spec->plan.breakaway_key.empty()) continue;
-    const std::string key = e + "." + spec->plan.breakaway_key;
-    const std::vector<std::string> fitted = fitted_keys(*spec, data.train);
-    if (std::find(fitted.begin(), fitted.end(), spec->plan.breakaway_key) == fitted.end()) continue;
-    if (std::find(c.free.begin(), c.free.end(), key) != c.free.end()) continue;
-    if (std::find(unexcited.begin(), unexcited.end(), key) != unexcited.end()) continue;
-    if (model::get_parameter(c.model, key) == 0.0) unexcited.push_back(key);
-  }
   if (expired()) {
     cut_short(fit);
     return c;
   }
   c.converged = fit.nls.converged;
+  c.unexcited = unexcited;
   c.status = fit.nls.converged ? "fitted" : k_fitted_budget_spent;
   if (!pinned.empty())
     c.status += fmt::format("; {} pinned at the given value (a gauge)", fmt::join(pinned, " "));
@@ -1691,6 +1683,7 @@ Candidates search_candidates(const model::Model& model, const GapData& data,
         for (const auto& f : current.free) {
           if (!f.starts_with("param_mismatch.")) job.free.push_back(f);
         }
+        job.unexcited = current.unexcited;
         job.start.effects.push_back(*single->model.effect(added));
         for (const auto& m : members) {
           for (const auto& c : singles) {
