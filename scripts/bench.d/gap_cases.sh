@@ -34,3 +34,31 @@ if wanted gap_cases; then
       "$s s" "$(met "$s" "<=" 40)"
   fi
 fi
+
+# The same with the fits' Jacobians by sensitivities (--jacobian sensitivities), against the
+# default's diagnoses of the row above (run it with gap_cases).
+if wanted gap_cases_jacobian; then
+  cases=${GAP_CASES:-$root/../shared/data/gap-cases}
+  if [[ -d $cases ]]; then
+    total_ms=0
+    same=0
+    n=0
+    for dir in "$cases"/*/; do
+      name=$(basename "$dir")
+      [[ -f $dir/train.csv && -f $dir/validate.csv ]] || continue
+      t0=$(date +%s%N)
+      mcg-fit gap --train "$dir/train.csv" --validate "$dir/validate.csv" --jacobian sensitivities \
+        >"$work/gap_sens_$name.csv" 2>/dev/null || true
+      t1=$(date +%s%N)
+      total_ms=$((total_ms + (t1 - t0) / 1000000))
+      n=$((n + 1))
+      verdict=$(awk -F, '!/^#/ && ++rows == 2 {print $1; exit}' "$work/gap_sens_$name.csv")
+      before=$(awk -F, '!/^#/ && ++rows == 2 {print $1; exit}' "$work/gap_$name.csv" 2>/dev/null || true)
+      [[ -n $verdict && $verdict == "$before" ]] && same=$((same + 1))
+      echo "== mcg-fit gap --jacobian sensitivities on $name: $(((t1 - t0) / 1000000)) ms, diagnosis ${verdict:-(none)}" >>"$raw"
+    done
+    s=$(awk -v m="$total_ms" 'BEGIN {printf "%.1f", m / 1000}')
+    row "\`mcg-fit gap --jacobian sensitivities\` on the $n public gap cases, one after another" whole-process \
+      "(against the default's row)" "$s s, $same of $n diagnoses as by differences" "-"
+  fi
+fi

@@ -423,6 +423,7 @@ int run_gap(const GapOptions& options, std::ostream& out, Diagnostics& diag) {
   for (auto& sr : data.validate) apply_speed_path(sr.run, speed, options.gear_ratio);
   settings.threads = options.threads;
   settings.discrepancy = options.discrepancy;
+  settings.sensitivities = options.sensitivities;
   settings.deadline = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                     std::chrono::duration<double>(options.budget_s));
   if (options.progress) {

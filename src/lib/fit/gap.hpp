@@ -101,6 +101,7 @@ struct GapSettings {
   std::map<std::string, std::pair<double, double>> bounds;  ///< [bounds] of the INI
   std::function<void(const std::string&)> progress;  ///< progress lines (none when empty)
   bool discrepancy = false;            ///< fit the discrepancy whatever the verdict
+  bool sensitivities = false;          ///< the fits' Jacobians by sensitivities (FitProblem::sensitivities)
   /// Reject a mixture whose added effect, fitted alone on the model it extends, removes almost
   /// nothing of its training cost before the joint refit (false: every one is refitted jointly).
   bool early_rejection = true;
@@ -341,6 +342,7 @@ struct GapOptions {
   double budget_s = 120.0;       ///< wall-clock budget of the diagnosis (partial results after it)
   bool progress = false;         ///< progress report lines on the diagnostics
   bool discrepancy = false;      ///< the catalog-free discrepancy fit whatever the verdict
+  bool sensitivities = false;    ///< --jacobian sensitivities (GapSettings::sensitivities)
 };
 
 /// Exit status of `mcg-fit gap` when the time budget ran out (the results so far are written).

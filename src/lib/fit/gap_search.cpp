@@ -632,6 +632,7 @@ FitProblem candidate_problem(const std::vector<std::string>& effects, const GapD
   problem.nls.xtol = 1e-4;
   problem.nls.ftol = 1e-5;
   problem.nls.check_smoothness = false;
+  problem.sensitivities = settings.sensitivities;
   problem.evaluate_runs = false;  // the candidate is scored by evaluate() and training_speed_rms()
   // Standard errors no smaller than a jackknife's over stretches of the runs (a quantised speed
   // at rest, a dead band trading with a Coulomb level: the Jacobian's error takes the residual

@@ -5,6 +5,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -15,6 +16,7 @@
 #include "common/error.hpp"
 #include "common/parallel.hpp"
 #include "common/units.hpp"
+#include "model/sensitivity.hpp"
 
 namespace mcg::fit {
 
@@ -321,11 +323,19 @@ double ripple_speed(const Run& run) {
 
 }  // namespace
 
-std::vector<std::vector<double>> simulate_as_measured(const model::Model& model, const Run& run,
-                                                      const model::SimOptions& options) {
+namespace {
+
+/// The options a run is simulated with: a ripple resolved up to its fastest measured speed.
+model::SimOptions options_for(const Run& run, const model::SimOptions& options) {
   model::SimOptions at_speed = options;
   if (at_speed.ripple_speed_rad_s == 0.0) at_speed.ripple_speed_rad_s = ripple_speed(run);
-  const model::Outputs out = model::simulate(model, run.inputs, at_speed);
+  return at_speed;
+}
+
+/// Per output of the run, the simulated series as it was measured. Every step is linear in
+/// the outputs (the estimator's differences, the gear, the speed filter from rest), so it maps
+/// the outputs' derivatives to the series' alike.
+std::vector<std::vector<double>> as_measured(const model::Outputs& out, const Run& run) {
   std::vector<std::vector<double>> series;
   series.reserve(run.outputs.size());
   const double g = run.gear_ratio;
@@ -344,6 +354,13 @@ std::vector<std::vector<double>> simulate_as_measured(const model::Model& model,
     if (speed) series.back() = run.speed_filter.apply(run.inputs.t_s, series.back());
   }
   return series;
+}
+
+}  // namespace
+
+std::vector<std::vector<double>> simulate_as_measured(const model::Model& model, const Run& run,
+                                                      const model::SimOptions& options) {
+  return as_measured(model::simulate(model, run.inputs, options_for(run, options)), run);
 }
 
 double deviation_norm(const std::vector<double>& y) {
@@ -793,8 +810,60 @@ FitResult fit_model(const FitProblem& problem) {
     });
   };
 
+  // The Jacobian by sensitivities: each run simulated once on dual numbers, its outputs'
+  // derivatives taken to the series as measured like the outputs themselves. Every parameter
+  // moves with whatever is tied to it.
+  NlsOptions nls = problem.nls;
+  if (problem.sensitivities) {
+    nls.sensitivities = [&](const Eigen::VectorXd& p, Eigen::VectorXd& out, Eigen::MatrixXd& jac) {
+      model::Model m = problem.model;
+      for (std::size_t i = 0; i < specs.size(); ++i) {
+        const double v = in_range(i, p[static_cast<Eigen::Index>(i)]);
+        if (!(v >= bounds[i].first && v <= bounds[i].second)) return false;
+        model::set_parameter(m, specs[i].name, v);
+      }
+      apply_ties(m, problem.ties);
+      std::vector<model::Direction> directions;
+      for (const ParameterSpec& spec : specs) {
+        const double v = model::get_parameter(m, spec.name);
+        model::Direction d{m, m, v != 0.0 ? 1e-6 * std::abs(v) : 1e-9};
+        model::set_parameter(d.plus, spec.name, v + d.step);
+        model::set_parameter(d.minus, spec.name, v - d.step);
+        apply_ties(d.plus, problem.ties);
+        apply_ties(d.minus, problem.ties);
+        directions.push_back(std::move(d));
+      }
+      out.resize(static_cast<Eigen::Index>(total));
+      jac.resize(static_cast<Eigen::Index>(total), static_cast<Eigen::Index>(specs.size()));
+      std::atomic<bool> ok{true};
+      parallel::for_each(problem.runs.size(), problem.nls.threads, [&](std::size_t r) {
+        const Run& run = problem.runs[r];
+        const auto sens =
+            model::simulate_sensitivities(m, directions, run.inputs, options_for(run, problem.sim));
+        if (!sens) {
+          ok = false;
+          return;
+        }
+        const auto sim = as_measured(sens->value, run);
+        std::vector<std::vector<std::vector<double>>> d;
+        for (const model::Outputs& dj : sens->d) d.push_back(as_measured(dj, run));
+        auto k = static_cast<Eigen::Index>(offset[r]);
+        for (std::size_t o = 0; o < run.outputs.size(); ++o) {
+          const auto& y = run.measured[o];
+          for (std::size_t n = 0; n < y.size(); ++n, ++k) {
+            const bool measured = std::isfinite(y[n]);
+            out[k] = measured ? (sim[o][n] - y[n]) / norm[r][o] : 0.0;
+            for (std::size_t j = 0; j < d.size(); ++j)
+              jac(k, static_cast<Eigen::Index>(j)) = measured ? d[j][o][n] / norm[r][o] : 0.0;
+          }
+        }
+      });
+      return ok.load();
+    };
+  }
+
   FitResult result;
-  result.nls = least_squares(specs, total, residual, problem.nls);
+  result.nls = least_squares(specs, total, residual, nls);
   for (std::size_t i = 0; i < specs.size(); ++i) {
     auto& v = result.nls.values[static_cast<Eigen::Index>(i)];
     v = in_range(i, v);

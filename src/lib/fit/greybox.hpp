@@ -189,6 +189,9 @@ struct FitProblem {
   /// Simulate the runs once more at the optimum for FitResult::runs (a caller that only needs
   /// the model and its statistics saves that simulation).
   bool evaluate_runs = true;
+  /// The solver's Jacobians by sensitivities along the simulation (model/sensitivity.hpp)
+  /// rather than by finite differences, where the model has them (NlsOptions::sensitivities).
+  bool sensitivities = false;
   /// How the residuals simulate run `run` (an index into runs) of a model: when set, instead
   /// of simulate_as_measured(model, runs[run], options), whose numbers it must return (the gap
   /// search looks up a model it simulated before). Called concurrently.

@@ -133,9 +133,22 @@ struct Functor : Eigen::DenseFunctor<double> {
     }
   }
 
-  /// Finite-difference Jacobian in solver coordinates about u, whose residuals are r0 (unused
-  /// by central differences).
+  /// The Jacobian in solver coordinates about u, whose residuals are r0 (unused by central
+  /// differences): by the sensitivities where they are given and can, else by finite differences.
   void jacobian(const Eigen::VectorXd& u, const Eigen::VectorXd& r0, JacobianType& jac) const {
+    if (options.sensitivities) {
+      if (interruptible && options.stop && options.stop()) throw Interrupted{};
+      const Eigen::VectorXd p = coords.to_physical(u);
+      Eigen::VectorXd r;
+      Eigen::MatrixXd dr_dp;
+      m_simulations.fetch_add(1, std::memory_order_relaxed);
+      if (options.sensitivities(p, r, dr_dp) && dr_dp.allFinite() && dr_dp.rows() == values() &&
+          dr_dp.cols() == inputs()) {
+        jac = dr_dp * coords.derivative(p).asDiagonal();
+        ++m_sensitivity_jacobians;
+        return;
+      }
+    }
     jac.resize(values(), inputs());
     const auto n = static_cast<std::size_t>(inputs());
     parallel::for_each(n, options.threads,
@@ -162,13 +175,14 @@ struct Functor : Eigen::DenseFunctor<double> {
         return 0;  // no evaluation
       }
     }
+    const int by_sensitivities = m_sensitivity_jacobians;
     jacobian(u, r0, jac);
     m_jac = jac;
     m_jac_u = u;
     m_jac_r = r0;
     m_jac_fd = true;
     m_force_fd = false;
-    ++m_fd_jacobians;
+    if (m_sensitivity_jacobians == by_sensitivities) ++m_fd_jacobians;
     const int per_column = options.central_differences ? 2 : 1;
     return per_column * inputs() + (options.central_differences ? 0 : 1);
   }
@@ -191,6 +205,7 @@ struct Functor : Eigen::DenseFunctor<double> {
   int simulations() const { return m_simulations.load(); }
   int fd_jacobians() const { return m_fd_jacobians; }
   int broyden_jacobians() const { return m_broyden_jacobians; }
+  int sensitivity_jacobians() const { return m_sensitivity_jacobians; }
 
  private:
   mutable Eigen::VectorXd m_best_u;
@@ -206,6 +221,7 @@ struct Functor : Eigen::DenseFunctor<double> {
   mutable int m_trials = 0;  ///< trial steps on the current Jacobian
   mutable int m_fd_jacobians = 0;
   mutable int m_broyden_jacobians = 0;
+  mutable int m_sensitivity_jacobians = 0;
 };
 
 /// A status of a convergence test (the solver stands at its optimum).
@@ -410,6 +426,7 @@ NlsResult least_squares(const std::vector<ParameterSpec>& specs, std::size_t res
   result.simulations += 1 + functor.simulations();  // the start, evaluated outside the solver
   result.fd_jacobians = functor.fd_jacobians();
   result.broyden_jacobians = functor.broyden_jacobians();
+  result.sensitivity_jacobians = functor.sensitivity_jacobians();
   const Eigen::VectorXd dp_du = coords.derivative(result.values);
   const Eigen::MatrixXd jac_p = jac_u * dp_du.cwiseInverse().asDiagonal();
   result.jacobian = jac_p;

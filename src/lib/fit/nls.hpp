@@ -50,6 +50,11 @@ struct NlsOptions {
   /// differences, so the solver stops only on a finite-difference Jacobian, and the statistics
   /// at the optimum always use one.
   bool broyden = false;
+  /// The Jacobian by sensitivities (model/sensitivity.hpp) instead of finite differences: fills
+  /// r (size m) and jac (m x n, dr/dp in the specs' physical units) at p and returns true, or
+  /// returns false where it cannot (the solver then takes finite differences there). It is
+  /// charged the evaluations of a finite-difference Jacobian, which it costs about as much.
+  std::function<bool(const Eigen::VectorXd& p, Eigen::VectorXd& r, Eigen::MatrixXd& jac)> sensitivities;
   /// Check at the optimum whether the residual is smooth in each parameter (NlsResult::rough),
   /// at the cost of one more Jacobian.
   bool check_smoothness = true;
@@ -89,8 +94,10 @@ struct NlsResult {
   /// Residual evaluations made, Jacobian columns and the statistics' Jacobian included (each
   /// point once: a point evaluated before is looked up).
   int simulations = 0;
-  /// Jacobians by finite differences and by Broyden updates (NlsOptions::broyden).
+  /// Jacobians by finite differences, by sensitivities (NlsOptions::sensitivities) and by
+  /// Broyden updates (NlsOptions::broyden).
   int fd_jacobians = 0;
+  int sensitivity_jacobians = 0;
   int broyden_jacobians = 0;
 };
 

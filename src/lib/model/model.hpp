@@ -35,36 +35,43 @@ inline constexpr double k_brush_smooth_i_A = 0.01;
 
 /// One friction element. Moving: F(w) = sign(w) (Tc_Nm + c1 |w| + c2 |w|^2 + c3 |w|^3);
 /// at rest it holds up to Ts_Nm. The viscous polynomial is applied with odd symmetry.
-struct Friction {
-  double Ts_Nm = 0.0;                         ///< static (breakaway) level, N m
-  double Tc_Nm = 0.0;                         ///< Coulomb level, N m
-  std::array<double, 3> viscous{0, 0, 0};     ///< c1 [N m s/rad], c2 [N m s^2/rad^2], c3 [N m s^3/rad^3]
+/// S is the number type: double, or model::Dual where the plant carries sensitivities.
+template <class S>
+struct BasicFriction {
+  S Ts_Nm = 0.0;                            ///< static (breakaway) level, N m
+  S Tc_Nm = 0.0;                            ///< Coulomb level, N m
+  std::array<S, 3> viscous{0.0, 0.0, 0.0};  ///< c1 [N m s/rad], c2 [N m s^2/rad^2], c3 [N m s^3/rad^3]
 
   /// Kinetic friction magnitude at speed |w| = x_rad_s (without Stribeck): Tc + P(x).
-  double kinetic_Nm(double x_rad_s) const {
+  S kinetic_Nm(const S& x_rad_s) const {
     return Tc_Nm + x_rad_s * (viscous[0] + x_rad_s * (viscous[1] + x_rad_s * viscous[2]));
   }
 };
+using Friction = BasicFriction<double>;
 
 /// One DC machine (the motor, or the identical machine used as generator).
-struct Machine {
-  double R_ohm = 0.0;        ///< armature resistance
-  double L_H = 0.0;          ///< armature inductance
-  double Kt_Nm_A = 0.0;      ///< torque constant
-  double Ke_V_s_rad = 0.0;   ///< back-EMF constant (= Kt in SI units)
-  double J_kg_m2 = 0.0;      ///< rotor inertia
-  Friction friction;         ///< the machine's own bearing and brush friction
+template <class S>
+struct BasicMachine {
+  S R_ohm = 0.0;              ///< armature resistance
+  S L_H = 0.0;                ///< armature inductance
+  S Kt_Nm_A = 0.0;            ///< torque constant
+  S Ke_V_s_rad = 0.0;         ///< back-EMF constant (= Kt in SI units)
+  S J_kg_m2 = 0.0;            ///< rotor inertia
+  BasicFriction<S> friction;  ///< the machine's own bearing and brush friction
 };
+using Machine = BasicMachine<double>;
 
 /// Every parameter of the rig, SI units. The INI form is described in docs/formats.md.
-struct Params {
-  Machine motor;
-  Machine generator;
-  Friction clutch_disengaged;   ///< clutch attached, not engaged (state 1), on the motor shaft
-  Friction clutch_engaged;      ///< clutch engaged (state 2), on the coupled shaft
-  double supply_V = boardunits::k_supply_V;  ///< H-bridge supply: v = duty * supply_V, saturated at +-supply_V
-  double dead_time_s = 0.0;     ///< transport delay of the applied voltage (clutch/relay not delayed)
+template <class S>
+struct BasicParams {
+  BasicMachine<S> motor;
+  BasicMachine<S> generator;
+  BasicFriction<S> clutch_disengaged;   ///< clutch attached, not engaged (state 1), on the motor shaft
+  BasicFriction<S> clutch_engaged;      ///< clutch engaged (state 2), on the coupled shaft
+  S supply_V = boardunits::k_supply_V;  ///< H-bridge supply: v = duty * supply_V, saturated at +-supply_V
+  S dead_time_s = 0.0;                  ///< transport delay of the applied voltage (clutch/relay not delayed)
 };
+using Params = BasicParams<double>;
 
 /// The report's rig (see model.cpp for the sources of every number and the inertia choice).
 Params builtin_rig();
@@ -391,21 +398,23 @@ struct Drive {
   double i_cmd_A = std::numeric_limits<double>::quiet_NaN();
 };
 
-/// The plant's state at one instant.
-struct State {
+/// The plant's state at one instant (S: double, or Dual with its sensitivities).
+template <class S>
+struct BasicState {
   double t_s = 0.0;
-  double omega_rad_s = 0.0;       ///< motor shaft speed
-  double omega_gen_rad_s = 0.0;   ///< generator shaft speed (= motor when rigidly engaged; 0 in state 0)
-  double theta_rad = 0.0;         ///< motor shaft angle since the start
-  double theta_gen_rad = 0.0;     ///< generator shaft angle since the start
-  double i_A = 0.0;               ///< motor armature current
-  double i_gen_A = 0.0;           ///< generator current (through winding and r_load)
-  double v_gen_V = 0.0;           ///< generator terminal voltage: r_load i_gen, or Ke w_g when open
-  double v_applied_V = 0.0;       ///< average voltage at the motor terminals (after delay, bridge effects)
-  double temp_rise_K = 0.0;       ///< motor winding temperature rise (thermal effect)
+  S omega_rad_s = 0.0;      ///< motor shaft speed
+  S omega_gen_rad_s = 0.0;  ///< generator shaft speed (= motor when rigidly engaged; 0 in state 0)
+  S theta_rad = 0.0;        ///< motor shaft angle since the start
+  S theta_gen_rad = 0.0;    ///< generator shaft angle since the start
+  S i_A = 0.0;              ///< motor armature current
+  S i_gen_A = 0.0;          ///< generator current (through winding and r_load)
+  S v_gen_V = 0.0;          ///< generator terminal voltage: r_load i_gen, or Ke w_g when open
+  S v_applied_V = 0.0;      ///< average voltage at the motor terminals (after delay, bridge effects)
+  S temp_rise_K = 0.0;      ///< motor winding temperature rise (thermal effect)
   int clutch = 2;
-  bool stuck = true;              ///< motor shaft held by static friction
+  bool stuck = true;  ///< motor shaft held by static friction
 };
+using State = BasicState<double>;
 
 /// Integrator settings.
 struct SimOptions {

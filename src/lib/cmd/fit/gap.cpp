@@ -1,6 +1,7 @@
 // mcg-fit gap: the options of fit::run_gap on the command line.
 #include "cmd/fit/gap.hpp"
 
+#include "cmd/fit/model.hpp"
 #include "common/range.hpp"
 #include "common/tool.hpp"
 
@@ -53,6 +54,7 @@ void FitGap::define(CLI::App& app) {
   gp->add_option("--threads", gap.threads, "threads of the one pool (0 = every core)")
       ->check(mcg::Range(0, 1024))
       ->capture_default_str();
+  add_jacobian_option(gp, gap.sensitivities);
   gap.progress = stderr_is_terminal();
 }
 

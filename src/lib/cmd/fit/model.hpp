@@ -34,6 +34,8 @@ struct FitModelOptions {
   int max_evaluations = 4000;
   /// Stretches of the delete-one-stretch jackknife of the standard errors (a joint fit; 0: none).
   std::size_t jackknife = 10;
+  /// --jacobian sensitivities: the solver's Jacobians by sensitivities (FitProblem::sensitivities).
+  bool sensitivities = false;
 };
 
 /// Joint fit: the fitted model as INI (every parameter, the free ones with their standard
@@ -45,6 +47,9 @@ struct FitModelOptions {
 /// parallel, rows in input order, progress when stderr is a terminal. A fit that did not
 /// converge or is not trustworthy is still written, marked converged = 0/no, and reported as
 /// an error of status k_untrustworthy_status; a batch file that cannot be read, of status 1.
+/// --jacobian differences|sensitivities on a fitting subcommand; sets `sensitivities` for the latter.
+void add_jacobian_option(CLI::App* app, bool& sensitivities);
+
 class FitModel final : public Command {
  public:
   FitModelOptions options;

@@ -49,7 +49,9 @@ const std::vector<EffectSpec>& effect_catalog() {
   return catalog;
 }
 
-Compiled::Compiled(const Model& model) : p(model.params), delay_s(model.params.dead_time_s) {
+Compiled::Compiled(const Model& model) {
+  p = model.params;
+  delay_s = model.params.dead_time_s;
   for (const EffectSpec& spec : effect_catalog()) {
     if (const Effect* e = model.effect(spec.name)) spec.compile(*e, *this);
   }

@@ -9,12 +9,15 @@ namespace mcg::model::effects {
 namespace {
 
 /// T_cap = T_max (1 - exp(-age/tau)), k = {T_max, tau}.
-double capacity(const std::array<double, 4>& k, double age_s) {
-  return k[0] * (1.0 - std::exp(-age_s / k[1]));
+template <class S>
+S capacity(const std::array<S, 4>& k, S age_s) {
+  using std::exp;
+  return k[0] * (1.0 - exp(-age_s / k[1]));
 }
 
 void compile(const Effect& e, Compiled& c) {
-  c.coupling.capacity = capacity;
+  c.coupling.capacity = capacity<double>;
+  c.coupling.capacity_dual = capacity<Dual>;
   c.coupling.capacity_k = {e.get("T_max_Nm"), e.get("tau_s"), 0.0, 0.0};
 }
 

@@ -12,13 +12,16 @@ namespace mcg::model::effects {
 namespace {
 
 /// T = T_c sin(N theta + phase), k = {T_c, N, phase}.
-double ripple(const std::array<double, 4>& k, double theta_rad, double /*omega_rad_s*/) {
-  return k[0] * std::sin(k[1] * theta_rad + k[2]);
+template <class S>
+S ripple(const std::array<S, 4>& k, S theta_rad, S /*omega_rad_s*/) {
+  using std::sin;
+  return k[0] * sin(k[1] * theta_rad + k[2]);
 }
 
 void compile(const Effect& e, Compiled& c) {
   const double N = e.get("N_per_rev");
-  c.motor_torque.push_back({ripple, {e.get("T_c_Nm"), N, e.get("phase_rad"), 0.0}, nullptr, N});
+  c.motor_torque.push_back(
+      {ripple<double>, {e.get("T_c_Nm"), N, e.get("phase_rad"), 0.0}, nullptr, N, ripple<Dual>});
 }
 
 /// An angle harmonic of the shaft torque, at two or more cycles a revolution: cogging repeats

@@ -16,10 +16,13 @@ namespace mcg::model::effects {
 
 namespace {
 
-double bias(const std::array<double, 4>& k, double /*theta_rad*/, double /*omega_rad_s*/) { return -k[0]; }
+template <class S>
+S bias(const std::array<S, 4>& k, S /*theta_rad*/, S /*omega_rad_s*/) {
+  return -k[0];
+}
 
 void compile(const Effect& e, Compiled& c) {
-  c.motor_torque.push_back({bias, {e.get("dT_Nm"), 0.0, 0.0, 0.0}, nullptr, 0.0});
+  c.motor_torque.push_back({bias<double>, {e.get("dT_Nm"), 0.0, 0.0, 0.0}, nullptr, 0.0, bias<Dual>});
 }
 
 /// The asymmetry the data show, when the runs move both ways.

@@ -10,13 +10,18 @@ namespace mcg::model::effects {
 namespace {
 
 /// mu |Kt i|, k = {mu}: the same on the kinetic and the breakaway level.
-double kinetic(const std::array<double, 4>& k, const Friction& /*f*/, double /*x*/, double load_Nm) {
+template <class S>
+S kinetic(const std::array<S, 4>& k, const BasicFriction<S>& /*f*/, S /*x*/, S load_Nm) {
   return k[0] * load_Nm;
 }
-double breakaway(const std::array<double, 4>& k, double load_Nm) { return k[0] * load_Nm; }
+template <class S>
+S breakaway(const std::array<S, 4>& k, S load_Nm) {
+  return k[0] * load_Nm;
+}
 
 void compile(const Effect& e, Compiled& c) {
-  c.friction_terms.push_back({kinetic, breakaway, {e.get("mu"), 0.0, 0.0, 0.0}});
+  c.friction_terms.push_back(
+      {kinetic<double>, breakaway<double>, {e.get("mu"), 0.0, 0.0, 0.0}, kinetic<Dual>, breakaway<Dual>});
 }
 
 /// A torque c |i| sign(w) against the motion (c < 0) is mu |Kt i|: mu = -c / Kt.

@@ -11,13 +11,17 @@ namespace {
 
 /// The excess over the Coulomb level, (Ts - Tc) exp(-(x/v_s)^shape), k = {v_s, shape}; at
 /// x <= 0 (inside a stage) its limit at 0+.
-double excess(const std::array<double, 4>& k, const Friction& f, double x, double /*load_Nm*/) {
-  if (x > 0.0) return (f.Ts_Nm - f.Tc_Nm) * std::exp(-std::pow(x / k[0], k[1]));
+template <class S>
+S excess(const std::array<S, 4>& k, const BasicFriction<S>& f, S x, S /*load_Nm*/) {
+  using std::exp;
+  using std::pow;
+  if (x > 0.0) return (f.Ts_Nm - f.Tc_Nm) * exp(-pow(x / k[0], k[1]));
   return f.Ts_Nm - f.Tc_Nm;
 }
 
 void compile(const Effect& e, Compiled& c) {
-  c.friction_terms.push_back({excess, nullptr, {e.get("v_s_rad_s"), e.get("shape_exp"), 0.0, 0.0}});
+  c.friction_terms.push_back(
+      {excess<double>, nullptr, {e.get("v_s_rad_s"), e.get("shape_exp"), 0.0, 0.0}, excess<Dual>, nullptr});
 }
 
 std::vector<double> grid_scale(const Params& nominal, const DriveScale& drive) {

@@ -8,11 +8,15 @@ namespace mcg::model::effects {
 namespace {
 
 /// d(dT)/dt = (P - dT/R_th) / C_th, k = {R_th, C_th = tau_th / R_th}.
-double heating(const std::array<double, 4>& k, double P_W, double dT_K) { return (P_W - dT_K / k[0]) / k[1]; }
+template <class S>
+S heating(const std::array<S, 4>& k, S P_W, S dT_K) {
+  return (P_W - dT_K / k[0]) / k[1];
+}
 
 void compile(const Effect& e, Compiled& c) {
   const double R_th = e.get("R_th_K_W");
-  c.winding.rate = heating;
+  c.winding.rate = heating<double>;
+  c.winding.rate_dual = heating<Dual>;
   c.winding.k = {R_th, e.get("tau_th_s") / R_th, 0.0, 0.0};
   c.winding.R_per_x = e.get("alpha_per_K");
   c.winding.x0 = e.get("dT0_K");
