@@ -560,19 +560,13 @@ TEST(FitGreybox, TimeRangeOmegaAndFixedValues) {
   EXPECT_EQ(error_of([&] { fix_parameters(m, {"motor.R_ohm=x"}); }), "--fix: motor.R_ohm: invalid number 'x'");
 }
 
-// The gap search fits each catalog effect with Broyden updates between finite-difference
-// Jacobians (NlsOptions::broyden): on a run with the effect at a value of its grid, started
-// from another, the updated solver lands where the finite-difference one does, for every
-// effect's fitted parameters: within 2 % of the standard error (plus 1e-6 relative), with
-// standard errors within 2 %; where the residual is not smooth at the optimum in one of the
-// effect's parameters (NlsResult::rough), within 2.5 standard errors. Effects the run does not determine
-// (infinite error, or a fit that does not converge) are counted apart; most must be checked.
-TEST(FitGreybox, BroydenUpdatesFitEveryEffectAsFiniteDifferencesDo) {
+/// Per catalog effect the gap search fits: the fit of a run measured with the effect at a value
+/// of its grid, started from another.
+std::vector<std::pair<std::string, FitProblem>> every_effect_fit() {
   Program p;
   p.hold(0.0, 0.05, 0).hold(6.0, 0.25, 0).hold(-5.0, 0.25, 0).hold(1.2, 0.2, 0);
   p.hold(8.0, 0.25, 2).hold(11.0, 0.25, 2, 5.6).hold(3.0, 0.2, 2, 5.6).hold(-6.0, 0.25, 2);
-  int checked = 0;
-  std::vector<std::string> unchecked;
+  std::vector<std::pair<std::string, FitProblem>> fits;
   for (const model::EffectSpec& spec : model::effect_catalog()) {
     const model::EffectPlan& plan = spec.plan;
     if (!plan.candidate || plan.free.empty()) continue;
@@ -597,101 +591,77 @@ TEST(FitGreybox, BroydenUpdatesFitEveryEffectAsFiniteDifferencesDo) {
     problem.model = start;
     problem.sim.smooth_stick = plan.friction;
     problem.nls.max_evaluations = 60 * static_cast<int>(problem.free.size() + 1);
+    fits.emplace_back(spec.name, std::move(problem));
+  }
+  return fits;
+}
+
+/// `other` lands where the finite-difference fit `fd` does: within 2 % of the standard error
+/// (plus 1e-6 relative), with standard errors within 2 %; where the residual is not smooth at
+/// the optimum in a parameter (NlsResult::rough), within 2.5 standard errors.
+void expect_lands_alike(const FitResult& fd, const FitResult& other, const std::string& effect) {
+  EXPECT_TRUE(other.nls.converged) << effect << ": " << other.nls.reason;
+  // Not smooth at the optimum (a clutch event moves with it): the two paths may stop at
+  // different points of the rough floor, within the error.
+  const auto is_rough = [](const FitResult& f) {
+    return std::find(f.nls.rough.begin(), f.nls.rough.end(), true) != f.nls.rough.end();
+  };
+  const bool rough = is_rough(fd) || is_rough(other);
+  for (Eigen::Index i = 0; i < fd.nls.values.size(); ++i) {
+    const double v = fd.nls.values[i];
+    const double se = fd.nls.std_errors[i];
+    const std::string& name = fd.nls.names[static_cast<std::size_t>(i)];
+    if (rough) {
+      const double wider = std::max(se, other.nls.std_errors[i]);
+      EXPECT_NEAR(other.nls.values[i], v, 2.5 * wider + 1e-6 * std::abs(v))
+          << name << " +- " << wider << " (rough)";
+      continue;
+    }
+    EXPECT_NEAR(other.nls.values[i], v, 0.02 * se + 1e-6 * std::abs(v)) << name << " +- " << se;
+    EXPECT_NEAR(other.nls.std_errors[i], se, 0.02 * se) << name;
+  }
+}
+
+// The gap search fits each catalog effect with Broyden updates between finite-difference
+// Jacobians (NlsOptions::broyden): the updated solver lands where the finite-difference one
+// does (expect_lands_alike) for every effect's fitted parameters. Effects the run does not
+// determine (infinite error, or a fit that does not converge) are counted apart; most must be
+// checked.
+TEST(FitGreybox, BroydenUpdatesFitEveryEffectAsFiniteDifferencesDo) {
+  int checked = 0;
+  std::vector<std::string> unchecked;
+  for (auto& [effect, problem] : every_effect_fit()) {
     const FitResult fd = fit_model(problem);
     problem.nls.broyden = true;
     const FitResult updated = fit_model(problem);
     if (!fd.nls.converged || !fd.nls.std_errors.allFinite()) {
-      unchecked.push_back(spec.name);
+      unchecked.push_back(effect);
       continue;
     }
     ++checked;
-    EXPECT_TRUE(updated.nls.converged) << spec.name << ": " << updated.nls.reason;
-    // Not smooth at the optimum (a clutch event moves with it): the two paths may stop at
-    // different points of the rough floor, within the error.
-    const auto is_rough = [](const FitResult& f) {
-      return std::find(f.nls.rough.begin(), f.nls.rough.end(), true) != f.nls.rough.end();
-    };
-    const bool rough = is_rough(fd) || is_rough(updated);
-    for (Eigen::Index i = 0; i < fd.nls.values.size(); ++i) {
-      const double v = fd.nls.values[i];
-      const double se = fd.nls.std_errors[i];
-      const std::string& name = fd.nls.names[static_cast<std::size_t>(i)];
-      if (rough) {
-        const double wider = std::max(se, updated.nls.std_errors[i]);
-        EXPECT_NEAR(updated.nls.values[i], v, 2.5 * wider + 1e-6 * std::abs(v))
-            << name << " +- " << wider << " (rough)";
-        continue;
-      }
-      EXPECT_NEAR(updated.nls.values[i], v, 0.02 * se + 1e-6 * std::abs(v)) << name << " +- " << se;
-      EXPECT_NEAR(updated.nls.std_errors[i], se, 0.02 * se) << name;
-    }
+    expect_lands_alike(fd, updated, effect);
   }
   EXPECT_GE(checked, 8) << "not determined by the run: " << ::testing::PrintToString(unchecked);
 }
 
 // The Jacobian by sensitivities along the simulation (FitProblem::sensitivities) against the
-// one by finite differences, from the same start for every effect's fitted parameters: the
-// solver lands at the same point, within 2 % of the standard error (plus 1e-6 relative), with
-// the same standard errors within 2 %; where the residual is not smooth at the optimum
-// (NlsResult::rough), within 2.5 standard errors. No Jacobian falls back to finite differences.
+// one by finite differences, on the same fits: it lands alike (expect_lands_alike), and no
+// Jacobian falls back to finite differences.
 TEST(FitGreybox, SensitivitiesFitEveryEffectAsFiniteDifferencesDo) {
-  Program p;
-  p.hold(0.0, 0.05, 0).hold(6.0, 0.25, 0).hold(-5.0, 0.25, 0).hold(1.2, 0.2, 0);
-  p.hold(8.0, 0.25, 2).hold(11.0, 0.25, 2, 5.6).hold(3.0, 0.2, 2, 5.6).hold(-6.0, 0.25, 2);
   int checked = 0;
   std::vector<std::string> unchecked;
-  for (const model::EffectSpec& spec : model::effect_catalog()) {
-    const model::EffectPlan& plan = spec.plan;
-    if (!plan.candidate || plan.free.empty()) continue;
-    const model::Model nominal;
-    const std::vector<double> scale =
-        plan.grid_scale != nullptr
-            ? plan.grid_scale(nominal.params, model::voltage_drive_scale(nominal.params))
-            : std::vector<double>(plan.free.size(), 1.0);
-    model::Model truth = nominal;
-    model::Model start = nominal;
-    truth.effects.push_back(model::default_effect(spec.name));
-    start.effects.push_back(model::default_effect(spec.name));
-    FitProblem problem;
-    for (std::size_t k = 0; k < plan.free.size(); ++k) {
-      if (plan.free[k] == plan.angle_order_key) continue;
-      const auto& grid = plan.grid[k];
-      truth.effects.back().set(plan.free[k], grid[grid.size() > 1 ? 1 : 0] * scale[k]);
-      start.effects.back().set(plan.free[k], grid[0] * scale[k] * (grid.size() > 1 ? 1.0 : 1.3));
-      problem.free.push_back(spec.name + "." + plan.free[k]);
-    }
-    problem.runs.push_back(make_run(measure(truth, p.inputs, 31), {}, nominal.params));
-    problem.model = start;
-    problem.sim.smooth_stick = plan.friction;
-    problem.nls.max_evaluations = 60 * static_cast<int>(problem.free.size() + 1);
+  for (auto& [effect, problem] : every_effect_fit()) {
     const FitResult fd = fit_model(problem);
     problem.sensitivities = true;
     const FitResult ad = fit_model(problem);
-    EXPECT_GT(ad.nls.sensitivity_jacobians, 0) << spec.name;
-    EXPECT_EQ(ad.nls.fd_jacobians, 0) << spec.name;
+    EXPECT_GT(ad.nls.sensitivity_jacobians, 0) << effect;
+    EXPECT_EQ(ad.nls.fd_jacobians, 0) << effect;
     if (!fd.nls.converged || !fd.nls.std_errors.allFinite()) {
-      unchecked.push_back(spec.name);
+      unchecked.push_back(effect);
       continue;
     }
     ++checked;
-    EXPECT_TRUE(ad.nls.converged) << spec.name << ": " << ad.nls.reason;
-    const auto is_rough = [](const FitResult& f) {
-      return std::find(f.nls.rough.begin(), f.nls.rough.end(), true) != f.nls.rough.end();
-    };
-    const bool rough = is_rough(fd) || is_rough(ad);
-    for (Eigen::Index i = 0; i < fd.nls.values.size(); ++i) {
-      const double v = fd.nls.values[i];
-      const double se = fd.nls.std_errors[i];
-      const std::string& name = fd.nls.names[static_cast<std::size_t>(i)];
-      if (rough) {
-        const double wider = std::max(se, ad.nls.std_errors[i]);
-        EXPECT_NEAR(ad.nls.values[i], v, 2.5 * wider + 1e-6 * std::abs(v))
-            << name << " +- " << wider << " (rough)";
-        continue;
-      }
-      EXPECT_NEAR(ad.nls.values[i], v, 0.02 * se + 1e-6 * std::abs(v)) << name << " +- " << se;
-      EXPECT_NEAR(ad.nls.std_errors[i], se, 0.02 * se) << name;
-    }
+    expect_lands_alike(fd, ad, effect);
   }
   EXPECT_GE(checked, 8) << "not determined by the run: " << ::testing::PrintToString(unchecked);
 }
