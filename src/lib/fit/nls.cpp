@@ -187,8 +187,9 @@ struct Functor : Eigen::DenseFunctor<double> {
     return per_column * inputs() + (options.central_differences ? 0 : 1);
   }
 
-  /// The Jacobian at u for the statistics: the solver's last one when it is a finite-difference
-  /// Jacobian at u (the solver stopped where it differentiated), else a new one.
+  /// The Jacobian at u for the statistics: the solver's last one when it is a Jacobian at u by
+  /// differences or sensitivities, not an update (the solver stopped where it differentiated),
+  /// else a new one.
   void final_jacobian(const Eigen::VectorXd& u, const Eigen::VectorXd& r, JacobianType& jac) const {
     if (m_jac_fd && m_jac_u.size() == u.size() && (m_jac_u.array() == u.array()).all()) {
       jac = m_jac;
@@ -199,7 +200,7 @@ struct Functor : Eigen::DenseFunctor<double> {
 
   /// The last Jacobian the solver used was a Broyden update.
   bool on_broyden() const { return m_jac_u.size() > 0 && !m_jac_fd; }
-  /// The next Jacobian by finite differences.
+  /// The next Jacobian by differences or sensitivities, not an update.
   void refresh() const { m_force_fd = true; }
 
   int simulations() const { return m_simulations.load(); }
@@ -216,7 +217,7 @@ struct Functor : Eigen::DenseFunctor<double> {
   mutable Eigen::MatrixXd m_jac;
   mutable Eigen::VectorXd m_jac_u;
   mutable Eigen::VectorXd m_jac_r;
-  mutable bool m_jac_fd = false;
+  mutable bool m_jac_fd = false;  ///< the last Jacobian is by differences or sensitivities, not an update
   mutable bool m_force_fd = true;
   mutable int m_trials = 0;  ///< trial steps on the current Jacobian
   mutable int m_fd_jacobians = 0;

@@ -340,7 +340,7 @@ void add_jacobian_option(CLI::App* app, bool& sensitivities) {
   app->add_option_function<std::string>(
          "--jacobian", [&sensitivities](const std::string& how) { sensitivities = how == "sensitivities"; },
          "the solver's Jacobians: differences (a simulation per free parameter) or sensitivities "
-         "(one simulation on dual numbers; exact, about 2 to 3 times slower)")
+         "(one simulation on dual numbers: exact, and slower; see mcg-fit(1))")
       ->check(CLI::IsMember({"differences", "sensitivities"}))
       ->default_str("differences");
 }
