@@ -823,15 +823,12 @@ FitResult fit_model(const FitProblem& problem) {
         model::set_parameter(m, specs[i].name, v);
       }
       apply_ties(m, problem.ties);
-      std::vector<model::Direction> directions;
-      for (const ParameterSpec& spec : specs) {
-        const double v = model::get_parameter(m, spec.name);
-        model::Direction d{m, m, v != 0.0 ? 1e-6 * std::abs(v) : 1e-9};
-        model::set_parameter(d.plus, spec.name, v + d.step);
-        model::set_parameter(d.minus, spec.name, v - d.step);
+      std::vector<std::string> names;
+      for (const ParameterSpec& spec : specs) names.push_back(spec.name);
+      std::vector<model::Direction> directions = model::parameter_directions(m, names);
+      for (model::Direction& d : directions) {
         apply_ties(d.plus, problem.ties);
         apply_ties(d.minus, problem.ties);
-        directions.push_back(std::move(d));
       }
       out.resize(static_cast<Eigen::Index>(total));
       jac.resize(static_cast<Eigen::Index>(total), static_cast<Eigen::Index>(specs.size()));
