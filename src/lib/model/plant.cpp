@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <functional>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -1061,22 +1062,44 @@ class PlantImpl : public PlantCore<double, Compiled> {
   using PlantCore::PlantCore;
 };
 
-std::vector<BasicState<Dual>> simulate_states(const CompiledDual& compiled, const Dual& kt_cmd_Nm_A,
-                                              const Inputs& in, const SimOptions& options) {
+namespace {
+
+/// Steps `compiled` through the rows of `in` from rest at t_s[0] (initial clutch = clutch[0]),
+/// handing on_row(k, state) row k's state: at t_k, just before row k's inputs (and a clutch or
+/// relay switch at t_k) act. A torque drive commands the current T / kt_cmd_Nm_A.
+template <class S, class C, class OnRow>
+void run_rows(C compiled, const S& kt_cmd_Nm_A, const Inputs& in, const SimOptions& options, OnRow&& on_row) {
   const std::size_t n = in.t_s.size();
-  std::vector<BasicState<Dual>> states;
-  states.reserve(n);
-  if (n == 0) return states;
-  PlantCore<Dual, CompiledDual> plant(compiled, options, static_cast<int>(in.clutch[0]));
+  MCG_DEMAND(in.v_V.size() == n && in.clutch.size() == n && in.r_load_ohm.size() == n);
+  MCG_DEMAND((in.i_cmd_A.empty() || in.i_cmd_A.size() == n) &&
+             (in.T_cmd_Nm.empty() || in.T_cmd_Nm.size() == n));
+  MCG_DEMAND(in.i_cmd_A.empty() || in.T_cmd_Nm.empty());
+  if (n == 0) return;
+  PlantCore<S, C> plant(std::move(compiled), options, static_cast<int>(in.clutch[0]));
   for (std::size_t k = 0; k < n; ++k) {
     const Drive drive{in.v_V[k], static_cast<int>(in.clutch[k]), in.r_load_ohm[k]};
-    Dual i_cmd_A = drive.i_cmd_A;
+    S i_cmd_A = drive.i_cmd_A;
     if (!in.i_cmd_A.empty()) i_cmd_A = in.i_cmd_A[k];
     if (!in.T_cmd_Nm.empty()) i_cmd_A = in.T_cmd_Nm[k] / kt_cmd_Nm_A;
-    states.push_back(plant.state());
+    on_row(k, plant.state());
     if (k + 1 < n) plant.step(in.t_s[k + 1] - in.t_s[k], drive, i_cmd_A);
   }
-  return states;
+}
+
+}  // namespace
+
+Outputs simulate(const Model& model, const Inputs& in, const SimOptions& options) {
+  Outputs out;
+  out.resize(in.t_s.size());
+  run_rows(Compiled(model), model.params.motor.Kt_Nm_A, in, options,
+           [&](std::size_t k, const State& state) { out.store(k, state); });
+  return out;
+}
+
+void simulate_states(const CompiledDual& compiled, const Dual& kt_cmd_Nm_A, const Inputs& in,
+                     const SimOptions& options,
+                     const std::function<void(std::size_t, const BasicState<Dual>&)>& on_row) {
+  run_rows(compiled, kt_cmd_Nm_A, in, options, on_row);
 }
 
 Plant::Plant(const Model& model, const SimOptions& options, int initial_clutch)

@@ -138,35 +138,23 @@ struct Lifter {
   }
 };
 
-/// The derivatives along direction j of a row's dual state, as a state.
-State derivative(const BasicState<Dual>& s, std::size_t j) {
+/// A row's dual state as a state of one part of each number: part(x) its value, or its
+/// derivative along one direction.
+template <class Part>
+State project(const BasicState<Dual>& s, Part part) {
   State out;
   out.t_s = s.t_s;
-  out.omega_rad_s = s.omega_rad_s.d[j];
-  out.omega_gen_rad_s = s.omega_gen_rad_s.d[j];
-  out.theta_rad = s.theta_rad.d[j];
-  out.theta_gen_rad = s.theta_gen_rad.d[j];
-  out.i_A = s.i_A.d[j];
-  out.i_gen_A = s.i_gen_A.d[j];
-  out.v_gen_V = s.v_gen_V.d[j];
-  out.v_applied_V = s.v_applied_V.d[j];
-  out.temp_rise_K = s.temp_rise_K.d[j];
+  out.omega_rad_s = part(s.omega_rad_s);
+  out.omega_gen_rad_s = part(s.omega_gen_rad_s);
+  out.theta_rad = part(s.theta_rad);
+  out.theta_gen_rad = part(s.theta_gen_rad);
+  out.i_A = part(s.i_A);
+  out.i_gen_A = part(s.i_gen_A);
+  out.v_gen_V = part(s.v_gen_V);
+  out.v_applied_V = part(s.v_applied_V);
+  out.temp_rise_K = part(s.temp_rise_K);
   out.clutch = s.clutch;
   out.stuck = s.stuck;
-  return out;
-}
-
-State value(const BasicState<Dual>& s) {
-  State out = derivative(s, 0);
-  out.omega_rad_s = s.omega_rad_s.v;
-  out.omega_gen_rad_s = s.omega_gen_rad_s.v;
-  out.theta_rad = s.theta_rad.v;
-  out.theta_gen_rad = s.theta_gen_rad.v;
-  out.i_A = s.i_A.v;
-  out.i_gen_A = s.i_gen_A.v;
-  out.v_gen_V = s.v_gen_V.v;
-  out.v_applied_V = s.v_applied_V.v;
-  out.temp_rise_K = s.temp_rise_K.v;
   return out;
 }
 
@@ -206,11 +194,12 @@ std::optional<Sensitivities> simulate_sensitivities(const Model& model,
       kt_cmd.d[j] = (dir.plus.params.motor.Kt_Nm_A - dir.minus.params.motor.Kt_Nm_A) / (2.0 * dir.step);
     }
     if (!lifter.has_dual_hooks() || !lifter.same_structure()) return std::nullopt;
-    const std::vector<BasicState<Dual>> states = simulate_states(lifter.lift(), kt_cmd, inputs, options);
-    for (std::size_t k = 0; k < n; ++k) {
-      if (first == 0) out.value.store(k, value(states[k]));
-      for (std::size_t j = 0; j < count; ++j) out.d[first + j].store(k, derivative(states[k], j));
-    }
+    simulate_states(lifter.lift(), kt_cmd, inputs, options,
+                    [&](std::size_t k, const BasicState<Dual>& state) {
+                      if (first == 0) out.value.store(k, project(state, [](const Dual& x) { return x.v; }));
+                      for (std::size_t j = 0; j < count; ++j)
+                        out.d[first + j].store(k, project(state, [j](const Dual& x) { return x.d[j]; }));
+                    });
     if (directions.empty()) break;
   }
   return out;

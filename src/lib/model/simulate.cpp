@@ -1,7 +1,7 @@
-// Open-loop simulation of a table of rows, and the checks on its inputs.
+// The outputs of an open-loop simulation (simulate() itself is plant.cpp's), and the checks
+// on its inputs.
 #include <cmath>
 
-#include "common/demand.hpp"
 #include "common/error.hpp"
 #include "common/units.hpp"
 #include "config/ini.hpp"
@@ -24,28 +24,6 @@ void Outputs::store(std::size_t row, const State& s) {
   i_gen_A[row] = s.i_gen_A;
   v_gen_V[row] = s.v_gen_V;
   v_applied_V[row] = s.v_applied_V;
-}
-
-Outputs simulate(const Model& model, const Inputs& in, const SimOptions& options) {
-  const std::size_t n = in.t_s.size();
-  MCG_DEMAND(in.v_V.size() == n && in.clutch.size() == n && in.r_load_ohm.size() == n);
-  MCG_DEMAND((in.i_cmd_A.empty() || in.i_cmd_A.size() == n) &&
-             (in.T_cmd_Nm.empty() || in.T_cmd_Nm.size() == n));
-  MCG_DEMAND(in.i_cmd_A.empty() || in.T_cmd_Nm.empty());
-  Outputs out;
-  out.resize(n);
-  if (n == 0) return out;
-  Plant plant(model, options, static_cast<int>(in.clutch[0]));
-  for (std::size_t k = 0; k < n; ++k) {
-    Drive drive{in.v_V[k], static_cast<int>(in.clutch[k]), in.r_load_ohm[k]};
-    if (!in.i_cmd_A.empty()) drive.i_cmd_A = in.i_cmd_A[k];
-    if (!in.T_cmd_Nm.empty()) drive.i_cmd_A = in.T_cmd_Nm[k] / model.params.motor.Kt_Nm_A;
-    // Row k's output is the state at t_k, just before row k's inputs (and a clutch or relay
-    // switch at t_k) act.
-    out.store(k, plant.state());
-    if (k + 1 < n) plant.step(in.t_s[k + 1] - in.t_s[k], drive);
-  }
-  return out;
 }
 
 void validate_inputs(const Inputs& in, std::string_view source, std::size_t first_line) {

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <vector>
 
 #include "model/dual.hpp"
@@ -186,10 +187,12 @@ struct Compiled : BasicCompiled<double> {
 /// Compiled with the derivatives of every number (model/sensitivity.cpp lifts it).
 using CompiledDual = BasicCompiled<Dual>;
 
-/// The states of simulate()'s rows on dual numbers; kt_cmd_Nm_A converts a torque drive's
-/// command to current (the simulated model's nominal Kt, with its derivatives).
-std::vector<BasicState<Dual>> simulate_states(const CompiledDual& compiled, const Dual& kt_cmd_Nm_A,
-                                              const Inputs& inputs, const SimOptions& options);
+/// simulate()'s rows on dual numbers: on_row(k, state) for each row in turn; kt_cmd_Nm_A
+/// converts a torque drive's command to current (the simulated model's nominal Kt, with its
+/// derivatives).
+void simulate_states(const CompiledDual& compiled, const Dual& kt_cmd_Nm_A, const Inputs& inputs,
+                     const SimOptions& options,
+                     const std::function<void(std::size_t, const BasicState<Dual>&)>& on_row);
 
 /// The param_mismatch scale that moves nominal parameter `name` ("motor.R_ohm": "R_scale"),
 /// empty when none does; read off param_mismatch's own compile step (param_mismatch.cpp).
